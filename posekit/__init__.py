@@ -1,0 +1,19 @@
+"""posekit — the library behind a numbered series of notebooks on data-driven character posing.
+
+Layers point down (``../shared/STYLE.md``):
+
+1. core: :mod:`posekit.conventions`, :mod:`posekit.rotations`, :mod:`posekit.skeleton`,
+   :mod:`posekit.kinematics`, :mod:`posekit.transforms`
+2. data: :mod:`posekit.io` (BVH, DeepMimic conversion), :mod:`posekit.data`, :mod:`posekit.paths`
+3. solvers (classical IK, inverse rig regression, neural models) — added lesson by lesson
+4. top: :mod:`posekit.viz` (3D widget, matplotlib), :mod:`posekit.bench`, :mod:`posekit.cli`,
+   :mod:`posekit.exercises`
+
+Conventions (metres, Y up, facing +Z, quaternions ``(x, y, z, w)``): :mod:`posekit.conventions`.
+"""
+
+from .kinematics import bone_lengths_of, fk, rest_pose
+from .skeleton import Skeleton
+
+__version__ = "0.1.0"
+__all__ = ["Skeleton", "fk", "rest_pose", "bone_lengths_of", "__version__"]

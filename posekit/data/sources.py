@@ -1,0 +1,174 @@
+"""Where poses come from: the shipped DeepMimic sample, BVH files and folders, the Bandai Namco sets.
+
+Introduced in ``notebooks/00_skeletons_and_poses.ipynb``. Data locations: :mod:`posekit.paths`.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..io.bvh import read_bvh
+from ..kinematics import fk
+from ..paths import require_shared_data, samples_dir
+from ..skeleton import Skeleton
+from .motion import MotionSet
+
+__all__ = [
+    "SAMPLE_FILE", "BANDAI_FOLDERS", "BANDAI_ROLES",
+    "load_sample", "load_bvh_files", "load_bandai", "skeleton_preset", "open_dataset", "dataset_names",
+]
+
+SAMPLE_FILE = "deepmimic_humanoid.npz"
+"""File name of the embedded default data inside :func:`posekit.paths.samples_dir`."""
+
+BANDAI_FOLDERS = {"bandai1": "bandai-namco-1", "bandai2": "bandai-namco-2-every4th"}
+
+BANDAI_ROLES = {
+    "pelvis": "Hips", "chest": "Chest", "neck": "Neck", "head": "Head",
+    "left_hip": "UpperLeg_L", "left_knee": "LowerLeg_L", "left_foot": "Foot_L", "left_toe": "Toes_L",
+    "right_hip": "UpperLeg_R", "right_knee": "LowerLeg_R", "right_foot": "Foot_R", "right_toe": "Toes_R",
+    "left_shoulder": "UpperArm_L", "left_elbow": "LowerArm_L", "left_hand": "Hand_L",
+    "right_shoulder": "UpperArm_R", "right_elbow": "LowerArm_R", "right_hand": "Hand_R",
+}
+
+
+def load_sample() -> MotionSet:
+    """The embedded default: 15 DeepMimic humanoid clips, 18 joints, metres, facing +Z.
+
+    Built by ``posekit data build-sample`` from pybullet's wheel; provenance and licence in
+    ``data_samples/README.md``.
+    """
+    path = samples_dir() / SAMPLE_FILE
+    if not path.is_file():
+        raise FileNotFoundError(f"{path} is missing; rebuild it with `posekit data build-sample` "
+                                "(needs `pip install -e .[build-data]`)")
+    return MotionSet.load(path, source="deepmimic (data_samples)")
+
+
+def load_bvh_files(paths, scale: float = 1.0, roles: dict | None = None, name: str = "",
+                   drop_tpose: bool = False, progress: bool = False) -> MotionSet:
+    """Read BVH files of one skeleton into a :class:`MotionSet`, one clip per file.
+
+    Parameters
+    ----------
+    paths : sequence of path
+    scale : float
+        File units to metres (0.01 for centimetres).
+    roles : dict, optional
+        Canonical roles of the skeleton.
+    progress : bool
+        Show a tqdm progress bar.
+
+    Raises
+    ------
+    ValueError
+        When the files do not share one hierarchy (names and parents), naming the first that differs.
+    """
+    paths = [Path(p) for p in paths]
+    if not paths:
+        raise ValueError("no BVH files given")
+    it = paths
+    if progress:
+        from tqdm.auto import tqdm
+
+        it = tqdm(paths, desc="reading BVH", unit="file")
+    motions = []
+    for p in it:
+        m = read_bvh(p, scale=scale, roles=roles, name=name, drop_tpose=drop_tpose)
+        if motions:
+            first = motions[0].skeleton
+            if m.skeleton.names != first.names or not np.array_equal(m.skeleton.parents, first.parents):
+                raise ValueError(f"{p}: its joint hierarchy differs from {paths[0]}'s; one MotionSet holds one skeleton")
+        motions.append(m)
+    skel = motions[0].skeleton
+    local_rot = np.concatenate([m.local_rot for m in motions])
+    local_pos = np.concatenate([m.local_pos for m in motions])
+    clip_id = np.concatenate([np.full(m.n_frames, i) for i, m in enumerate(motions)])
+    animated = bool(np.any(np.abs(local_pos[:, 1:] - skel.offsets[1:]) > 1e-9)) if len(local_pos) else False
+    lp = local_pos if animated else None
+    root_pos = local_pos[:, 0]
+    global_pos = fk(skel, local_rot, root_pos, lp)[0]
+    return MotionSet(skel, local_rot, root_pos, global_pos, clip_id, [p.stem for p in paths],
+                     np.array([m.frame_time for m in motions]), lp,
+                     source=str(paths[0].parent if len(paths) > 1 else paths[0]))
+
+
+def load_bandai(which: int = 1, data_dir=None, limit: int | None = None, progress: bool = True,
+                pattern: str = "*.bvh") -> MotionSet:
+    """Bandai Namco Research Motion Dataset 1 or 2 (every 4th frame), read by path, never copied.
+
+    Parameters
+    ----------
+    which : {1, 2}
+    data_dir : path, optional
+        Folder holding ``bandai-namco-1/`` and ``bandai-namco-2-every4th/``; default
+        ``$POSEKIT_DATA_DIR``.
+    limit : int, optional
+        Read only the first ``limit`` files (sorted by name).
+    pattern : str
+        Glob of the files to read, e.g. ``"*_walk_*.bvh"``.
+
+    Returns
+    -------
+    MotionSet
+        22 joints, metres (the files are in centimetres), 30 fps (dataset 1) or 7.5 fps (dataset 2).
+        Licence: CC BY-NC 4.0, Bandai Namco Research Inc.
+    """
+    key = f"bandai{which}"
+    if key not in BANDAI_FOLDERS:
+        raise ValueError(f"which must be 1 or 2, got {which!r}")
+    folder = require_shared_data(data_dir) / BANDAI_FOLDERS[key] / "data"
+    files = sorted(folder.glob(pattern))[:limit]
+    if not files:
+        raise FileNotFoundError(f"no BVH files matching {pattern!r} in {folder}")
+    ms = load_bvh_files(files, scale=0.01, roles=BANDAI_ROLES, name=key, progress=progress)
+    ms.source = f"{key} ({folder})"
+    return ms
+
+
+def skeleton_preset(name: str, data_dir=None) -> Skeleton:
+    """Skeleton of a dataset: ``"deepmimic"`` (shipped) or ``"bandai"`` (read from the first BVH
+    header of dataset 1 under ``data_dir`` / ``$POSEKIT_DATA_DIR``; the hierarchy is identical in
+    every Bandai file)."""
+    if name in ("deepmimic", "sample"):
+        with np.load(samples_dir() / SAMPLE_FILE) as z:
+            return Skeleton.from_arrays(z)
+    if name in ("bandai", "bandai1", "bandai2"):
+        folder = require_shared_data(data_dir) / BANDAI_FOLDERS.get(name, "bandai-namco-1") / "data"
+        first = next(iter(sorted(folder.glob("*.bvh"))), None)
+        if first is None:
+            raise FileNotFoundError(f"no BVH file in {folder}")
+        return read_bvh(first, scale=0.01, roles=BANDAI_ROLES, name="bandai").skeleton
+    raise ValueError(f"unknown skeleton preset {name!r}; valid: deepmimic, bandai")
+
+
+def dataset_names() -> list[str]:
+    """Names accepted by :func:`open_dataset` besides paths."""
+    return ["sample", "deepmimic", "bandai1", "bandai2"]
+
+
+def open_dataset(spec, scale: float | None = None, data_dir=None, progress: bool = False) -> MotionSet:
+    """Open a dataset by name (``sample``/``deepmimic``, ``bandai1``, ``bandai2``), a BVH file, a
+    folder of BVH files, or a ``.npz`` written by :meth:`MotionSet.save`.
+
+    ``scale`` (file units to metres) applies to BVH paths; default 1.
+    """
+    s = str(spec)
+    if s in ("sample", "deepmimic"):
+        return load_sample()
+    if s in BANDAI_FOLDERS:
+        return load_bandai(int(s[-1]), data_dir=data_dir, progress=progress)
+    p = Path(s)
+    if p.is_dir():
+        files = sorted(p.glob("*.bvh"))
+        if not files:
+            raise FileNotFoundError(f"{p}: folder holds no .bvh files")
+        return load_bvh_files(files, scale=scale or 1.0, progress=progress)
+    if p.is_file():
+        if p.suffix.lower() == ".npz":
+            return MotionSet.load(p)
+        return load_bvh_files([p], scale=scale or 1.0)
+    raise FileNotFoundError(f"{s!r} is neither a dataset name ({', '.join(dataset_names())}) nor an existing "
+                            "BVH file, folder or .npz")
