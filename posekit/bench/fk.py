@@ -1,0 +1,85 @@
+"""``posekit bench fk``: forward-kinematics throughput and shipped-data load time.
+
+Rows, side by side in one run on one thread: posekit's numpy FK, a straightforward numpy FK
+(``np.matmul`` per joint, the baseline a newcomer would write), torch FK, and the goal from the
+roadmap (500,000 poses/s for a 22-joint skeleton; the shipped sample loads in under 1 s).
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..kinematics import fk
+from ..rotations import quat_to_matrix, random_rotations
+from ..skeleton import Skeleton
+
+GOAL_POSES_PER_S = 500_000
+GOAL_LOAD_S = 1.0
+
+# a 22-joint humanoid tree with the Bandai Namco topology (lengths are random: only speed matters)
+_PARENTS_22 = [-1, 0, 1, 2, 3, 4, 3, 6, 7, 8, 3, 10, 11, 12, 1, 14, 15, 16, 1, 18, 19, 20]
+
+
+def _naive_fk(skeleton, R):
+    """Baseline: per-joint ``np.matmul`` on (N, 3, 3) stacks, no layout tricks."""
+    N, J = R.shape[:2]
+    Rg = np.empty_like(R)
+    Pg = np.empty((N, J, 3))
+    Rg[:, 0] = R[:, 0]
+    Pg[:, 0] = skeleton.offsets[0]
+    for j in range(1, J):
+        p = skeleton.parents[j]
+        Rg[:, j] = Rg[:, p] @ R[:, j]
+        Pg[:, j] = Pg[:, p] + Rg[:, p] @ skeleton.offsets[j]
+    return Pg, Rg
+
+
+def _best_rate(fn, n_poses, repeats):
+    fn()
+    best = np.inf
+    for _ in range(repeats):
+        t = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t)
+    return n_poses / best
+
+
+def run(n_poses: int = 20_000, repeats: int = 5, seed: int = 0) -> list[dict]:
+    """Measure; returns one row per method with ``poses_per_s`` and ``goal``."""
+    from threadpoolctl import threadpool_limits
+
+    rng = np.random.default_rng(seed)
+    J = len(_PARENTS_22)
+    skel = Skeleton([f"j{i}" for i in range(J)], _PARENTS_22, rng.normal(size=(J, 3)) * 0.1, name="bench22")
+    q = random_rotations((n_poses, J), rng)
+    R = quat_to_matrix(q)
+    rows = []
+    with threadpool_limits(1):
+        import torch
+
+        threads = torch.get_num_threads()
+        torch.set_num_threads(1)
+        try:
+            Rt = torch.from_numpy(R)
+            cases = [
+                ("posekit fk (numpy, matrices in)", lambda: fk(skel, R)),
+                ("posekit fk (numpy, quaternions in)", lambda: fk(skel, q)),
+                ("baseline: np.matmul per joint", lambda: _naive_fk(skel, R)),
+                ("posekit fk (torch, matrices in)", lambda: fk(skel, Rt)),
+            ]
+            for name, fn in cases:
+                rate = _best_rate(fn, n_poses, repeats)
+                rows.append({"method": name, "joints": J, "poses": n_poses, "poses_per_s": round(rate),
+                             "goal_poses_per_s": GOAL_POSES_PER_S})
+        finally:
+            torch.set_num_threads(threads)
+    from ..data import load_sample
+
+    t = time.perf_counter()
+    ms = load_sample()
+    load_s = time.perf_counter() - t
+    rows.append({"method": "load shipped sample", "joints": ms.skeleton.n_joints, "poses": ms.n_frames,
+                 "seconds": round(load_s, 4), "goal_seconds": GOAL_LOAD_S})
+    return rows
