@@ -1,0 +1,10 @@
+"""Checker functions for the notebooks' exercises: a self-learner knows when they are right.
+
+Each checker calls the student's function on seeded cases, compares with posekit, prints one line
+(✓ or ✗ with what differed) and returns True or False. A function that still raises
+``NotImplementedError`` is reported as "not attempted yet".
+"""
+
+from .nb00 import check_bone_lengths, check_fk, check_sixd_to_matrix
+
+__all__ = ["check_fk", "check_sixd_to_matrix", "check_bone_lengths"]

@@ -1,0 +1,8 @@
+"""Seeing poses: the interactive 3D viewer (pythreejs) and static matplotlib figures.
+
+Top layer: imports the core and data layers, never a particular solver."""
+
+from .plot import plot_pose, plot_strip
+from .viewer import SkeletonViewer
+
+__all__ = ["SkeletonViewer", "plot_pose", "plot_strip"]

@@ -1,0 +1,353 @@
+"""An interactive 3D skeleton viewer for Jupyter (pythreejs + ipywidgets).
+
+Introduced in ``notebooks/00_skeletons_and_poses.ipynb``; every later lesson poses through it.
+World axes: :mod:`posekit.conventions` (metres, Y up, the character faces +Z).
+
+What it shows: a skeleton (bones as lines, joints as small spheres), an optional *ghost* pose for
+comparison, and *target* markers. Updating a pose rewrites the position buffers of the existing
+geometries instead of rebuilding the scene, so playback and live solving stay smooth.
+
+Interaction: orbit with the mouse (drag to rotate, wheel to zoom, right-drag to pan);
+**double-click** a joint to select it (a single-click picker would also fire at the end of every
+orbit drag); the X/Y/Z sliders then move that joint's target, and ``on_target_change`` callbacks
+(an IK solver, in later lessons) receive ``(joint_name, position)``.
+
+The viewer knows no solver: lessons connect one through :meth:`SkeletonViewer.on_target_change`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..skeleton import Skeleton
+
+__all__ = ["SkeletonViewer", "icosphere"]
+
+
+def icosphere(subdivisions: int = 1):
+    """Unit sphere mesh: vertices (V, 3) and triangle indices (T, 3), from a subdivided icosahedron."""
+    t = (1.0 + 5 ** 0.5) / 2
+    v = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t),
+         (0, -1, -t), (0, 1, -t), (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
+    f = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4), (11, 10, 2),
+         (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8), (3, 8, 9), (4, 9, 5),
+         (2, 4, 11), (6, 2, 10), (8, 6, 7), (9, 8, 1)]
+    verts = [np.array(p, float) / np.linalg.norm(p) for p in v]
+    faces = f
+    for _ in range(subdivisions):
+        cache, new = {}, []
+
+        def mid(a, b):
+            key = (min(a, b), max(a, b))
+            if key not in cache:
+                m = verts[a] + verts[b]
+                verts.append(m / np.linalg.norm(m))
+                cache[key] = len(verts) - 1
+            return cache[key]
+
+        for a, b, c in faces:
+            ab, bc, ca = mid(a, b), mid(b, c), mid(c, a)
+            new += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
+        faces = new
+    return np.array(verts), np.array(faces, dtype=np.uint32)
+
+
+class _Spheres:
+    """Many spheres in one mesh: moving them rewrites one position buffer."""
+
+    def __init__(self, n, radius, color, opacity=1.0):
+        import pythreejs as three
+
+        self.unit, faces = icosphere(1)
+        self.radius = radius
+        self.n = n
+        V = len(self.unit)
+        self.faces_per_sphere = len(faces)
+        index = (faces[None] + (np.arange(n) * V)[:, None, None]).reshape(-1).astype(np.uint32)
+        normals = np.tile(self.unit, (n, 1)).astype(np.float32)
+        self.geometry = three.BufferGeometry(attributes={
+            "position": three.BufferAttribute(self._positions(np.zeros((n, 3))), normalized=False),
+            "normal": three.BufferAttribute(normals, normalized=False),
+            "index": three.BufferAttribute(index, normalized=False),
+        })
+        material = three.MeshLambertMaterial(color=color, transparent=opacity < 1, opacity=opacity)
+        self.mesh = three.Mesh(self.geometry, material)
+
+    def _positions(self, centres):
+        return (centres[:, None, :] + self.radius * self.unit[None]).reshape(-1, 3).astype(np.float32)
+
+    def set(self, centres):
+        self.geometry.attributes["position"].array = self._positions(np.asarray(centres, float))
+
+
+class _Bones:
+    """Bones as line segments parent -> child in one buffer."""
+
+    def __init__(self, skeleton, color, linewidth=3, opacity=1.0):
+        import pythreejs as three
+
+        self.pairs = np.array([(skeleton.parents[j], j) for j in range(1, skeleton.n_joints)], dtype=int)
+        self.geometry = three.BufferGeometry(attributes={
+            "position": three.BufferAttribute(np.zeros((2 * len(self.pairs), 3), np.float32), normalized=False)})
+        material = three.LineBasicMaterial(color=color, linewidth=linewidth, transparent=opacity < 1, opacity=opacity)
+        self.lines = three.LineSegments(self.geometry, material)
+
+    def set(self, pos):
+        self.geometry.attributes["position"].array = np.asarray(pos, np.float32)[self.pairs.reshape(-1)]
+
+
+class SkeletonViewer:
+    """A pythreejs scene of one skeleton with a ghost, targets, picking and sliders.
+
+    Parameters
+    ----------
+    skeleton : Skeleton
+    pose : ndarray, shape (J, 3), metres, optional
+        Global joint positions; default the rest pose.
+    ghost : ndarray, shape (J, 3), optional
+        A second pose drawn translucent (e.g. the ground truth, or another solver).
+    targets : dict, optional
+        Joint name -> (3,) target position, drawn as red spheres.
+    width, height : int
+        Canvas size in pixels.
+    joint_radius : float
+        Sphere radius in metres.
+    controls : bool
+        Show the joint selector, X/Y/Z target sliders and the status line.
+
+    Attributes
+    ----------
+    widget : ipywidgets.VBox
+        What to display (the viewer also displays itself when it is a cell's last value).
+    selected : str or None
+        Name of the selected joint.
+    pose : ndarray, shape (J, 3)
+    targets : dict
+    """
+
+    def __init__(self, skeleton: Skeleton, pose=None, ghost=None, targets=None, width: int = 560,
+                 height: int = 420, joint_radius: float = 0.025, controls: bool = True,
+                 background: str = "#f7f7f2", floor: bool = True):
+        import ipywidgets as w
+        import pythreejs as three
+
+        from ..kinematics import rest_pose
+
+        self.skeleton = skeleton
+        J = skeleton.n_joints
+        self.pose = np.array(rest_pose(skeleton) if pose is None else pose, dtype=float)
+        self._check(self.pose, "pose")
+        self.targets = {}
+        self.selected = None
+        self._select_callbacks, self._target_callbacks = [], []
+        self._syncing = False
+
+        self._bones = _Bones(skeleton, "#1f4e79", linewidth=3)
+        self._joints = _Spheres(J, joint_radius, "#2e86c1")
+        self._ghost_bones = _Bones(skeleton, "#999999", linewidth=2, opacity=0.6)
+        self._ghost_joints = _Spheres(J, joint_radius * 0.8, "#aaaaaa", opacity=0.5)
+        self._selected_marker = _Spheres(1, joint_radius * 1.6, "#f1c40f", opacity=0.6)
+        self._ghost_group = three.Group(children=[self._ghost_bones.lines, self._ghost_joints.mesh])
+        self._target_group = three.Group()
+        self._targets_mesh = None
+        self._selected_marker.mesh.visible = False
+
+        centre, extent = self._frame(self.pose)
+        self.camera = three.PerspectiveCamera(position=[float(centre[0] + 0.8 * extent), float(centre[1] + 0.4 * extent),
+                                                         float(centre[2] + 2.2 * extent)],
+                                              fov=40, aspect=width / height, near=0.01, far=100)
+        self.camera.lookAt([float(c) for c in centre])
+        children = [self._bones.lines, self._joints.mesh, self._ghost_group, self._target_group,
+                    self._selected_marker.mesh, self.camera,
+                    three.AmbientLight(color="#ffffff", intensity=0.6),
+                    three.DirectionalLight(color="#ffffff", position=[3, 5, 4], intensity=0.7)]
+        if floor:
+            children.append(three.GridHelper(size=6, divisions=24, colorCenterLine="#888888", colorGrid="#cccccc"))
+        self.scene = three.Scene(children=children, background=background)
+        self.orbit = three.OrbitControls(controlling=self.camera, target=[float(c) for c in centre])
+        self.picker = three.Picker(controlling=self._joints.mesh, event="dblclick")
+        self.picker.observe(self._on_pick, names=["point"])
+        self.renderer = three.Renderer(camera=self.camera, scene=self.scene, controls=[self.orbit, self.picker],
+                                       width=width, height=height, antialias=True)
+
+        self.status = w.HTML(value="double-click a joint to select it")
+        self.joint_select = w.Dropdown(options=[("(none)", None)] + [(n, n) for n in skeleton.names],
+                                       value=None, description="joint", layout=w.Layout(width="220px"))
+        self.joint_select.observe(lambda ch: self.select(ch["new"]), names="value")
+        span = max(extent, 1.0)
+        self.sliders = [w.FloatSlider(value=0.0, min=-span, max=span, step=0.005, description=f"target {a}",
+                                      continuous_update=True, readout_format=".3f",
+                                      layout=w.Layout(width="320px")) for a in "xyz"]
+        lo = self.pose.min(0) - span
+        hi = self.pose.max(0) + span
+        for k, s in enumerate(self.sliders):
+            s.min, s.max = float(lo[k]), float(hi[k])
+            s.observe(self._on_slider, names="value")
+        self.controls = w.VBox([w.HBox([self.joint_select, self.status]), *self.sliders])
+        self.controls.layout.display = None if controls else "none"
+        self._extra = w.VBox([])
+        self.widget = w.VBox([self.renderer, self.controls, self._extra])
+
+        self.set_pose(self.pose)
+        self.set_ghost(ghost)
+        self.set_targets(targets or {})
+
+    # ------------------------------------------------------------------ helpers
+    def _check(self, pos, what):
+        pos = np.asarray(pos, dtype=float)
+        if pos.shape != (self.skeleton.n_joints, 3):
+            raise ValueError(f"{what}: expected shape ({self.skeleton.n_joints}, 3), got {pos.shape}")
+        if not np.all(np.isfinite(pos)):
+            raise ValueError(f"{what} contains NaN or inf")
+        return pos
+
+    @staticmethod
+    def _frame(pos):
+        lo, hi = pos.min(0), pos.max(0)
+        return 0.5 * (lo + hi), float(max(np.ptp(pos, axis=0).max(), 1.0))
+
+    def _ipython_display_(self):
+        from IPython.display import display
+
+        display(self.widget)
+
+    # ------------------------------------------------------------------ drawing
+    def set_pose(self, global_pos):
+        """Show a new pose: global joint positions, shape (J, 3), metres."""
+        self.pose = self._check(global_pos, "pose").copy()
+        self._bones.set(self.pose)
+        self._joints.set(self.pose)
+        if self.selected is not None:
+            self._selected_marker.set(self.pose[[self.skeleton.index(self.selected)]])
+            self._update_status()
+
+    def set_ghost(self, global_pos=None):
+        """Show (shape (J, 3)) or hide (None) the ghost pose."""
+        if global_pos is None:
+            self._ghost_group.visible = False
+            return
+        g = self._check(global_pos, "ghost")
+        self._ghost_bones.set(g)
+        self._ghost_joints.set(g)
+        self._ghost_group.visible = True
+
+    def set_targets(self, targets: dict):
+        """Replace the target markers: joint name -> (3,) position in metres."""
+        new = {}
+        for name, p in targets.items():
+            self.skeleton.index(name)
+            p = np.asarray(p, dtype=float).reshape(3)
+            if not np.all(np.isfinite(p)):
+                raise ValueError(f"target for {name} contains NaN or inf")
+            new[name] = p
+        rebuild = set(new) != set(self.targets) or self._targets_mesh is None
+        self.targets = new
+        if rebuild:
+            self._targets_mesh = _Spheres(max(len(new), 1), self._joints.radius * 1.3, "#e74c3c")
+            self._targets_mesh.mesh.visible = bool(new)
+            self._target_group.children = [self._targets_mesh.mesh]
+        if new:
+            self._targets_mesh.set(np.array(list(new.values())))
+        self._sync_sliders()
+
+    def frame_camera(self):
+        """Point the camera at the current pose."""
+        centre, extent = self._frame(self.pose)
+        self.orbit.target = [float(c) for c in centre]
+        self.camera.position = [float(centre[0] + 0.8 * extent), float(centre[1] + 0.4 * extent),
+                                float(centre[2] + 2.2 * extent)]
+
+    # ------------------------------------------------------------------ selection and targets
+    def select(self, joint):
+        """Select a joint by name, role or index (None clears the selection)."""
+        name = None if joint is None else self.skeleton.names[self.skeleton.index(joint)]
+        self.selected = name
+        if self.joint_select.value != name:
+            self.joint_select.value = name
+        self._selected_marker.mesh.visible = name is not None
+        if name is not None:
+            self._selected_marker.set(self.pose[[self.skeleton.index(name)]])
+        self._sync_sliders()
+        self._update_status()
+        for cb in self._select_callbacks:
+            cb(name)
+
+    def _on_pick(self, change):
+        p = np.asarray(change["new"], dtype=float)
+        if p.shape != (3,) or not np.all(np.isfinite(p)):
+            return
+        j = int(np.argmin(np.linalg.norm(self.pose - p, axis=1)))
+        self.select(self.skeleton.names[j])
+
+    def _sync_sliders(self):
+        if self.selected is None:
+            return
+        p = self.targets.get(self.selected, self.pose[self.skeleton.index(self.selected)])
+        self._syncing = True
+        try:
+            for s, v in zip(self.sliders, p):
+                s.value = float(np.clip(v, s.min, s.max))
+        finally:
+            self._syncing = False
+
+    def _on_slider(self, change):
+        if self._syncing or self.selected is None:
+            return
+        self.move_target(self.selected, [s.value for s in self.sliders])
+
+    def move_target(self, joint, position):
+        """Set one joint's target (creating it if needed) and notify ``on_target_change`` callbacks."""
+        name = self.skeleton.names[self.skeleton.index(joint)]
+        targets = dict(self.targets)
+        targets[name] = np.asarray(position, dtype=float).reshape(3)
+        self.set_targets(targets)
+        self._update_status()
+        for cb in self._target_callbacks:
+            cb(name, self.targets[name].copy())
+
+    def on_select(self, callback):
+        """Call ``callback(joint_name or None)`` whenever the selection changes."""
+        self._select_callbacks.append(callback)
+
+    def on_target_change(self, callback):
+        """Call ``callback(joint_name, position)`` whenever a target moves (sliders or code)."""
+        self._target_callbacks.append(callback)
+
+    def _update_status(self):
+        if self.selected is None:
+            self.status.value = "double-click a joint to select it"
+            return
+        p = self.pose[self.skeleton.index(self.selected)]
+        text = f"<b>{self.selected}</b> at ({p[0]:+.3f}, {p[1]:+.3f}, {p[2]:+.3f}) m"
+        if self.selected in self.targets:
+            t = self.targets[self.selected]
+            text += f", target {np.linalg.norm(t - p) * 100:.1f} cm away"
+        self.status.value = text
+
+    # ------------------------------------------------------------------ playback
+    def add_controls(self, *widgets):
+        """Append widgets (sliders of a lesson, a player) under the viewer."""
+        self._extra.children = tuple(self._extra.children) + tuple(widgets)
+
+    def player(self, frames, frame_time: float = 1 / 30, description: str = "frame"):
+        """A Play button and a frame slider that show ``frames`` (F, J, 3) in turn; added under the view.
+
+        Returns
+        -------
+        ipywidgets.HBox
+            The player; its ``children[1]`` is the frame slider.
+        """
+        import ipywidgets as w
+
+        frames = np.asarray(frames, dtype=float)
+        if frames.ndim != 3 or frames.shape[1:] != (self.skeleton.n_joints, 3):
+            raise ValueError(f"frames: expected shape (F, {self.skeleton.n_joints}, 3), got {frames.shape}")
+        play = w.Play(value=0, min=0, max=len(frames) - 1, step=1, interval=max(int(frame_time * 1000), 15),
+                      description="play")
+        slider = w.IntSlider(value=0, min=0, max=len(frames) - 1, description=description)
+        w.jslink((play, "value"), (slider, "value"))
+        slider.observe(lambda ch: self.set_pose(frames[ch["new"]]), names="value")
+        box = w.HBox([play, slider])
+        self.set_pose(frames[0])
+        self.add_controls(box)
+        return box
