@@ -26,8 +26,13 @@ def check_finite(x, what: str):
 def _as_matrices(local_rot, J: int):
     shape = tuple(local_rot.shape)
     if len(shape) >= 2 and shape[-2:] == (J, 4):
+        check_finite(local_rot, "local_rot")
+        norms = local_rot.norm(dim=-1) if is_torch(local_rot) else np.linalg.norm(local_rot, axis=-1)
+        if bool((norms < 1e-8).any()):
+            raise ValueError("local_rot holds zero-length quaternions; expected unit quaternions (x, y, z, w)")
         return quat_to_matrix(local_rot)
     if len(shape) >= 3 and shape[-3:] == (J, 3, 3):
+        check_finite(local_rot, "local_rot")
         return local_rot
     raise ValueError(
         f"local_rot: expected quaternions of shape (..., {J}, 4) or matrices of shape "
@@ -68,7 +73,6 @@ def fk(skeleton: Skeleton, local_rot, root_pos=None, local_pos=None):
     J = skeleton.n_joints
     R = _as_matrices(local_rot, J)
     batch = tuple(R.shape[:-3])
-    check_finite(local_rot, "local_rot")
     for arr, name, tail in ((root_pos, "root_pos", (3,)), (local_pos, "local_pos", (J, 3))):
         if arr is not None:
             if tuple(arr.shape[len(arr.shape) - len(tail):]) != tail:

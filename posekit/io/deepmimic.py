@@ -38,16 +38,16 @@ CLIPS = ("walk", "run", "jump", "kick", "punch", "spin", "spinkick", "cartwheel"
          "backflip", "dance_a", "dance_b", "getup_facedown", "getup_faceup")
 
 # posekit joint order: (name, parent name, URDF joint it comes from or None for an added end point)
-_JOINTS = [
+_JOINTS = [  # depth-first, the order a BVH file would list them
     ("root", None, "root"), ("chest", "root", "chest"), ("neck", "chest", "neck"), ("head", "neck", None),
-    ("right_hip", "root", "right_hip"), ("right_knee", "right_hip", "right_knee"),
-    ("right_ankle", "right_knee", "right_ankle"), ("right_toe", "right_ankle", None),
     ("right_shoulder", "chest", "right_shoulder"), ("right_elbow", "right_shoulder", "right_elbow"),
     ("right_wrist", "right_elbow", "right_wrist"),
-    ("left_hip", "root", "left_hip"), ("left_knee", "left_hip", "left_knee"),
-    ("left_ankle", "left_knee", "left_ankle"), ("left_toe", "left_ankle", None),
     ("left_shoulder", "chest", "left_shoulder"), ("left_elbow", "left_shoulder", "left_elbow"),
     ("left_wrist", "left_elbow", "left_wrist"),
+    ("right_hip", "root", "right_hip"), ("right_knee", "right_hip", "right_knee"),
+    ("right_ankle", "right_knee", "right_ankle"), ("right_toe", "right_ankle", None),
+    ("left_hip", "root", "left_hip"), ("left_knee", "left_hip", "left_knee"),
+    ("left_ankle", "left_knee", "left_ankle"), ("left_toe", "left_ankle", None),
 ]
 # end points placed from the URDF collision shapes (URDF units): head = centre of the neck link's
 # sphere; toe = front of the sole of the ankle link's box (centre 0.18,-0.09,0; size 0.708,0.22,0.36)

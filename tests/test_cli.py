@@ -1,0 +1,66 @@
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from posekit.cli import main
+
+from .test_bvh import SIMPLE
+
+
+def run(*args):
+    return subprocess.run([sys.executable, "-m", "posekit.cli", *args], capture_output=True, text=True, timeout=300)
+
+
+def test_inspect_sample_json(capsys):
+    assert main(["data", "inspect", "sample", "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    assert info["joints"] == 18 and info["frames"] == 1620 and info["clips"] == 15
+    assert info["parents"][0] == -1 and info["names"][0] == "root"
+
+
+def test_inspect_text_lists_hierarchy(capsys):
+    assert main(["data", "inspect", "sample"]) == 0
+    out = capsys.readouterr().out
+    assert "frames      1620" in out and "left_wrist" in out
+
+
+def test_convert_writes_positions(tmp_path, capsys):
+    src = tmp_path / "m.bvh"
+    src.write_text(SIMPLE)
+    assert main(["data", "convert", str(src), str(tmp_path / "o.npz"), "--scale", "0.01"]) == 0
+    with np.load(tmp_path / "o.npz") as z:
+        assert list(z["names"]) == ["Hips", "Spine", "Head", "Leg"]
+        assert z["positions"].shape == (2, 4, 3) and list(z["parents"]) == [-1, 0, 1, 0]
+        np.testing.assert_allclose(z["positions"][0, 3], [0.11, 0.9, 0])
+        assert float(z["frame_time"]) == pytest.approx(0.0333333)
+
+
+def test_malformed_file_exits_nonzero_with_file_and_line(tmp_path):
+    bad = tmp_path / "bad.bvh"
+    bad.write_text(SIMPLE.replace("Frames: 2", "Frames: 5"))
+    r = run("data", "inspect", str(bad))
+    assert r.returncode == 2
+    assert f"{bad}:33: Frames: says 5 frames" in r.stderr and "Traceback" not in r.stderr
+    r = run("data", "convert", str(bad), str(tmp_path / "x.npz"))
+    assert r.returncode == 2 and "bad.bvh:33" in r.stderr and not (tmp_path / "x.npz").exists()
+
+
+@pytest.mark.shared_data
+def test_inspect_bandai_folder(shared_data, capsys):
+    folder = shared_data / "bandai-namco-1" / "data"
+    assert main(["data", "inspect", str(folder), "--json", "--scale", "0.01"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    assert info["joints"] == 22 and info["clips"] == 174 and info["frames"] == 31914
+    assert info["frame_time"] == pytest.approx(1 / 30, rel=1e-4)
+
+
+def test_bench_fk_json():
+    r = run("bench", "fk", "--json", "--poses", "2000", "--repeats", "1")
+    assert r.returncode == 0, r.stderr
+    rows = json.loads(r.stdout)
+    methods = [row["method"] for row in rows]
+    assert "baseline: np.matmul per joint" in methods and "load shipped sample" in methods
+    assert all(row.get("poses_per_s", 1) > 0 for row in rows)

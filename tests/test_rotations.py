@@ -1,0 +1,64 @@
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from posekit import rotations as rot
+
+
+def test_quat_matrix_round_trip(rng):
+    q = rot.random_rotations((10, 3), rng)
+    np.testing.assert_allclose(rot.matrix_to_quat(rot.quat_to_matrix(q)), q, atol=1e-12)
+
+
+def test_sixd_round_trip(rng):
+    R = rot.quat_to_matrix(rot.random_rotations((50,), rng))
+    np.testing.assert_allclose(rot.sixd_to_matrix(rot.matrix_to_sixd(R)), R, atol=1e-12)
+
+
+def test_sixd_maps_any_vector_to_a_rotation(rng):
+    R = rot.sixd_to_matrix(rng.normal(size=(100, 6)))
+    np.testing.assert_allclose(R @ np.swapaxes(R, -1, -2), np.broadcast_to(np.eye(3), R.shape), atol=1e-12)
+    np.testing.assert_allclose(np.linalg.det(R), 1.0, atol=1e-12)
+
+
+def test_geodesic_distance_is_the_rotation_angle(rng):
+    a = rot.quat_to_matrix(rot.random_rotations((20,), rng))
+    angles = np.linspace(0, np.pi, 20)
+    b = a @ Rotation.from_rotvec(np.c_[angles, 0 * angles, 0 * angles]).as_matrix()
+    np.testing.assert_allclose(rot.geodesic_distance(a, b), angles, atol=1e-7)
+
+
+def test_torch_matches_numpy(rng):
+    torch = pytest.importorskip("torch")
+    x = rng.normal(size=(8, 6))
+    np.testing.assert_allclose(rot.sixd_to_matrix(torch.tensor(x)).numpy(), rot.sixd_to_matrix(x), atol=1e-12)
+    R = rot.sixd_to_matrix(x)
+    np.testing.assert_allclose(rot.matrix_to_sixd(torch.tensor(R)).numpy(), rot.matrix_to_sixd(R), atol=1e-12)
+    R2 = rot.quat_to_matrix(rot.random_rotations(8, rng))
+    np.testing.assert_allclose(rot.geodesic_distance(torch.tensor(R), torch.tensor(R2)).numpy(),
+                               rot.geodesic_distance(R, R2), atol=1e-6)
+    q = rot.random_rotations(8, rng)
+    np.testing.assert_allclose(rot.quat_to_matrix(torch.tensor(q)).numpy(), rot.quat_to_matrix(q), atol=1e-12)
+    np.testing.assert_allclose(rot.matrix_to_quat(torch.tensor(R2)).numpy(), rot.matrix_to_quat(R2), atol=1e-9)
+
+
+def test_euler_follows_bvh_intrinsic_order():
+    q = rot.euler_to_quat(np.array([30.0, 40.0, 50.0]), "ZXY", degrees=True)
+    Rz, Rx, Ry = (Rotation.from_euler(a, d, degrees=True).as_matrix() for a, d in zip("zxy", (30, 40, 50)))
+    np.testing.assert_allclose(rot.quat_to_matrix(q), Rz @ Rx @ Ry, atol=1e-12)
+    np.testing.assert_allclose(rot.quat_to_euler(q, "ZXY", degrees=True), [30, 40, 50], atol=1e-9)
+
+
+def test_quat_multiply_matches_matrices(rng):
+    a, b = rot.random_rotations((2, 5), rng)
+    np.testing.assert_allclose(rot.quat_to_matrix(rot.quat_multiply(a, b)),
+                               rot.quat_to_matrix(a) @ rot.quat_to_matrix(b), atol=1e-12)
+    np.testing.assert_allclose(rot.quat_to_matrix(rot.quat_multiply(a, rot.quat_inverse(a))),
+                               np.broadcast_to(np.eye(3), (5, 3, 3)), atol=1e-12)
+
+
+def test_wrong_shapes_are_refused():
+    with pytest.raises(ValueError, match=r"expected shape \(\.\.\., 6\)"):
+        rot.sixd_to_matrix(np.zeros((3, 5)))
+    with pytest.raises(ValueError, match=r"expected shape \(\.\.\., 3, 3\)"):
+        rot.geodesic_distance(np.zeros((3, 3)), np.zeros((3, 4)))
