@@ -152,19 +152,22 @@ class SkeletonViewer:
         self._targets_mesh = None
         self._selected_marker.mesh.visible = False
 
+        # The scene content sits in a group shifted by -centre, so the orbit pivot (the origin,
+        # where OrbitControls starts) is the middle of the pose.
         centre, extent = self._frame(self.pose)
-        self.camera = three.PerspectiveCamera(position=[float(centre[0] + 0.8 * extent), float(centre[1] + 0.4 * extent),
-                                                         float(centre[2] + 2.2 * extent)],
-                                              fov=40, aspect=width / height, near=0.01, far=100)
-        self.camera.lookAt([float(c) for c in centre])
-        children = [self._bones.lines, self._joints.mesh, self._ghost_group, self._target_group,
-                    self._selected_marker.mesh, self.camera,
-                    three.AmbientLight(color="#ffffff", intensity=0.6),
-                    three.DirectionalLight(color="#ffffff", position=[3, 5, 4], intensity=0.7)]
+        self._offset = centre.copy()
+        self.camera = three.PerspectiveCamera(position=self._camera_position(extent), fov=40,
+                                              aspect=width / height, near=0.01, far=100)
+        content = [self._bones.lines, self._joints.mesh, self._ghost_group, self._target_group,
+                   self._selected_marker.mesh]
         if floor:
-            children.append(three.GridHelper(size=6, divisions=24, colorCenterLine="#888888", colorGrid="#cccccc"))
-        self.scene = three.Scene(children=children, background=background)
-        self.orbit = three.OrbitControls(controlling=self.camera, target=[float(c) for c in centre])
+            content.append(three.GridHelper(size=6, divisions=24, colorCenterLine="#888888", colorGrid="#cccccc"))
+        self._world = three.Group(children=content, position=[float(-c) for c in centre])
+        self.scene = three.Scene(children=[self._world, self.camera,
+                                           three.AmbientLight(color="#ffffff", intensity=0.6),
+                                           three.DirectionalLight(color="#ffffff", position=[3, 5, 4], intensity=0.7)],
+                                 background=background)
+        self.orbit = three.OrbitControls(controlling=self.camera)
         self.picker = three.Picker(controlling=self._joints.mesh, event="dblclick")
         self.picker.observe(self._on_pick, names=["point"])
         self.renderer = three.Renderer(camera=self.camera, scene=self.scene, controls=[self.orbit, self.picker],
@@ -202,9 +205,15 @@ class SkeletonViewer:
         return pos
 
     @staticmethod
+    def _camera_position(extent):
+        return [0.7 * extent, 0.3 * extent, 1.9 * extent]
+
+    @staticmethod
     def _frame(pos):
         lo, hi = pos.min(0), pos.max(0)
-        return 0.5 * (lo + hi), float(max(np.ptp(pos, axis=0).max(), 1.0))
+        centre = 0.5 * (lo + hi)
+        centre[1] = 0.5 * hi[1]  # look at half the height above the floor
+        return centre, float(max(np.ptp(pos, axis=0).max(), 1.0))
 
     def _ipython_display_(self):
         from IPython.display import display
@@ -251,11 +260,11 @@ class SkeletonViewer:
         self._sync_sliders()
 
     def frame_camera(self):
-        """Point the camera at the current pose."""
+        """Re-centre the view on the current pose."""
         centre, extent = self._frame(self.pose)
-        self.orbit.target = [float(c) for c in centre]
-        self.camera.position = [float(centre[0] + 0.8 * extent), float(centre[1] + 0.4 * extent),
-                                float(centre[2] + 2.2 * extent)]
+        self._offset = centre.copy()
+        self._world.position = [float(-c) for c in centre]
+        self.camera.position = self._camera_position(extent)
 
     # ------------------------------------------------------------------ selection and targets
     def select(self, joint):
@@ -276,6 +285,7 @@ class SkeletonViewer:
         p = np.asarray(change["new"], dtype=float)
         if p.shape != (3,) or not np.all(np.isfinite(p)):
             return
+        p = p + self._offset  # picked point is in scene coordinates
         j = int(np.argmin(np.linalg.norm(self.pose - p, axis=1)))
         self.select(self.skeleton.names[j])
 

@@ -1,0 +1,160 @@
+"""The 3D widget in a real browser: JupyterLab in headless Chromium runs notebook 00, the viewer's
+canvas shows the skeleton, moving the elbow slider moves the joint, and double-clicking a joint
+selects it.
+
+Needs Debian's ``chromium`` (``make test`` installs it) and Playwright's Python package, which is
+pointed at ``/usr/bin/chromium`` (it cannot download its own browser here).
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import time
+import urllib.request
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytestmark = pytest.mark.browser
+
+ROOT = Path(__file__).resolve().parent.parent
+NOTEBOOK = "00_skeletons_and_poses.ipynb"
+CHROMIUM = os.environ.get("POSEKIT_CHROMIUM", "/usr/bin/chromium")
+FLAGS = ["--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader", "--disable-background-networking",
+         "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-quic"]
+SAMPLE_JOINTS = {"root", "chest", "neck", "head"} | {f"{s}_{j}" for s in ("left", "right") for j in (
+    "shoulder", "elbow", "wrist", "hip", "knee", "ankle", "toe")}
+BACKGROUND = np.array([0xF7, 0xF7, 0xF2])
+
+
+def _free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def lab(tmp_path_factory):
+    if not Path(CHROMIUM).exists():
+        pytest.fail(f"{CHROMIUM} not found: install Debian's chromium and chromium-driver (make test does)")
+    work = tmp_path_factory.mktemp("lab")
+    shutil.copy(ROOT / "notebooks" / NOTEBOOK, work / NOTEBOOK)  # never let autosave touch the repo copy
+    port, token = _free_port(), "posekit-test"
+    cmd = [sys.executable, "-m", "jupyter", "lab", "--no-browser", f"--port={port}", "--ip=127.0.0.1",
+           f"--ServerApp.token={token}", f"--ServerApp.root_dir={work}", "--ServerApp.open_browser=False",
+           "--LabApp.news_url=", "--LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate"]
+    if hasattr(os, "geteuid") and os.geteuid() == 0:
+        cmd.append("--allow-root")
+    log = open(work / "lab.log", "w")
+    proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, cwd=work)
+    url = f"http://127.0.0.1:{port}"
+    try:
+        for _ in range(120):
+            try:
+                urllib.request.urlopen(f"{url}/api/status?token={token}", timeout=2)
+                break
+            except OSError:
+                if proc.poll() is not None:
+                    pytest.fail(f"jupyter lab exited: {(work / 'lab.log').read_text()[-2000:]}")
+                time.sleep(0.5)
+        else:
+            pytest.fail("jupyter lab did not start within 60 s")
+        yield url, token, work
+    finally:
+        proc.terminate()
+        try:
+            proc.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+        log.close()
+
+
+def _pixels(locator):
+    from PIL import Image
+
+    return np.asarray(Image.open(io.BytesIO(locator.screenshot())).convert("RGB")).astype(int)
+
+
+def _foreground(img):
+    return np.abs(img - BACKGROUND).sum(-1) > 60
+
+
+def _wait_for(pred, timeout, what):
+    t0 = time.time()
+    while time.time() - t0 < timeout:
+        value = pred()
+        if value is not None and value is not False:
+            return value
+        time.sleep(0.5)
+    pytest.fail(f"timed out after {timeout} s waiting for {what}")
+
+
+def test_viewer_renders_and_slider_moves_joint(lab):
+    from playwright.sync_api import sync_playwright
+
+    url, token, work = lab
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True)
+        try:
+            page = browser.new_page(viewport={"width": 1400, "height": 1000})
+            page.goto(f"{url}/lab/tree/{NOTEBOOK}?token={token}", timeout=120_000)
+            page.wait_for_selector(".jp-Notebook .jp-Cell", timeout=120_000)
+            page.wait_for_selector(".jp-Notebook-ExecutionIndicator[data-status='idle'], "
+                                   "#jp-main-statusbar :text('Idle')", timeout=120_000)
+            page.locator(".lm-MenuBar-itemLabel", has_text="Run").first.click()
+            page.locator(".lm-Menu-itemLabel", has_text="Run All Cells").first.click()
+
+            # the cell with the elbow slider: its viewer, slider and readout
+            slider_label = page.get_by_text("left_elbow bend", exact=True)
+            slider_label.wait_for(timeout=180_000)
+            cell = page.locator(".jp-CodeCell", has=slider_label)
+            canvas = cell.locator("canvas").first
+            canvas.scroll_into_view_if_needed()
+            readout = cell.locator(".widget-html-content", has_text="left hand at")
+            readout.wait_for(timeout=60_000)
+
+            before = _wait_for(lambda: (lambda im: im if _foreground(im).mean() > 0.002 else None)(_pixels(canvas)),
+                               60, "the skeleton to appear on the canvas")
+            fg = _foreground(before).mean()
+            assert fg > 0.002, f"canvas looks empty ({fg:.4%} non-background pixels)"
+            text_before = readout.inner_text()
+
+            # drag the slider handle to the right: the elbow bends, FK runs in the kernel
+            handle = cell.locator(".widget-slider", has_text="left_elbow bend").locator(".noUi-handle").first
+            box = handle.bounding_box()
+            page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+            page.mouse.down()
+            page.mouse.move(box["x"] + 120, box["y"] + box["height"] / 2, steps=10)
+            page.mouse.up()
+            _wait_for(lambda: readout.inner_text() != text_before, 30, "the readout to change")
+            after = _wait_for(lambda: (lambda im: im if (np.abs(im - before).sum(-1) > 60).mean() > 0.0005
+                                       else None)(_pixels(canvas)), 30, "the canvas to change")
+            moved = np.abs(after - before).sum(-1) > 60
+            assert moved.mean() > 0.0005, "the joint did not move on the canvas"
+            assert _foreground(after).mean() > 0.002
+            page.screenshot(path=str(work / "after.png"))
+
+            # double-click a joint sphere of the playback viewer: the status line names it
+            first_viewer = page.locator(".jp-CodeCell", has=page.locator(".widget-play")).first
+            view = first_viewer.locator("canvas").first
+            view.scroll_into_view_if_needed()
+            img = _pixels(view)
+            # joint spheres are the light blue (#2e86c1 lit); bones are darker blue
+            r, g, b = img[..., 0], img[..., 1], img[..., 2]
+            ys, xs = np.nonzero((b > 150) & (b - r > 80) & (g > 100))
+            assert len(xs) > 0, "no joint sphere pixels found"
+            k = len(xs) // 2
+            status = first_viewer.locator(".widget-html-content").first
+            assert "double-click a joint" in status.inner_text()
+            view.dblclick(position={"x": float(xs[k]), "y": float(ys[k])})
+            _wait_for(lambda: " at (" in status.inner_text(), 30, "the picked joint to be selected")
+            picked = status.inner_text().split(" at (")[0].strip()
+            assert picked in SAMPLE_JOINTS, picked
+        finally:
+            browser.close()
