@@ -1,0 +1,107 @@
+"""Small compiled helpers shared by the rotation-based solvers (CCD, DLS): FK of one pose,
+Rodrigues' formula and the shortest rotation between two directions. Conventions:
+:mod:`posekit.conventions` (column vectors, parent-first FK)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._jit import njit
+from ..rotations import matrix_to_quat, quat_to_matrix
+from ..skeleton import Skeleton
+from .api import Pose
+
+
+@njit
+def fk_one(parents, local_pos, Rl, root_pos, Rg, Pg):
+    """FK of one pose into ``Rg`` (J, 3, 3) and ``Pg`` (J, 3); ``local_pos`` (J, 3)."""
+    J = parents.shape[0]
+    Rg[0] = Rl[0]
+    Pg[0] = root_pos
+    for j in range(1, J):
+        p = parents[j]
+        Rg[j] = Rg[p] @ Rl[j]
+        Pg[j] = Pg[p] + Rg[p] @ local_pos[j]
+
+
+@njit
+def rodrigues(wx, wy, wz):
+    """Rotation matrix of the rotation vector (wx, wy, wz) (axis * angle, radians)."""
+    th = np.sqrt(wx * wx + wy * wy + wz * wz)
+    R = np.eye(3)
+    if th < 1e-12:
+        return R
+    kx, ky, kz = wx / th, wy / th, wz / th
+    c, s = np.cos(th), np.sin(th)
+    v = 1.0 - c
+    R[0, 0] = c + kx * kx * v
+    R[0, 1] = kx * ky * v - kz * s
+    R[0, 2] = kx * kz * v + ky * s
+    R[1, 0] = ky * kx * v + kz * s
+    R[1, 1] = c + ky * ky * v
+    R[1, 2] = ky * kz * v - kx * s
+    R[2, 0] = kz * kx * v - ky * s
+    R[2, 1] = kz * ky * v + kx * s
+    R[2, 2] = c + kz * kz * v
+    return R
+
+
+@njit
+def rotation_between(a, b):
+    """Shortest rotation taking direction ``a`` to direction ``b`` (both (3,))."""
+    na = np.sqrt(a[0] ** 2 + a[1] ** 2 + a[2] ** 2)
+    nb = np.sqrt(b[0] ** 2 + b[1] ** 2 + b[2] ** 2)
+    if na < 1e-12 or nb < 1e-12:
+        return np.eye(3)
+    ax = (a[1] * b[2] - a[2] * b[1]) / (na * nb)
+    ay = (a[2] * b[0] - a[0] * b[2]) / (na * nb)
+    az = (a[0] * b[1] - a[1] * b[0]) / (na * nb)
+    s = np.sqrt(ax * ax + ay * ay + az * az)
+    c = (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) / (na * nb)
+    ang = np.arctan2(s, c)
+    if s < 1e-12:
+        return np.eye(3)  # parallel (or exactly opposite: no unique rotation, skip this step)
+    return rodrigues(ax / s * ang, ay / s * ang, az / s * ang)
+
+
+@njit
+def rotate_joint(Rl, Rg, parents, j, Rw):
+    """Turn joint ``j`` by the world-frame rotation ``Rw``: its local rotation becomes
+    ``Rg[parent]^T Rw Rg[parent] Rl[j]``."""
+    p = parents[j]
+    if p < 0:
+        Rl[j] = Rw @ Rl[j]
+    else:
+        Rl[j] = Rg[p].T @ (Rw @ (Rg[p] @ Rl[j]))
+
+
+def rotations_of(skeleton: Skeleton, start: Pose, who: str):
+    """Local matrices (J, 3, 3), root position (3,) and local translations (J, 3) of a start pose."""
+    if start.local_rot is None or start.root_pos is None:
+        raise ValueError(f"{who} turns joints, so the start Pose needs local_rot and root_pos "
+                         "(use Pose.from_rotations)")
+    q = np.asarray(start.local_rot, dtype=float)
+    if q.shape != (skeleton.n_joints, 4) or not np.all(np.isfinite(q)):
+        raise ValueError(f"start.local_rot: expected finite quaternions of shape ({skeleton.n_joints}, 4), got {q.shape}")
+    local_pos = skeleton.offsets if start.local_pos is None else np.asarray(start.local_pos, dtype=float)
+    return (np.ascontiguousarray(quat_to_matrix(q)), np.asarray(start.root_pos, dtype=float).copy(),
+            np.ascontiguousarray(local_pos, dtype=float))
+
+
+def pose_from(Rl, root_pos, local_pos, Pg, skeleton: Skeleton, start: Pose) -> Pose:
+    return Pose(Pg.copy(), matrix_to_quat(Rl), root_pos.copy(),
+                None if start.local_pos is None else np.asarray(local_pos).copy())
+
+
+def rotatable(skeleton: Skeleton, eff_idx, base: int) -> np.ndarray:
+    """Joints the rotation solvers may turn: those on a chain from an effector's parent up to the
+    base (the base turns too; its ancestors stay fixed). Shape (J,) bool."""
+    fixed = np.zeros(skeleton.n_joints, dtype=bool)
+    fixed[skeleton.chain(base, 0)[:-1]] = True
+    out = np.zeros(skeleton.n_joints, dtype=bool)
+    for e in eff_idx:
+        j = int(skeleton.parents[e])
+        while j >= 0 and not fixed[j]:
+            out[j] = True
+            j = int(skeleton.parents[j])
+    return out
