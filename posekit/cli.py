@@ -10,6 +10,8 @@
     Rebuilds ``data_samples/deepmimic_humanoid.npz`` from pybullet's wheel (extra ``build-data``).
 ``posekit bench fk [--json]``
     FK throughput and load time, side by side with the baseline and the goal.
+``posekit bench ik [--solvers fabrik,ccd,dls] [--effectors 2,5] [--data sample|bandai1|PATH] [--json]``
+    Every IK solver on the same held-out real poses: latency, memory, effector/pose/bone errors.
 
 Errors in input files print ``file:line: message`` and exit with status 2.
 """
@@ -113,6 +115,28 @@ def _bench_fk(args) -> int:
     return 0
 
 
+def _bench_ik(args) -> int:
+    from .bench import ik as bench_ik
+    from .bench.report import format_table, to_json
+    from .data.sources import open_dataset
+
+    motions = open_dataset(args.data, scale=args.scale, progress=not args.json and sys.stderr.isatty())
+    rows = bench_ik.run(motions, solvers=args.solvers.split(","), effector_sets=args.effectors.split(","),
+                        n_cases=args.cases, start=args.start, seed=args.seed, peers=not args.no_peers,
+                        progress=not args.json and sys.stderr.isatty())
+    if args.json:
+        print(to_json(rows))
+        return 0
+    print(f"IK benchmark: {rows[0]['data']}, {args.cases} held-out cases, start = {args.start}, one thread")
+    print("(latency and memory of one solve; errors in mm; converged = every effector within 1 mm)")
+    cols = [c for c in bench_ik.TABLE_COLUMNS if any(c in r for r in rows)]
+    print(format_table([r for r in rows if "note" not in r], cols))
+    for r in rows:
+        if "note" in r:
+            print(f"note: {r['method']}: {r['note']}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="posekit", description="posekit: data tools and benchmarks")
     sub = parser.add_subparsers(dest="group", required=True)
@@ -141,6 +165,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--poses", type=int, default=20_000)
     p.add_argument("--repeats", type=int, default=5)
     p.set_defaults(fn=_bench_fk)
+    p = bsub.add_parser("ik", help="IK solvers on held-out real poses, side by side (Victor & Meyer Table 1 style)")
+    p.add_argument("--solvers", default="fabrik,ccd,dls", help="comma-separated: fabrik, fabrik-constrained, ccd, dls")
+    p.add_argument("--effectors", default="2,5", help="comma-separated effector sets: 2, 5, 5point")
+    p.add_argument("--cases", type=int, default=1000)
+    p.add_argument("--start", choices=["frame", "rest"], default="frame")
+    p.add_argument("--data", default="sample", help="sample, bandai1, bandai2, or a BVH file/folder")
+    p.add_argument("--scale", type=float, default=None, help="file units to metres for a BVH path")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--no-peers", action="store_true", help="skip ikpy")
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(fn=_bench_ik)
     return parser
 
 
