@@ -70,13 +70,26 @@ def rotate_joint(Rl, Rg, parents, j, Rw):
     ``Rg[parent]^T Rw Rg[parent] Rl[j]``."""
     p = parents[j]
     if p < 0:
-        Rl[j] = Rw @ Rl[j]
+        R = Rw @ Rl[j]
     else:
-        Rl[j] = Rg[p].T @ (Rw @ (Rg[p] @ Rl[j]))
+        R = Rg[p].T @ (Rw @ (Rg[p] @ Rl[j]))
+    # re-orthonormalise (Gram-Schmidt on the columns): thousands of products would otherwise drift
+    # away from a rotation and stretch bones by micrometres
+    a = R[:, 0] / np.sqrt(R[0, 0] ** 2 + R[1, 0] ** 2 + R[2, 0] ** 2)
+    b = R[:, 1] - (a[0] * R[0, 1] + a[1] * R[1, 1] + a[2] * R[2, 1]) * a
+    b = b / np.sqrt(b[0] ** 2 + b[1] ** 2 + b[2] ** 2)
+    Rl[j, :, 0] = a
+    Rl[j, :, 1] = b
+    Rl[j, 0, 2] = a[1] * b[2] - a[2] * b[1]
+    Rl[j, 1, 2] = a[2] * b[0] - a[0] * b[2]
+    Rl[j, 2, 2] = a[0] * b[1] - a[1] * b[0]
 
 
 def rotations_of(skeleton: Skeleton, start: Pose, who: str):
     """Local matrices (J, 3, 3), root position (3,) and local translations (J, 3) of a start pose."""
+    from .api import check_pose
+
+    check_pose(skeleton, start)
     if start.local_rot is None or start.root_pos is None:
         raise ValueError(f"{who} turns joints, so the start Pose needs local_rot and root_pos "
                          "(use Pose.from_rotations)")
