@@ -6,5 +6,6 @@ Each checker calls the student's function on seeded cases, compares with posekit
 """
 
 from .nb00 import check_bone_lengths, check_fk, check_sixd_to_matrix
+from .nb01 import check_fabrik_chain, check_two_bone
 
-__all__ = ["check_fk", "check_sixd_to_matrix", "check_bone_lengths"]
+__all__ = ["check_fk", "check_sixd_to_matrix", "check_bone_lengths", "check_fabrik_chain", "check_two_bone"]
