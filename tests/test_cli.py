@@ -64,3 +64,25 @@ def test_bench_fk_json():
     methods = [row["method"] for row in rows]
     assert "baseline: np.matmul per joint" in methods and "load shipped sample" in methods
     assert all(row.get("poses_per_s", 1) > 0 for row in rows)
+
+
+def test_bench_ik_json_keys():
+    r = run("bench", "ik", "--solvers", "fabrik,dls", "--effectors", "2,5", "--cases", "20", "--json")
+    assert r.returncode == 0, r.stderr
+    rows = json.loads(r.stdout)
+    keys = {"method", "effectors", "cases", "latency_ms_median", "effector_error_mm_median", "mpjpe_mm_median",
+            "bone_length_error_mm_max", "converged_fraction"}
+    solved = [row for row in rows if row["method"] in ("fabrik", "dls")]
+    assert {(row["method"], row["effectors"]) for row in solved} == {("fabrik", "2"), ("fabrik", "5"), ("dls", "2"), ("dls", "5")}
+    for row in solved:
+        assert keys <= set(row) and row["cases"] == 20 and row["bone_length_error_mm_max"] < 1e-3
+    assert any(row["method"].startswith("ikpy") for row in rows)
+    assert any(row["method"] == "fabrik batched" and row["solves_per_s"] > 0 for row in rows)
+    assert next(row for row in rows if row["method"] == "fabrik" and row["effectors"] == "2")["paper_latency_ms"] == 6.56
+
+
+def test_bench_ik_rejects_unknown_solver_and_set():
+    r = run("bench", "ik", "--solvers", "magic", "--cases", "5", "--no-peers")
+    assert r.returncode == 2 and "unknown solver 'magic'" in r.stderr
+    r = run("bench", "ik", "--effectors", "7", "--cases", "5", "--no-peers")
+    assert r.returncode == 2 and "unknown effector set '7'" in r.stderr

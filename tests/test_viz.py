@@ -1,0 +1,65 @@
+"""The widgets' Python side (the browser side is tests/test_browser.py)."""
+
+import numpy as np
+import pytest
+
+from posekit.bench.ik import build_cases, make_solver
+from posekit.ik import effector_set
+from posekit.viz import SkeletonViewer, SolverPanel
+
+
+def test_viewer_updates_buffers_not_scene(sample):
+    v = SkeletonViewer(sample.skeleton, sample.global_pos[0])
+    children = v.scene.children
+    attr = v._joints.geometry.attributes["position"]
+    v.set_pose(sample.global_pos[50])
+    assert v.scene.children is children and v._joints.geometry.attributes["position"] is attr
+    np.testing.assert_allclose(v._bones.geometry.attributes["position"].array.reshape(-1, 2, 3)[:, 1],
+                               sample.global_pos[50][1:], atol=1e-6)
+
+
+def test_viewer_selection_sliders_and_callbacks(sample):
+    s = sample.skeleton
+    v = SkeletonViewer(s, sample.global_pos[0])
+    seen = []
+    v.on_target_change(lambda name, p: seen.append((name, p)))
+    v.select("left_hand")
+    assert v.selected == "left_wrist" and "left_wrist" in v.status.value
+    v.sliders[1].value = v.sliders[1].value + 0.2
+    assert seen and seen[-1][0] == "left_wrist"
+    np.testing.assert_allclose(v.targets["left_wrist"][1], sample.global_pos[0][s.index("left_wrist"), 1] + 0.2)
+    # a double-click near a joint selects it
+    v._on_pick({"new": list(sample.global_pos[0][s.index("head")] - v._offset + 0.01)})
+    assert v.selected == "head"
+
+
+def test_viewer_refuses_bad_poses(sample):
+    v = SkeletonViewer(sample.skeleton)
+    with pytest.raises(ValueError, match=r"expected shape \(18, 3\)"):
+        v.set_pose(np.zeros((17, 3)))
+    with pytest.raises(ValueError, match="NaN"):
+        v.set_ghost(np.full((18, 3), np.nan))
+    with pytest.raises(ValueError, match="unknown joint"):
+        v.set_targets({"tail": [0, 0, 0]})
+
+
+def test_player_steps_through_frames(sample):
+    v = SkeletonViewer(sample.skeleton)
+    frames = sample.global_pos[sample.clip_frames("walk")]
+    box = v.player(frames, 1 / 30)
+    box.children[1].value = 10
+    np.testing.assert_allclose(v.pose, frames[10])
+
+
+def test_solver_panel_resolves_on_target_moves(sample):
+    s = sample.skeleton
+    cases = build_cases(sample, 3)
+    panel = SolverPanel(s, {n: make_solver(n, s) for n in ("fabrik", "dls")}, cases.pose(0),
+                        effector_set(s, "2", cases.target_pos[0]), truth=cases.target_pos[0])
+    target = cases.target_pos[0][s.index("left_hand")] + np.array([0.05, 0.05, 0.0])
+    panel.move_target("left_hand", target)
+    for name in ("fabrik", "dls"):
+        res = panel.results[name]
+        assert res.converged, name
+        np.testing.assert_allclose(panel.viewers[name].pose[s.index("left_hand")], target, atol=1e-3)
+        assert "reached" in panel.labels[name].value
