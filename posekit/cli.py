@@ -12,6 +12,10 @@
     FK throughput and load time, side by side with the baseline and the goal.
 ``posekit bench ik [--solvers fabrik,ccd,dls] [--effectors 2,5] [--data sample|bandai1|PATH] [--json]``
     Every IK solver on the same held-out real poses: latency, memory, effector/pose/bone errors.
+``posekit bench invrig [--json]``
+    Inverse rig mapping: joint and ground-truth errors and frames/s of every method (lesson 02).
+``posekit train invrig``
+    Makes the inverse-rig network weights shipped in ``data_samples/weights`` (seeded).
 
 Errors in input files print ``file:line: message`` and exit with status 2.
 """
@@ -137,6 +141,42 @@ def _bench_ik(args) -> int:
     return 0
 
 
+def _bench_invrig(args) -> int:
+    from .bench import invrig
+    from .bench.report import format_table, to_json
+
+    rows = invrig.run(seed=args.seed, budget=args.budget, weights=args.weights)
+    if args.json:
+        print(to_json(rows))
+        return 0
+    setup = rows[-1]
+    print(f"Inverse rig mapping on the held-out test clips ({rows[0]['frames']} frames), one thread; "
+          f"GPR: multiquadric, theta0 = {setup['theta0']:.3g}, {setup['gpr_budget']} subsampled poses, "
+          f"fitted in {setup['fit_s']:.1f} s")
+    print("joint error: cm; ground-truth error: control error in training standard deviations")
+    print("\nTable 1 (paper: {}-{} frames/s with Maya in the loop)".format(*setup["paper_frames_per_s"]))
+    print(format_table([r for r in rows if r["table"] == 1],
+                       ["method", "joint_error", "ground_truth_error", "total_s", "frames_per_s"]))
+    print("\nTable 2: the network by supersampling method")
+    print(format_table([r for r in rows if r["table"] == 2],
+                       ["method", "joint_error", "ground_truth_error", "joint_error_with_jacobian"]))
+    print("\nDrift (Fig. 11): three 1,000-frame test clips solved frame by frame")
+    print(format_table([r for r in rows if r["table"] == 3],
+                       ["method", "joint_error_first_200", "joint_error_last_200", "ground_truth_error_first_200",
+                        "ground_truth_error_last_200", "frames_per_s"]))
+    return 0
+
+
+def _train_invrig(args) -> int:
+    from .regression.train import train_all
+
+    paths = train_all(methods=args.methods.split(","), samples=args.samples, epochs=args.epochs, seed=args.seed,
+                      out=args.out, progress=sys.stderr.isatty())
+    for m, p in paths.items():
+        print(f"wrote {p} ({p.stat().st_size / 1e3:.0f} kB)")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="posekit", description="posekit: data tools and benchmarks")
     sub = parser.add_subparsers(dest="group", required=True)
@@ -176,6 +216,22 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-peers", action="store_true", help="skip ikpy")
     p.add_argument("--json", action="store_true")
     p.set_defaults(fn=_bench_ik)
+    p = bsub.add_parser("invrig", help="inverse rig mapping: Tables 1 and 2 of Holden et al. 2017 on our rig")
+    p.add_argument("--json", action="store_true")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--budget", type=int, default=500, help="GPR training poses after greedy subsampling")
+    p.add_argument("--weights", default=None, help="folder of invrig_nn_*.pt (default data_samples/weights)")
+    p.set_defaults(fn=_bench_invrig)
+
+    train = sub.add_parser("train", help="make the weights the lessons ship (seeded)")
+    tsub = train.add_subparsers(dest="cmd", required=True)
+    p = tsub.add_parser("invrig", help="inverse-rig networks, one per supersampling method (lesson 02)")
+    p.add_argument("--methods", default="uniform,gaussian,mvn,gmm,pca")
+    p.add_argument("--samples", type=int, default=20_000)
+    p.add_argument("--epochs", type=int, default=20)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--out", default=None, help="folder (default data_samples/weights)")
+    p.set_defaults(fn=_train_invrig)
     return parser
 
 
