@@ -29,7 +29,7 @@ from ..regression.nn import load_inverse_net
 from ..regression.train import weights_path
 from ..rig import HumanoidRig, animate, heuristic_inverse, standard_sets
 
-__all__ = ["Setup", "setup", "run", "drift", "PAPER_FPS"]
+__all__ = ["Setup", "run", "drift", "PAPER_FPS"]
 
 PAPER_FPS = (195, 656)
 """Frames per second the paper reports for its methods with Maya in the loop (range over methods)."""
@@ -110,12 +110,13 @@ def _timed(fn):
     return out, time.perf_counter() - t
 
 
-def run(seed: int = 0, budget: int = 500, weights=None, sampling: bool = True) -> list[dict]:
-    """Measure Table 1 (and Table 2 with ``sampling``); one row per method."""
+def run(seed: int = 0, budget: int = 500, weights=None, sampling: bool = True, drift_table: bool = True,
+        setup_: Setup | None = None) -> list[dict]:
+    """Measure Table 1 (and Table 2 with ``sampling``, Table 3 with ``drift_table``); one row per method."""
     import torch
     from threadpoolctl import threadpool_limits
 
-    s = Setup(seed, budget)
+    s = setup_ or Setup(seed, budget)
     Xt = s.Xt3.reshape(len(s.test), -1)
     rows = []
     threads = torch.get_num_threads()
@@ -137,7 +138,7 @@ def run(seed: int = 0, budget: int = 500, weights=None, sampling: bool = True) -
                              "ground_truth_error": s.ground_truth_error(y), "total_s": dt,
                              "frames_per_s": len(Xt) / dt})
             for guess, name in (("previous", "optimisation only (previous frame as guess)"),
-                                ("gpr", "GPR + computed Jacobian, every frame")):
+                                ("gpr", "GPR + computed Jacobian, every frame")) if drift_table else ():
                 (je, ge), dt = _timed(lambda: drift(s, guess))
                 rows.append({"table": 3, "method": name, "frames": je.size,
                              "joint_error_first_200": float(je[:, :200].mean()),
