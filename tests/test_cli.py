@@ -86,3 +86,16 @@ def test_bench_ik_rejects_unknown_solver_and_set():
     assert r.returncode == 2 and "unknown solver 'magic'" in r.stderr
     r = run("bench", "ik", "--effectors", "7", "--cases", "5", "--no-peers")
     assert r.returncode == 2 and "unknown effector set '7'" in r.stderr
+
+
+def test_bench_invrig_json():
+    r = run("bench", "invrig", "--json", "--budget", "200")
+    assert r.returncode == 0, r.stderr
+    rows = json.loads(r.stdout)
+    t1 = {row["method"]: row for row in rows if row["table"] == 1}
+    assert set(t1) == {"heuristic script", "GPR", "GPR + learned Jacobian", "GPR + computed Jacobian", "NN",
+                       "NN + computed Jacobian"}
+    for row in t1.values():
+        assert {"joint_error", "ground_truth_error", "frames_per_s"} <= set(row) and row["frames"] == 1000
+    assert len([row for row in rows if row["table"] == 2]) == 5
+    assert len([row for row in rows if row["table"] == 3]) == 2
