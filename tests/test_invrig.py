@@ -73,6 +73,8 @@ def test_rig_clamps_and_reports_and_refuses_nan(rig):
     c, rep = rig.clamp(y)
     assert c[rig.index("neck_turn")] == rig.high[rig.index("neck_turn")]
     assert rep.count == 1 and "neck_turn" in str(rep)
+    with pytest.warns(RuntimeWarning, match="clamped: 1 values clamped; worst per control: neck_turn by 3.8"):
+        np.testing.assert_allclose(rig.evaluate(y), rig.evaluate(c))
     with pytest.raises(ValueError, match="NaN"):
         rig.evaluate(np.full(rig.n_controls, np.nan))
     with pytest.raises(ValueError, match=r"expected shape \(\.\.\., 34\)"):

@@ -141,11 +141,17 @@ class HumanoidRig:
     def evaluate(self, y, clamp: bool = True) -> np.ndarray:
         """The rig function f: controls (..., C) -> joint positions (..., J, 3), metres.
 
-        Controls outside their ranges are clamped (``clamp=True``), as a rig's limits would.
+        Controls outside their ranges are clamped (``clamp=True``), as a rig's limits would, with a
+        RuntimeWarning saying which and by how much.
         """
         y = self._check(y)
         if clamp:
-            y = np.clip(y, self.low, self.high)
+            c, report = self.clamp(y)
+            if report.count:
+                import warnings
+
+                warnings.warn(f"rig controls outside their ranges were clamped: {report}", RuntimeWarning, stacklevel=2)
+            y = c
         batch = y.shape[:-1]
         y = y.reshape(-1, self.n_controls)
         N, s, J = len(y), self.skeleton, self.skeleton.n_joints
