@@ -156,7 +156,7 @@ def _bench_invrig(args) -> int:
     print("joint error: cm; ground-truth error: control error in training standard deviations")
     print("\nTable 1 (paper: {}-{} frames/s with Maya in the loop)".format(*setup["paper_frames_per_s"]))
     print(format_table([r for r in rows if r["table"] == 1],
-                       ["method", "joint_error", "ground_truth_error", "total_s", "frames_per_s"]))
+                       ["method", "joint_error", "ground_truth_error", "total_s", "frames_per_s", "clamped_values"]))
     print("\nTable 2: the network by supersampling method")
     print(format_table([r for r in rows if r["table"] == 2],
                        ["method", "joint_error", "ground_truth_error", "joint_error_with_jacobian"]))

@@ -61,7 +61,14 @@ class Setup:
         self.fit_s = time.perf_counter() - t
 
     def joint_error(self, y, frames=slice(None)):
+        """Mean joint distance (cm) of the rig at ``y`` — clamped to the rig's ranges first, as the rig
+        would (:meth:`clamped_values` counts how many were outside) — to the test joints."""
+        y = self.rig.clamp(y)[0]
         return float(np.linalg.norm(self.rig.evaluate(y) - self.Xt3[frames], axis=-1).mean() * 100)
+
+    def clamped_values(self, y) -> int:
+        """How many predicted control values lie outside the rig's ranges."""
+        return self.rig.clamp(y)[1].count
 
     def ground_truth_error(self, y, frames=slice(None)):
         return float(np.mean(np.abs(y - self.test[frames]) / self.sd))
@@ -99,7 +106,7 @@ def drift(s: Setup, guess: str = "previous", iterations: int = 3, progress: bool
             y[:, f] = prev
     else:
         raise ValueError(f"guess must be 'previous' or 'gpr', got {guess!r}")
-    je = np.linalg.norm(s.rig.evaluate(y) - x, axis=-1).mean(-1) * 100
+    je = np.linalg.norm(s.rig.evaluate(s.rig.clamp(y)[0]) - x, axis=-1).mean(-1) * 100
     ge = np.mean(np.abs(y - s.long) / s.sd, axis=-1)
     return je, ge
 
@@ -136,7 +143,7 @@ def run(seed: int = 0, budget: int = 500, weights=None, sampling: bool = True, d
                 y, dt = _timed(fn)
                 rows.append({"table": 1, "method": name, "joint_error": s.joint_error(y),
                              "ground_truth_error": s.ground_truth_error(y), "total_s": dt,
-                             "frames_per_s": len(Xt) / dt})
+                             "frames_per_s": len(Xt) / dt, "clamped_values": s.clamped_values(y)})
             for guess, name in (("previous", "optimisation only (previous frame as guess)"),
                                 ("gpr", "GPR + computed Jacobian, every frame")) if drift_table else ():
                 (je, ge), dt = _timed(lambda: drift(s, guess))

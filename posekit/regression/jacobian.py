@@ -30,7 +30,7 @@ def refine(rig, x_target, y0, jacobian="computed", iterations: int = 3, damping:
     rig : HumanoidRig
     x_target : ndarray, shape (N, J, 3), metres
     y0 : ndarray, shape (N, C)
-        First guess.
+        First guess (clamped to the rig's ranges before the first step).
     jacobian : "computed" or callable
         ``"computed"`` uses the rig's finite differences; a callable maps y (N, C) -> J (N, 3J, C).
     iterations : int
@@ -42,7 +42,7 @@ def refine(rig, x_target, y0, jacobian="computed", iterations: int = 3, damping:
     ndarray, shape (N, C), clamped to the rig's ranges.
     """
     x_target = np.asarray(x_target, dtype=float).reshape(len(y0), -1)
-    y = np.array(y0, dtype=float)
+    y = np.clip(np.array(y0, dtype=float), rig.low, rig.high)  # the rig would clamp the guess anyway
     C = y.shape[1]
     for _ in range(iterations):
         dx = x_target - rig.evaluate(y).reshape(len(y), -1)
