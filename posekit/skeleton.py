@@ -134,6 +134,10 @@ class Skeleton:
         """Indices of several joints (names, roles or indices), shape (K,)."""
         return np.array([self.index(j) for j in joints], dtype=np.int64)
 
+    def pelvis(self) -> int:
+        """Index of the pelvis role, or of the root when the skeleton has no such role."""
+        return self.index("pelvis") if "pelvis" in self.roles else 0
+
     def children(self, joint) -> list[int]:
         """Indices of the direct children of a joint."""
         j = self.index(joint)

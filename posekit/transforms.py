@@ -161,7 +161,7 @@ def root_frame(skeleton: Skeleton, global_pos):
         Facing angle (see :func:`facing_angle`), radians.
     """
     global_pos = _check_positions(skeleton, global_pos)
-    pelvis = global_pos[..., skeleton.index("pelvis") if "pelvis" in skeleton.roles else 0, :]
+    pelvis = global_pos[..., skeleton.pelvis(), :]
     origin = pelvis * np.array([1.0, 0.0, 1.0])
     return origin, facing_angle(skeleton, global_pos)
 

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..data import MotionSet, sample_pairs, split_by_clip
-from ..ik.api import EFFECTOR_SETS, Effector, Pose, effector_set
+from ..ik.api import EFFECTOR_SETS, Effector, Pose, base_index, effector_set
 from ..kinematics import bone_lengths_of, fk
 from ..transforms import rotate_y_rotations, to_root_space
 
@@ -110,7 +110,7 @@ def build_cases(motions: MotionSet, n_cases: int = 1000, seed: int = 0, start: s
     ia, ib = np.array([where[f] for f in a]), np.array([where[f] for f in b])
     target = local[ib]
     lp_all = None if motions.local_pos is None else motions.local_pos[frames]
-    pel = s.index("pelvis") if "pelvis" in s.roles else 0
+    pel = base_index(s)
     if start == "frame":
         rot, rpos = q[ia], root[ia].copy()
         lp = None if lp_all is None else lp_all[ia]
@@ -135,8 +135,7 @@ def _numpy_fabrik(skeleton, start, eff, targets, tol=1e-3, max_iter=20):
     parents = skeleton.parents
     pos = start.copy()
     L = np.linalg.norm(pos - pos[np.maximum(parents, 0)], axis=1)
-    pel = skeleton.index("pelvis") if "pelvis" in skeleton.roles else 0
-    fixed = set(skeleton.chain(pel, 0))
+    fixed = set(skeleton.chain(base_index(skeleton), 0))
     active = set()
     for e in eff:
         active.update(skeleton.chain(int(e), 0))

@@ -119,7 +119,7 @@ def augment_positions(skeleton, global_pos, rng=None, mirror_prob: float = 0.5, 
     if flip.any():
         x[flip] = mirror_positions(skeleton, x[flip])
     if rotate:
-        pelvis = x[:, skeleton.index("pelvis") if "pelvis" in skeleton.roles else 0] * np.array([1.0, 0.0, 1.0])
+        pelvis = x[:, skeleton.pelvis()] * np.array([1.0, 0.0, 1.0])
         x = rotate_y_positions(x - pelvis[:, None], rng.uniform(-np.pi, np.pi, len(x))) + pelvis[:, None]
     return x
 

@@ -167,6 +167,11 @@ def resolve_effectors(skeleton: Skeleton, effectors: Sequence[Effector], kinds=K
     return np.array(idx), np.array(targets), np.array(tols), np.array(weights)
 
 
+def base_index(skeleton: Skeleton, base=None) -> int:
+    """The joint a solver keeps in place: ``base`` if given, else the pelvis role, else joint 0."""
+    return skeleton.index(base) if base is not None else skeleton.pelvis()
+
+
 def check_pose(skeleton: Skeleton, start: Pose) -> np.ndarray:
     """Validate a start pose; returns its global positions (J, 3)."""
     if not isinstance(start, Pose):

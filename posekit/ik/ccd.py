@@ -16,7 +16,7 @@ import numpy as np
 from .._jit import njit
 from ..skeleton import Skeleton
 from ._rigid import fk_one, pose_from, rotatable, rotate_joint, rotation_between, rotations_of
-from .api import IKResult, Pose, resolve_effectors
+from .api import IKResult, Pose, base_index, resolve_effectors
 
 __all__ = ["CCDSolver"]
 
@@ -65,8 +65,7 @@ class CCDSolver:
     def __init__(self, skeleton: Skeleton, max_iter: int = 50, base: str | None = None):
         self.skeleton = skeleton
         self.max_iter = int(max_iter)
-        self.base = skeleton.index(base) if base is not None else (
-            skeleton.index("pelvis") if "pelvis" in skeleton.roles else 0)
+        self.base = base_index(skeleton, base)
 
     def solve(self, start: Pose, effectors) -> IKResult:
         Rl, root, local_pos = rotations_of(self.skeleton, start, "CCD")

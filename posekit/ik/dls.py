@@ -21,7 +21,7 @@ import numpy as np
 from .._jit import njit
 from ..skeleton import Skeleton
 from ._rigid import fk_one, pose_from, rodrigues, rotatable, rotate_joint, rotations_of
-from .api import IKResult, Pose, resolve_effectors
+from .api import IKResult, Pose, base_index, resolve_effectors
 
 __all__ = ["DLSSolver"]
 
@@ -97,8 +97,7 @@ class DLSSolver:
         self.damping = float(damping)
         self.max_iter = int(max_iter)
         self.max_step = float(max_step)
-        self.base = skeleton.index(base) if base is not None else (
-            skeleton.index("pelvis") if "pelvis" in skeleton.roles else 0)
+        self.base = base_index(skeleton, base)
 
     def solve(self, start: Pose, effectors) -> IKResult:
         Rl, root, local_pos = rotations_of(self.skeleton, start, "DLS")

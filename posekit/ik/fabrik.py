@@ -24,7 +24,7 @@ import numpy as np
 
 from .._jit import njit
 from ..skeleton import Skeleton
-from .api import Effector, IKResult, Pose, check_pose, resolve_effectors
+from .api import IKResult, Pose, base_index, check_pose, resolve_effectors
 
 __all__ = ["fabrik_chain", "FabrikSolver", "Constraints", "default_constraints", "fix_bone_lengths",
            "chain_lengths"]
@@ -295,8 +295,7 @@ class FabrikSolver:
         self.skeleton = skeleton
         self.max_iter = int(max_iter)
         J = skeleton.n_joints
-        b = skeleton.index(base) if base is not None else (skeleton.index("pelvis") if "pelvis" in skeleton.roles else 0)
-        self.base = b
+        b = self.base = base_index(skeleton, base)
         fixed = np.zeros(J, dtype=np.bool_)
         fixed[skeleton.chain(b, 0)] = True
         self._fixed = fixed

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..skeleton import Skeleton
+from .api import base_index
 
 __all__ = ["fabrik_batched"]
 
@@ -51,7 +52,7 @@ def fabrik_batched(skeleton: Skeleton, start_pos, eff_joints, targets, tolerance
     if not (np.all(np.isfinite(start_pos)) and np.all(np.isfinite(targets))):
         raise ValueError("start_pos and targets must be finite")
     parents = skeleton.parents
-    b = skeleton.index(base) if base is not None else (skeleton.index("pelvis") if "pelvis" in skeleton.roles else 0)
+    b = base_index(skeleton, base)
     fixed = np.zeros(J, bool)
     fixed[skeleton.chain(b, 0)] = True
     active = np.zeros(J, bool)
