@@ -25,6 +25,7 @@ pytestmark = pytest.mark.browser
 
 ROOT = Path(__file__).resolve().parent.parent
 NOTEBOOK = "00_skeletons_and_poses.ipynb"
+PANEL_NOTEBOOK = "01_fabrik.ipynb"
 CHROMIUM = os.environ.get("POSEKIT_CHROMIUM", "/usr/bin/chromium")
 FLAGS = ["--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader", "--disable-background-networking",
          "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-quic"]
@@ -44,11 +45,13 @@ def lab(tmp_path_factory):
     if not Path(CHROMIUM).exists():
         pytest.fail(f"{CHROMIUM} not found: install Debian's chromium and chromium-driver (make test does)")
     work = tmp_path_factory.mktemp("lab")
-    shutil.copy(ROOT / "notebooks" / NOTEBOOK, work / NOTEBOOK)  # never let autosave touch the repo copy
+    for nb in (NOTEBOOK, PANEL_NOTEBOOK):  # copies: never let autosave touch the repo's notebooks
+        shutil.copy(ROOT / "notebooks" / nb, work / nb)
     port, token = _free_port(), "posekit-test"
     cmd = [sys.executable, "-m", "jupyter", "lab", "--no-browser", f"--port={port}", "--ip=127.0.0.1",
            f"--ServerApp.token={token}", f"--ServerApp.root_dir={work}", "--ServerApp.open_browser=False",
-           "--LabApp.news_url=", "--LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate"]
+           "--LabApp.news_url=", "--LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate",
+           f"--LabApp.workspaces_dir={work / 'workspaces'}"]
     if hasattr(os, "geteuid") and os.geteuid() == 0:
         cmd.append("--allow-root")
     log = open(work / "lab.log", "w")
@@ -95,6 +98,23 @@ def _wait_for(pred, timeout, what):
     pytest.fail(f"timed out after {timeout} s waiting for {what}")
 
 
+def _open_and_run_all(page, url, token, notebook):
+    page.goto(f"{url}/lab/tree/{notebook}?reset&token={token}", timeout=120_000)
+    page.wait_for_selector(".jp-Notebook:visible .jp-Cell", timeout=120_000)
+    page.wait_for_selector(".jp-Notebook-ExecutionIndicator[data-status='idle'], "
+                           "#jp-main-statusbar :text('Idle')", timeout=120_000)
+    page.locator(".lm-MenuBar-itemLabel", has_text="Run").first.click()
+    page.locator(".lm-Menu-itemLabel", has_text="Run All Cells").first.click()
+
+
+def _drag(page, handle, dx):
+    box = handle.bounding_box()
+    page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+    page.mouse.down()
+    page.mouse.move(box["x"] + box["width"] / 2 + dx, box["y"] + box["height"] / 2, steps=10)
+    page.mouse.up()
+
+
 def test_viewer_renders_and_slider_moves_joint(lab):
     from playwright.sync_api import sync_playwright
 
@@ -103,12 +123,7 @@ def test_viewer_renders_and_slider_moves_joint(lab):
         browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True)
         try:
             page = browser.new_page(viewport={"width": 1400, "height": 1000})
-            page.goto(f"{url}/lab/tree/{NOTEBOOK}?token={token}", timeout=120_000)
-            page.wait_for_selector(".jp-Notebook .jp-Cell", timeout=120_000)
-            page.wait_for_selector(".jp-Notebook-ExecutionIndicator[data-status='idle'], "
-                                   "#jp-main-statusbar :text('Idle')", timeout=120_000)
-            page.locator(".lm-MenuBar-itemLabel", has_text="Run").first.click()
-            page.locator(".lm-Menu-itemLabel", has_text="Run All Cells").first.click()
+            _open_and_run_all(page, url, token, NOTEBOOK)
 
             # the cell with the elbow slider: its viewer, slider and readout
             slider_label = page.get_by_text("left_elbow bend", exact=True)
@@ -127,11 +142,7 @@ def test_viewer_renders_and_slider_moves_joint(lab):
 
             # drag the slider handle to the right: the elbow bends, FK runs in the kernel
             handle = cell.locator(".widget-slider", has_text="left_elbow bend").locator(".noUi-handle").first
-            box = handle.bounding_box()
-            page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
-            page.mouse.down()
-            page.mouse.move(box["x"] + 120, box["y"] + box["height"] / 2, steps=10)
-            page.mouse.up()
+            _drag(page, handle, 120)
             _wait_for(lambda: readout.inner_text() != text_before, 30, "the readout to change")
             after = _wait_for(lambda: (lambda im: im if (np.abs(im - before).sum(-1) > 60).mean() > 0.0005
                                        else None)(_pixels(canvas)), 30, "the canvas to change")
@@ -156,5 +167,38 @@ def test_viewer_renders_and_slider_moves_joint(lab):
             _wait_for(lambda: " at (" in status.inner_text(), 30, "the picked joint to be selected")
             picked = status.inner_text().split(" at (")[0].strip()
             assert picked in SAMPLE_JOINTS, picked
+        finally:
+            browser.close()
+
+
+def test_three_solvers_solve_live_side_by_side(lab):
+    """Notebook 01's SolverPanel: three canvases show skeletons; moving the target slider re-solves
+    with FABRIK, CCD and DLS (their status lines change) and the views move."""
+    from playwright.sync_api import sync_playwright
+
+    url, token, work = lab
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True)
+        try:
+            page = browser.new_page(viewport={"width": 1500, "height": 1100})
+            _open_and_run_all(page, url, token, PANEL_NOTEBOOK)
+            labels = page.locator(".widget-html-content", has_text=" it., ")
+            labels.first.wait_for(timeout=240_000)
+            cell = page.locator(".jp-CodeCell", has=labels.first)
+            cell.scroll_into_view_if_needed()
+            canvases = cell.locator("canvas")
+            assert canvases.count() == 3 and labels.count() == 3
+            before = [_wait_for(lambda c=c: (lambda im: im if _foreground(im).mean() > 0.002 else None)(_pixels(c)),
+                                60, "a skeleton on every canvas") for c in canvases.all()]
+            texts = [l.inner_text() for l in labels.all()]
+            assert all("mm" in t and "ms" in t for t in texts)
+            handle = cell.locator(".widget-slider", has_text="target y").locator(".noUi-handle").first
+            _drag(page, handle, 60)
+            _wait_for(lambda: all(l.inner_text() != t for l, t in zip(labels.all(), texts)), 60,
+                      "all three solvers to re-solve")
+            for c, im in zip(canvases.all(), before):
+                _wait_for(lambda c=c, im=im: (np.abs(_pixels(c) - im).sum(-1) > 60).mean() > 0.0005 or None, 30,
+                          "every view to move")
+            page.screenshot(path=str(work / "panel.png"))
         finally:
             browser.close()
