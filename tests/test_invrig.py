@@ -1,6 +1,5 @@
 """Lesson 02: the rig, the animator, GPR, Jacobian refinement, supersampling, the network."""
 
-import warnings
 
 import numpy as np
 import pytest

@@ -23,6 +23,7 @@ about the same axis, so ``(a, 0)``, ``(0, a)`` and ``(a/2, a/2)`` give one and t
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -148,8 +149,6 @@ class HumanoidRig:
         if clamp:
             c, report = self.clamp(y)
             if report.count:
-                import warnings
-
                 warnings.warn(f"rig controls outside their ranges were clamped: {report}", RuntimeWarning, stacklevel=2)
             y = c
         batch = y.shape[:-1]
