@@ -19,7 +19,6 @@ from .skeleton import Skeleton
 __all__ = [
     "mirror_positions",
     "mirror_rotations",
-    "rotate_y",
     "rotate_y_positions",
     "rotate_y_rotations",
     "facing_angle",
@@ -116,11 +115,6 @@ def rotate_y_rotations(local_rot, root_pos, angle):
     local_rot[..., 0, :] = quat_multiply(_yaw_quat(angle), local_rot[..., 0, :])
     root = np.einsum("...ab,...b->...a", _yaw_matrix(angle), np.asarray(root_pos, dtype=float))
     return local_rot, root
-
-
-def rotate_y(global_pos, angle):
-    """Alias of :func:`rotate_y_positions` (augmentation by a random heading)."""
-    return rotate_y_positions(global_pos, angle)
 
 
 def facing_angle(skeleton: Skeleton, global_pos) -> np.ndarray:

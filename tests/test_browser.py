@@ -78,6 +78,19 @@ def lab(tmp_path_factory):
         log.close()
 
 
+@pytest.fixture(scope="module")
+def chromium():
+    """Debian's Chromium driven by Playwright (it cannot download a browser of its own here)."""
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True)
+        try:
+            yield browser
+        finally:
+            browser.close()
+
+
 def _pixels(locator):
     from PIL import Image
 
@@ -115,90 +128,82 @@ def _drag(page, handle, dx):
     page.mouse.up()
 
 
-def test_viewer_renders_and_slider_moves_joint(lab):
-    from playwright.sync_api import sync_playwright
-
+def test_viewer_renders_and_slider_moves_joint(lab, chromium):
     url, token, work = lab
-    with sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True)
-        try:
-            page = browser.new_page(viewport={"width": 1400, "height": 1000})
-            _open_and_run_all(page, url, token, NOTEBOOK)
+    page = chromium.new_page(viewport={"width": 1400, "height": 1000})
+    try:
+        _open_and_run_all(page, url, token, NOTEBOOK)
 
-            # the cell with the elbow slider: its viewer, slider and readout
-            slider_label = page.get_by_text("left_elbow bend", exact=True)
-            slider_label.wait_for(timeout=180_000)
-            cell = page.locator(".jp-CodeCell", has=slider_label)
-            canvas = cell.locator("canvas").first
-            canvas.scroll_into_view_if_needed()
-            readout = cell.locator(".widget-html-content", has_text="left hand at")
-            readout.wait_for(timeout=60_000)
+        # the cell with the elbow slider: its viewer, slider and readout
+        slider_label = page.get_by_text("left_elbow bend", exact=True)
+        slider_label.wait_for(timeout=180_000)
+        cell = page.locator(".jp-CodeCell", has=slider_label)
+        canvas = cell.locator("canvas").first
+        canvas.scroll_into_view_if_needed()
+        readout = cell.locator(".widget-html-content", has_text="left hand at")
+        readout.wait_for(timeout=60_000)
 
-            before = _wait_for(lambda: (lambda im: im if _foreground(im).mean() > 0.002 else None)(_pixels(canvas)),
-                               60, "the skeleton to appear on the canvas")
-            fg = _foreground(before).mean()
-            assert fg > 0.002, f"canvas looks empty ({fg:.4%} non-background pixels)"
-            text_before = readout.inner_text()
+        before = _wait_for(lambda: (lambda im: im if _foreground(im).mean() > 0.002 else None)(_pixels(canvas)),
+                           60, "the skeleton to appear on the canvas")
+        fg = _foreground(before).mean()
+        assert fg > 0.002, f"canvas looks empty ({fg:.4%} non-background pixels)"
+        text_before = readout.inner_text()
 
-            # drag the slider handle to the right: the elbow bends, FK runs in the kernel
-            handle = cell.locator(".widget-slider", has_text="left_elbow bend").locator(".noUi-handle").first
-            _drag(page, handle, 120)
-            _wait_for(lambda: readout.inner_text() != text_before, 30, "the readout to change")
-            after = _wait_for(lambda: (lambda im: im if (np.abs(im - before).sum(-1) > 60).mean() > 0.0005
-                                       else None)(_pixels(canvas)), 30, "the canvas to change")
-            moved = np.abs(after - before).sum(-1) > 60
-            assert moved.mean() > 0.0005, "the joint did not move on the canvas"
-            assert _foreground(after).mean() > 0.002
-            page.screenshot(path=str(work / "after.png"))
+        # drag the slider handle to the right: the elbow bends, FK runs in the kernel
+        handle = cell.locator(".widget-slider", has_text="left_elbow bend").locator(".noUi-handle").first
+        _drag(page, handle, 120)
+        _wait_for(lambda: readout.inner_text() != text_before, 30, "the readout to change")
+        after = _wait_for(lambda: (lambda im: im if (np.abs(im - before).sum(-1) > 60).mean() > 0.0005
+                                   else None)(_pixels(canvas)), 30, "the canvas to change")
+        moved = np.abs(after - before).sum(-1) > 60
+        assert moved.mean() > 0.0005, "the joint did not move on the canvas"
+        assert _foreground(after).mean() > 0.002
+        page.screenshot(path=str(work / "after.png"))
 
-            # double-click a joint sphere of the playback viewer: the status line names it
-            first_viewer = page.locator(".jp-CodeCell", has=page.locator(".widget-play")).first
-            view = first_viewer.locator("canvas").first
-            view.scroll_into_view_if_needed()
-            img = _pixels(view)
-            # joint spheres are the light blue (#2e86c1 lit); bones are darker blue
-            r, g, b = img[..., 0], img[..., 1], img[..., 2]
-            ys, xs = np.nonzero((b > 150) & (b - r > 80) & (g > 100))
-            assert len(xs) > 0, "no joint sphere pixels found"
-            k = len(xs) // 2
-            status = first_viewer.locator(".widget-html-content").first
-            assert "double-click a joint" in status.inner_text()
-            view.dblclick(position={"x": float(xs[k]), "y": float(ys[k])})
-            _wait_for(lambda: " at (" in status.inner_text(), 30, "the picked joint to be selected")
-            picked = status.inner_text().split(" at (")[0].strip()
-            assert picked in SAMPLE_JOINTS, picked
-        finally:
-            browser.close()
+        # double-click a joint sphere of the playback viewer: the status line names it
+        first_viewer = page.locator(".jp-CodeCell", has=page.locator(".widget-play")).first
+        view = first_viewer.locator("canvas").first
+        view.scroll_into_view_if_needed()
+        img = _pixels(view)
+        # joint spheres are the light blue (#2e86c1 lit); bones are darker blue
+        r, g, b = img[..., 0], img[..., 1], img[..., 2]
+        ys, xs = np.nonzero((b > 150) & (b - r > 80) & (g > 100))
+        assert len(xs) > 0, "no joint sphere pixels found"
+        k = len(xs) // 2
+        status = first_viewer.locator(".widget-html-content").first
+        assert "double-click a joint" in status.inner_text()
+        view.dblclick(position={"x": float(xs[k]), "y": float(ys[k])})
+        _wait_for(lambda: " at (" in status.inner_text(), 30, "the picked joint to be selected")
+        picked = status.inner_text().split(" at (")[0].strip()
+        assert picked in SAMPLE_JOINTS, picked
+    finally:
+        page.close()
 
 
-def test_three_solvers_solve_live_side_by_side(lab):
+def test_three_solvers_solve_live_side_by_side(lab, chromium):
     """Notebook 01's SolverPanel: three canvases show skeletons; moving the target slider re-solves
     with FABRIK, CCD and DLS (their status lines change) and the views move."""
-    from playwright.sync_api import sync_playwright
-
     url, token, work = lab
-    with sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True)
-        try:
-            page = browser.new_page(viewport={"width": 1500, "height": 1100})
-            _open_and_run_all(page, url, token, PANEL_NOTEBOOK)
-            labels = page.locator(".widget-html-content", has_text=" it., ")
-            labels.first.wait_for(timeout=240_000)
-            cell = page.locator(".jp-CodeCell", has=labels.first)
-            cell.scroll_into_view_if_needed()
-            canvases = cell.locator("canvas")
-            assert canvases.count() == 3 and labels.count() == 3
-            before = [_wait_for(lambda c=c: (lambda im: im if _foreground(im).mean() > 0.002 else None)(_pixels(c)),
-                                60, "a skeleton on every canvas") for c in canvases.all()]
-            texts = [l.inner_text() for l in labels.all()]
-            assert all("mm" in t and "ms" in t for t in texts)
-            handle = cell.locator(".widget-slider", has_text="target y").locator(".noUi-handle").first
-            _drag(page, handle, 60)
-            _wait_for(lambda: all(l.inner_text() != t for l, t in zip(labels.all(), texts)), 60,
-                      "all three solvers to re-solve")
-            for c, im in zip(canvases.all(), before):
-                _wait_for(lambda c=c, im=im: (np.abs(_pixels(c) - im).sum(-1) > 60).mean() > 0.0005 or None, 30,
-                          "every view to move")
-            page.screenshot(path=str(work / "panel.png"))
-        finally:
-            browser.close()
+    page = chromium.new_page(viewport={"width": 1500, "height": 1100})
+    try:
+        _open_and_run_all(page, url, token, PANEL_NOTEBOOK)
+        labels = page.locator(".widget-html-content", has_text=" it., ")
+        labels.first.wait_for(timeout=240_000)
+        cell = page.locator(".jp-CodeCell", has=labels.first)
+        cell.scroll_into_view_if_needed()
+        canvases = cell.locator("canvas")
+        assert canvases.count() == 3 and labels.count() == 3
+        before = [_wait_for(lambda c=c: (lambda im: im if _foreground(im).mean() > 0.002 else None)(_pixels(c)),
+                            60, "a skeleton on every canvas") for c in canvases.all()]
+        texts = [l.inner_text() for l in labels.all()]
+        assert all("mm" in t and "ms" in t for t in texts)
+        handle = cell.locator(".widget-slider", has_text="target y").locator(".noUi-handle").first
+        _drag(page, handle, 60)
+        _wait_for(lambda: all(l.inner_text() != t for l, t in zip(labels.all(), texts)), 60,
+                  "all three solvers to re-solve")
+        for c, im in zip(canvases.all(), before):
+            _wait_for(lambda c=c, im=im: (np.abs(_pixels(c) - im).sum(-1) > 60).mean() > 0.0005 or None, 30,
+                      "every view to move")
+        page.screenshot(path=str(work / "panel.png"))
+    finally:
+        page.close()

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..data import MotionSet, sample_pairs, split_by_clip
+from ..ik import CCDSolver, DLSSolver, FabrikSolver
 from ..ik.api import EFFECTOR_SETS, Effector, Pose, base_index, effector_set
 from ..kinematics import bone_lengths_of, fk
 from ..transforms import rotate_y_rotations, to_root_space
@@ -37,17 +38,11 @@ PAPER = {
 """Paper figures shown beside ours (runtime in ms)."""
 
 
-def _fabrik(s, **kw):
-    from ..ik import FabrikSolver
-
-    return FabrikSolver(s, **kw)
-
-
 SOLVERS = {
-    "fabrik": lambda s: _fabrik(s),
-    "fabrik-constrained": lambda s: _fabrik(s, constraints=True),
-    "ccd": lambda s: __import__("posekit.ik.ccd", fromlist=["CCDSolver"]).CCDSolver(s),
-    "dls": lambda s: __import__("posekit.ik.dls", fromlist=["DLSSolver"]).DLSSolver(s),
+    "fabrik": FabrikSolver,
+    "fabrik-constrained": lambda s: FabrikSolver(s, constraints=True),
+    "ccd": CCDSolver,
+    "dls": DLSSolver,
 }
 """Solver name -> factory(skeleton). Later lessons register their solvers here."""
 
@@ -202,7 +197,6 @@ def _ikpy_rows(cases: Cases, n: int, tolerance: float):
         from ikpy.link import OriginLink, URDFLink
     except ImportError:
         return [{"method": "ikpy", "effectors": "left_hand", "note": "ikpy not installed"}]
-    from ..ik import FabrikSolver
     from ..rotations import quat_to_euler
 
     chain_j = s.chain("left_hand", "pelvis")
