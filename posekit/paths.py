@@ -34,8 +34,8 @@ def require_shared_data(data_dir=None) -> Path:
     d = shared_data_dir(data_dir)
     if d is None:
         raise FileNotFoundError(
-            "larger datasets not found: pass data_dir=... (or --data) or set POSEKIT_DATA_DIR to the "
-            "folder holding bandai-namco-1/ and bandai-namco-2-every4th/"
+            "larger datasets not found: set POSEKIT_DATA_DIR to the folder holding bandai-namco-1/ and "
+            "bandai-namco-2-every4th/ (in Python you may pass data_dir=... instead)"
             + (f" (given: {data_dir or os.environ.get('POSEKIT_DATA_DIR')!r} is not a folder)"
                if (data_dir or os.environ.get("POSEKIT_DATA_DIR")) else "")
         )

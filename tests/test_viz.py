@@ -62,4 +62,10 @@ def test_solver_panel_resolves_on_target_moves(sample):
         res = panel.results[name]
         assert res.converged, name
         np.testing.assert_allclose(panel.viewers[name].pose[s.index("left_hand")], target, atol=1e-3)
-        assert "reached" in panel.labels[name].value
+        assert panel.labels[name].value.startswith("<b>✓ reached</b><br>"), panel.labels[name].value
+    # a target out of every solver's reach is reported as not reached, each status on its own lines
+    panel.move_target("left_hand", target + np.array([0.0, 5.0, 0.0]))
+    for name in ("fabrik", "dls"):
+        label = panel.labels[name].value
+        assert not panel.results[name].converged and label.startswith("<b>✗ not reached</b><br>"), label
+        assert label.count("<br>") == 2 and "iterations," in label

@@ -16,6 +16,15 @@ from .viewer import SkeletonViewer
 __all__ = ["SolverPanel"]
 
 
+def status_line(result, ms: float) -> str:
+    """One solver's status under its view, as HTML on three lines: reached or not, the worst
+    effector error (mm), iterations and time (ms)."""
+    mark = "✓ reached" if result.converged else "✗ not reached"
+    it = result.iterations
+    return (f"<b>{mark}</b><br>worst effector {result.effector_error.max() * 1000:.1f} mm<br>"
+            f"{it} iteration{'' if it == 1 else 's'}, {ms:.2f} ms")
+
+
 class SolverPanel:
     """One viewer per solver; the first viewer's joint selector, double-click picking and X/Y/Z
     sliders move a target, and every solver re-solves from the same start pose.
@@ -87,6 +96,4 @@ class SolverPanel:
             v = self.viewers[name]
             v.set_pose(res.pose.global_pos)
             v.set_targets(targets)
-            mark = "reached" if res.converged else "not reached"
-            self.labels[name].value = (f"worst effector {res.effector_error.max() * 1000:.1f} mm ({mark}), "
-                                       f"{res.iterations} it., {ms:.2f} ms")
+            self.labels[name].value = status_line(res, ms)
