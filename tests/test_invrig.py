@@ -150,6 +150,11 @@ def test_line_search_and_greedy_subsampling(data):
     X = X.reshape(len(X), -1)
     best, table = line_search_theta0(X[::8], train[::8])
     assert len(table) == 13 and 1e-4 <= best <= 1e2 and best == min(table, key=lambda r: r[1])[0]
+    # the linear kernel barely feels theta0 (its CV errors differ ~1e-12): a tie, which must not be
+    # decided by rounding noise but by the documented rule (the smallest theta0)
+    best_lin, table_lin = line_search_theta0(X[::8], train[::8], "linear")
+    errs = np.array([e for _, e in table_lin])
+    assert np.ptp(errs) < 1e-6 * errs.min() and best_lin == table_lin[0][0] == 1e-4
     idx = greedy_subsample(X, train, 300, theta0=best)
     assert len(set(idx)) == 300
     sd = np.maximum(train.std(0), 1e-3)
@@ -179,6 +184,28 @@ def test_sampling_methods(rig, data, method):
     assert s.shape == (3000, rig.n_controls) and np.all(s >= rig.low) and np.all(s <= rig.high)
     used = train.std(0) > 1e-6
     assert np.abs(s.mean(0) - train.mean(0))[used].max() < 0.5 * (rig.high - rig.low)[used].max()
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_sampling_follows_its_data(method):
+    # synthetic controls with a different mean and spread per control and two strongly correlated
+    # controls: a sampler that ignored its data (or its correlations, where it claims to model
+    # them) would fail here
+    rng = np.random.default_rng(3)
+    mu, sd = rng.uniform(-1, 1, 6), rng.uniform(0.05, 0.3, 6)
+    Y = rng.normal(mu, sd, size=(4000, 6))
+    Y[:, 1] = mu[1] + (Y[:, 0] - mu[0]) / sd[0] * sd[1] + rng.normal(0, 0.02 * sd[1], 4000)
+    s = sample_controls(method, Y, 4000, np.full(6, -10.0), np.full(6, 10.0), seed=2)
+    # uniform samples the data's box, whose centre (the mid-range) sits off the mean by chance
+    assert np.all(np.abs(s.mean(0) - mu) < (0.5 if method == "uniform" else 0.25) * sd), np.abs(s.mean(0) - mu) / sd
+    ratio = s.std(0) / Y.std(0)
+    assert np.all((ratio > 0.5) & (ratio < (2.5 if method == "uniform" else 1.5))), ratio
+    assert s.min(0).min() >= -10 and s.max(0).max() <= 10
+    corr = np.corrcoef(s[:, 0], s[:, 1])[0, 1]
+    if method in ("mvn", "gmm", "pca"):
+        assert corr > 0.9, corr
+    else:  # independent per-control samplers lose the correlation: the lesson's point
+        assert abs(corr) < 0.1, corr
 
 
 def test_network_trains_and_shipped_weights_check_their_rig(rig, data, tmp_path):
