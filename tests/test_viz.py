@@ -33,6 +33,28 @@ def test_viewer_selection_sliders_and_callbacks(sample):
     assert v.selected == "head"
 
 
+def test_selection_alone_creates_no_target_and_idle_sliders_show_nothing(sample):
+    s = sample.skeleton
+    v = SkeletonViewer(s, sample.global_pos[0])
+    # nothing selected: the dropdown says so and the sliders are off, with no number shown
+    assert v.joint_select.label == "(none)" and v.selected is None
+    assert all(sl.disabled and not sl.readout for sl in v.sliders)
+    seen = []
+    v.on_target_change(lambda name, p: seen.append(name))
+    v.select("left_elbow")
+    assert all(not sl.disabled and sl.readout for sl in v.sliders)
+    # the browser snaps each value to the slider's step grid and sends it back: not a move
+    for sl in v.sliders:
+        sl.value = sl.min + round((sl.value - sl.min) / sl.step) * sl.step
+    assert not seen and v.targets == {} and "away" not in v.status.value
+    v.sliders[0].value += 0.05
+    joint = sample.global_pos[0][s.index("left_elbow")]
+    assert seen == ["left_elbow"] and "cm away" in v.status.value
+    assert abs(np.linalg.norm(v.targets["left_elbow"] - joint) - 0.05) < v.SLIDER_STEP
+    v.joint_select.value = ""
+    assert v.selected is None and all(sl.disabled for sl in v.sliders)
+
+
 def test_viewer_refuses_bad_poses(sample):
     v = SkeletonViewer(sample.skeleton)
     with pytest.raises(ValueError, match=r"expected shape \(18, 3\)"):

@@ -125,6 +125,9 @@ class SkeletonViewer:
     targets : dict
     """
 
+    SLIDER_STEP = 0.005
+    """Target slider resolution, metres."""
+
     def __init__(self, skeleton: Skeleton, pose=None, ghost=None, targets=None, width: int = 560,
                  height: int = 420, joint_radius: float = 0.025, controls: bool = True,
                  background: str = "#f7f7f2", floor: bool = True):
@@ -174,17 +177,21 @@ class SkeletonViewer:
                                        width=width, height=height, antialias=True)
 
         self.status = w.HTML(value="double-click a joint to select it")
-        self.joint_select = w.Dropdown(options=[("(none)", None)] + [(n, n) for n in skeleton.names],
-                                       value=None, description="joint", layout=w.Layout(width="220px"))
-        self.joint_select.observe(lambda ch: self.select(ch["new"]), names="value")
+        # "" stands for no selection: a Dropdown whose value is None shows a blank box
+        self.joint_select = w.Dropdown(options=[("(none)", "")] + [(n, n) for n in skeleton.names],
+                                       value="", description="joint", layout=w.Layout(width="220px"))
+        self.joint_select.observe(lambda ch: self.select(ch["new"] or None), names="value")
         span = max(extent, 1.0)
-        self.sliders = [w.FloatSlider(value=0.0, min=-span, max=span, step=0.005, description=f"target {a}",
-                                      continuous_update=True, readout_format=".3f",
-                                      layout=w.Layout(width="320px")) for a in "xyz"]
-        lo = self.pose.min(0) - span
-        hi = self.pose.max(0) + span
-        for k, s in enumerate(self.sliders):
-            s.min, s.max = float(lo[k]), float(hi[k])
+        step = self.SLIDER_STEP
+        # limits on the step grid, so that the browser's snapping to it does not move a value
+        lo = np.floor((self.pose.min(0) - span) / step) * step
+        hi = np.ceil((self.pose.max(0) + span) / step) * step
+        self.sliders = [w.FloatSlider(value=float(lo[k]), min=float(lo[k]), max=float(hi[k]), step=step,
+                                      description=f"target {a}", continuous_update=True, readout_format=".3f",
+                                      disabled=True, readout=False, layout=w.Layout(width="320px"))
+                        for k, a in enumerate("xyz")]
+        self._synced = None
+        for s in self.sliders:
             s.observe(self._on_slider, names="value")
         self.controls = w.VBox([w.HBox([self.joint_select, self.status]), *self.sliders])
         self.controls.layout.display = None if controls else "none"
@@ -271,8 +278,8 @@ class SkeletonViewer:
         """Select a joint by name, role or index (None clears the selection)."""
         name = None if joint is None else self.skeleton.names[self.skeleton.index(joint)]
         self.selected = name
-        if self.joint_select.value != name:
-            self.joint_select.value = name
+        if self.joint_select.value != (name or ""):
+            self.joint_select.value = name or ""
         self._selected_marker.mesh.visible = name is not None
         if name is not None:
             self._selected_marker.set(self.pose[[self.skeleton.index(name)]])
@@ -290,7 +297,13 @@ class SkeletonViewer:
         self.select(self.skeleton.names[j])
 
     def _sync_sliders(self):
-        if self.selected is None:
+        """Show the selected joint's target (or, without one, the joint) on the sliders; with no
+        selection the sliders are disabled and show no number."""
+        active = self.selected is not None
+        for s in self.sliders:
+            s.disabled, s.readout = not active, active
+        if not active:
+            self._synced = None
             return
         p = self.targets.get(self.selected, self.pose[self.skeleton.index(self.selected)])
         self._syncing = True
@@ -299,11 +312,17 @@ class SkeletonViewer:
                 s.value = float(np.clip(v, s.min, s.max))
         finally:
             self._syncing = False
+        self._synced = np.array([s.value for s in self.sliders])
 
     def _on_slider(self, change):
         if self._syncing or self.selected is None:
             return
-        self.move_target(self.selected, [s.value for s in self.sliders])
+        values = np.array([s.value for s in self.sliders])
+        # the browser snaps a synced value to the slider's step grid and sends it back: that is
+        # not a move, and must not create a target a fraction of a step from the joint
+        if self._synced is not None and np.all(np.abs(values - self._synced) <= 0.5 * self.SLIDER_STEP + 1e-9):
+            return
+        self.move_target(self.selected, values)
 
     def move_target(self, joint, position):
         """Set one joint's target (creating it if needed) and notify ``on_target_change`` callbacks."""
