@@ -12,10 +12,14 @@ ROOT_FLAG := $(if $(filter 0,$(shell id -u)),--allow-root,)
 
 .PHONY: setup lab test browser-deps bench clean
 
-$(STAMP): pyproject.toml
+# JupyterLab settings for this environment: no news pop-up, no update check (nothing is fetched)
+LAB_OVERRIDES := $(VENV)/share/jupyter/lab/settings/overrides.json
+
+$(STAMP): pyproject.toml tools/jupyterlab_overrides.json
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
 	$(PY) -m pip install -q -e ".[dev]"
+	mkdir -p $(dir $(LAB_OVERRIDES)) && cp tools/jupyterlab_overrides.json $(LAB_OVERRIDES)
 	touch $(STAMP)
 
 setup: $(STAMP)
@@ -28,7 +32,8 @@ browser-deps:
 	fi
 
 lab: setup
-	$(VENV)/bin/jupyter lab notebooks/ $(ROOT_FLAG) $(LAB_ARGS)
+	$(VENV)/bin/jupyter lab notebooks/ $(ROOT_FLAG) --LabApp.news_url= \
+	  --LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate $(LAB_ARGS)
 
 test: setup browser-deps
 	$(PY) -m pytest $(PYTEST_ARGS)

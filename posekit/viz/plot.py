@@ -77,9 +77,14 @@ def plot_pose(skeleton: Skeleton, global_pos, ax=None, color="C0", ghost=None, g
     ax.set_ylim(cy - half, cy + half)
     ax.set_zlim(cz - half, cz + half)
     ax.set_box_aspect((1, 1, 1))
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("z (m)")
-    ax.set_zlabel("y, up (m)")
+    from matplotlib.ticker import MaxNLocator
+
+    for axis in (ax.xaxis, ax.yaxis, ax.zaxis):  # few, small ticks: full ones overlap on a 4-inch axes
+        axis.set_major_locator(MaxNLocator(3))
+    ax.tick_params(labelsize=7, pad=-2)
+    ax.set_xlabel("x (m)", fontsize=8, labelpad=-6)
+    ax.set_ylabel("z (m)", fontsize=8, labelpad=-6)
+    ax.set_zlabel("y, up (m)", fontsize=8, labelpad=-6)
     ax.view_init(elev=elev, azim=azim)
     if title:
         ax.set_title(title)
@@ -108,5 +113,10 @@ def plot_strip(skeleton: Skeleton, poses, titles=None, elev: float = 12, azim: f
         ax.set_xticklabels([])
         ax.set_yticklabels([])
         ax.set_zticklabels([])
-    fig.tight_layout()
+        if k:  # axis names once, on the first panel: elsewhere they run into the next panel
+            ax.set_xlabel("")
+            ax.set_ylabel("")
+            ax.set_zlabel("")
+    # tight_layout cannot measure 3D axes; fixed margins keep every panel whole
+    fig.subplots_adjust(left=0.0, right=1.0, bottom=0.02, top=0.92, wspace=0.02)
     return fig
