@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Skeleton", "ROLES"]
+__all__ = ["Skeleton", "ROLES", "roles_hint"]
 
 ROLES = (
     "pelvis", "chest", "neck", "head",
@@ -30,6 +30,15 @@ _SIDE_SWAPS = [
     (re.compile(r"_L$"), "_R"), (re.compile(r"_R$"), "_L"),
     (re.compile(r"^L(?=[A-Z_])"), "R"), (re.compile(r"^R(?=[A-Z_])"), "L"),
 ]
+
+
+def roles_hint(missing) -> str:
+    """How to supply roles that are missing: a ``roles=`` dict, shown with the first few."""
+    missing = list(missing)
+    example = ", ".join(f"'{r}': '<joint name>'" for r in missing[:3])
+    more = ", ..." if len(missing) > 3 else ""
+    return (f"pass roles={{{example}{more}}} to read_bvh / load_bvh_files / open_dataset, or use "
+            "skeleton.with_roles({...})")
 
 
 def _swap_side(name: str) -> str:
@@ -125,10 +134,33 @@ class Skeleton:
             return self.names.index(joint)
         if joint in self.roles:
             return self.names.index(self.roles[joint])
+        if joint in ROLES:
+            self.require_roles([joint])
         raise ValueError(
             f"unknown joint {joint!r} in skeleton {self.name or '(unnamed)'}; valid names: "
             f"{', '.join(self.names)}; valid roles: {', '.join(self.roles) or 'none'}"
         )
+
+    def missing_roles(self, roles=ROLES) -> list[str]:
+        """The roles of ``roles`` (default every canonical role) this skeleton has no joint for."""
+        return [r for r in roles if r not in self.roles]
+
+    def require_roles(self, roles, what: str = "") -> None:
+        """Raise a ``ValueError`` naming the missing roles (and how to supply them) unless the
+        skeleton has all of ``roles``; ``what`` says what needs them (e.g. ``"effector set '5'"``)."""
+        missing = self.missing_roles(roles)
+        if missing:
+            need = f"{what} needs" if what else "this needs"
+            raise ValueError(
+                f"skeleton {self.name or '(unnamed)'} has no joint for the role(s) {', '.join(missing)} "
+                f"({need} {', '.join(roles)}); roles it has: {', '.join(self.roles) or 'none'}. "
+                f"{roles_hint(missing)}; joint names: {', '.join(self.names)}")
+
+    def with_roles(self, roles: dict) -> "Skeleton":
+        """A copy whose roles are updated with ``roles`` (role -> joint name); a value of None drops a role."""
+        merged = {**self.roles, **roles}
+        merged = {k: v for k, v in merged.items() if v is not None}
+        return Skeleton(self.names, self.parents, self.offsets, merged, self.name, self.end_sites)
 
     def indices(self, joints) -> np.ndarray:
         """Indices of several joints (names, roles or indices), shape (K,)."""

@@ -139,7 +139,7 @@ def facing_angle(skeleton: Skeleton, global_pos) -> np.ndarray:
         if left in skeleton.roles and right in skeleton.roles:
             across = across + global_pos[..., skeleton.index(left), :] - global_pos[..., skeleton.index(right), :]
     if isinstance(across, float):
-        raise ValueError(f"skeleton {skeleton.name!r} has no left_hip/right_hip roles to find its facing")
+        skeleton.require_roles(("left_hip", "right_hip"), "the facing direction (facing_angle, to_root_space)")
     forward = np.cross(across, UP)
     return np.arctan2(forward[..., 0], forward[..., 2])
 

@@ -87,7 +87,7 @@ def test_round_trip_keeps_a_files_layout(tmp_path):
 @pytest.mark.parametrize("edit, line, msg", [
     (lambda t: t[: t.index("MOTION")], None, "no MOTION section"),
     (lambda t: t.replace("Frames: 2", "Frames: 3"), 33, "says 3 frames but the file has 2"),
-    (lambda t: t.replace("Frames: 2", "Frames: 1"), 33, "more rows follow"),
+    (lambda t: t.replace("Frames: 2", "Frames: 0"), 32, "says 0 frames but 2 frame rows follow"),
     (lambda t: t.replace("2.5e0 90 1E1", "2.5e0 90"), 33, "expected 15 values in a frame row, found 14"),
     (lambda t: t.replace("1 90 0 0 0", "1 90 zero 0 0"), 32, "bad number 'zero'"),
     (lambda t: t.replace("Xrotation Yrotation Zrotation", "Xrotation Yrotation Wrotation"), 9,
@@ -125,3 +125,32 @@ def test_reads_real_bandai_file_in_metres(shared_data):
     height = pos[:, m.skeleton.index("Head"), 1].mean()
     assert 1.3 < height < 2.0  # a person's head, in metres
     assert pos[..., 1].min() > -0.05  # feet on the floor
+
+
+def test_one_extra_frame_row_warns_and_reads_every_row(tmp_path):
+    from posekit.io.bvh import BVHWarning
+
+    p = write(tmp_path, SIMPLE.replace("Frames: 2", "Frames: 1"), "offbyone.bvh")
+    with pytest.warns(BVHWarning, match=r"offbyone.bvh:33: Frames: says 1 frames but the file has 2 complete"):
+        m = read_bvh(p)
+    assert m.n_frames == 2 and m.local_pos[1, 0, 0] == pytest.approx(2.5)
+    np.testing.assert_allclose(m.global_positions(), read_bvh(write(tmp_path, SIMPLE)).global_positions())
+
+
+def test_fewer_rows_than_declared_stays_an_error(tmp_path):
+    p = write(tmp_path, SIMPLE.replace("Frames: 2", "Frames: 3"), "short.bvh")
+    with pytest.raises(BVHError, match="Frames: says 3 frames but the file has 2") as e:
+        read_bvh(p)
+    assert str(e.value).startswith(f"{p}:33:")
+    # one extra row that is incomplete is not the off-by-one slip: an error on that row
+    p = write(tmp_path, SIMPLE + "1 2 3\n", "ragged.bvh")
+    with pytest.raises(BVHError, match="says 2 frames but 3 frame rows follow") as e:
+        read_bvh(p)
+    assert e.value.line == 34
+
+
+def test_guessed_roles_and_units_on_a_plain_file(tmp_path):
+    m = read_bvh(write(tmp_path, SIMPLE), scale=0.01)
+    assert m.skeleton.roles == {"pelvis": "Hips", "head": "Head", "chest": "Spine"}
+    assert m.units.unit == "given" and m.units.scale == 0.01 and m.rig.rig == "unknown"
+    assert read_bvh(write(tmp_path, SIMPLE), roles={"head": "Spine"}).skeleton.roles["head"] == "Spine"

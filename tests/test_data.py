@@ -132,3 +132,87 @@ def test_bandai_dataset_2_subset(shared_data):
     ms = load_bandai(2, data_dir=shared_data, limit=40, progress=False)
     assert ms.n_clips == 40 and ms.skeleton.n_joints == 22
     np.testing.assert_allclose(ms.frame_time, 0.133333, rtol=1e-4)
+
+
+# ------------------------------------------------------------------ BVH folders in the wild
+def _folder(tmp_path, name, n, rig=None, frames=30):
+    from .test_rigs import mixamo_rig, write_rig
+
+    folder = tmp_path / name
+    folder.mkdir()
+    rng = np.random.default_rng(n)
+    for i in range(n):  # subjects of different sizes
+        write_rig(folder / f"take_{i}.bvh", rig or mixamo_rig(), rng, k=1 + 0.08 * i, frames=frames)
+    return folder
+
+
+def test_folder_with_other_hierarchy_says_what_differs(tmp_path):
+    from .test_rigs import mixamo_rig, write_rig
+
+    folder = _folder(tmp_path, "mixed", 1)
+    rename = lambda n: n and n.replace("LeftToeBase", "LeftToe")
+    rig = [(rename(n), rename(p), o) for n, p, o in mixamo_rig()]
+    write_rig(folder / "take_9.bvh", rig, np.random.default_rng(0))
+    with pytest.raises(ValueError, match=r"take_9.bvh: its joint hierarchy differs from .*take_0.bvh's: 1 joint "
+                                         r"name\(s\) differ, the first is joint \d+: 'mixamorig:LeftToe' here, "
+                                         r"'mixamorig:LeftToeBase' in the first file"):
+        open_dataset(folder, scale=0.01)
+    write_rig(folder / "take_9.bvh", [r for r in mixamo_rig() if "Toe_End" not in r[0]], np.random.default_rng(0))
+    with pytest.raises(ValueError, match=r"25 joints instead of 27; lacks: mixamorig:LeftToe_End, mixamorig:RightToe"):
+        open_dataset(folder, scale=0.01)
+
+
+def test_scale_argument_wins_over_detection(tmp_path):
+    import warnings
+
+    folder = _folder(tmp_path, "two", 2, frames=5)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # an explicit scale never warns about units
+        ms = open_dataset(folder, scale=0.02)
+    assert ms.units.unit == "given" and ms.units.detected == "cm" and ms.units.scale == 0.02
+    assert 3.0 < ms.units.height < 3.5
+
+
+def test_split_falls_back_to_time_with_too_few_clips(tmp_path):
+    with pytest.warns(UserWarning):
+        ms = open_dataset(_folder(tmp_path, "one", 1, frames=40))
+    assert [len(s) for s in split_by_clip(ms)] == [40, 0, 0]  # clip-level: nothing held out
+    with pytest.warns(UserWarning, match=r"only 1 clip\(s\) for 3 non-empty sets.*splitting each clip in time"):
+        train, val, test = split_by_clip(ms, fallback=True)
+    assert list(train) == list(range(32)) and list(val) == list(range(32, 36)) and list(test) == list(range(36, 40))
+    with pytest.raises(ValueError, match="needs at least two frames.*got 0.*1 clip.*fallback=True"):
+        sample_pairs(ms, 5, frames=split_by_clip(ms)[2])
+
+
+@pytest.mark.parametrize("clips", [1, 2])
+def test_bench_ik_on_one_or_two_clips(tmp_path, clips):
+    from posekit.bench.ik import build_cases, run
+
+    with pytest.warns(UserWarning, match="cm"):
+        ms = open_dataset(_folder(tmp_path, f"c{clips}", clips))
+    with pytest.warns(UserWarning, match="too few for a clip-level split"):
+        cases = build_cases(ms, n_cases=8)
+    assert len(cases) == 8
+    held_out = set(np.concatenate([ms.clip_frames(c)[-3:] for c in range(clips)]))  # last 10 % of 30 frames
+    local_truth = to_root_space(ms.skeleton, ms.global_pos[sorted(held_out)])[0]
+    for t in cases.target_pos:  # every target is a held-out frame
+        assert np.min(np.abs(local_truth - t).max(axis=(1, 2))) < 1e-9
+    with pytest.warns(UserWarning, match="too few for a clip-level split"):
+        rows = run(ms, solvers=("fabrik", "dls"), effector_sets=("2",), n_cases=6, peers=False, baseline=False,
+                   batched=False)
+    assert {r["method"] for r in rows} == {"fabrik", "dls"}
+    assert all(r["cases"] == 6 and r["effector_error_mm_median"] < 5 for r in rows)
+
+
+def test_bench_ik_cli_on_a_single_bvh_file(tmp_path, capsys):
+    import json
+
+    from posekit.cli import main
+
+    folder = _folder(tmp_path, "single", 1)
+    with pytest.warns(UserWarning):
+        code = main(["bench", "ik", "--data", str(folder / "take_0.bvh"), "--solvers", "dls", "--effectors", "2",
+                     "--cases", "5", "--no-peers", "--json"])
+    assert code == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert rows[0]["method"] == "dls" and rows[0]["cases"] == 5

@@ -1,8 +1,11 @@
 """Pose data: the shipped sample, BVH folders, the Bandai Namco sets, and training utilities."""
 
-from .dataset import NormStats, augment_positions, sample_pairs, split_by_clip
+from .dataset import NormStats, augment_positions, sample_pairs, split_by_clip, split_by_time
 from .motion import MotionSet
 from .sources import (load_bandai, load_bvh_files, load_sample, open_dataset, skeleton_preset)
+from .rigs import guess_roles, guess_units, missing_roles, rig_report
+from .bandai_mini import BandaiMiniSplit, bandai_mini_split, build_bandai_mini, load_bandai_mini
 
 __all__ = ["MotionSet", "load_sample", "load_bvh_files", "load_bandai", "open_dataset", "skeleton_preset",
-           "split_by_clip", "NormStats", "augment_positions", "sample_pairs"]
+           "guess_roles", "missing_roles", "rig_report", "guess_units", "split_by_clip", "split_by_time", "NormStats", "augment_positions", "sample_pairs",
+           "load_bandai_mini", "bandai_mini_split", "build_bandai_mini", "BandaiMiniSplit"]

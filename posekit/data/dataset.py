@@ -6,6 +6,7 @@ train on what these produce.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -13,10 +14,10 @@ import numpy as np
 from ..transforms import mirror_positions, rotate_y_positions
 from .motion import MotionSet
 
-__all__ = ["split_by_clip", "NormStats", "augment_positions", "sample_pairs"]
+__all__ = ["split_by_clip", "split_by_time", "NormStats", "augment_positions", "sample_pairs"]
 
 
-def split_by_clip(motions: MotionSet, fractions=(0.8, 0.1, 0.1), seed: int = 0):
+def split_by_clip(motions: MotionSet, fractions=(0.8, 0.1, 0.1), seed: int = 0, fallback: bool = False):
     """Split frames into train/val/test so that every clip lies in exactly one set.
 
     Clips are shuffled with ``seed`` and assigned greedily so each set's *frame* share is close to
@@ -26,17 +27,31 @@ def split_by_clip(motions: MotionSet, fractions=(0.8, 0.1, 0.1), seed: int = 0):
     ----------
     fractions : sequence of float
         Shares of frames per set; normalised to sum to 1.
+    fallback : bool
+        When there are fewer clips than sets with a non-zero share (one or two BVH files for three
+        sets), split *within* each clip instead (:func:`split_by_time`) and warn; without it such
+        sets stay empty.
 
     Returns
     -------
     list of ndarray
         Frame indices of each set, sorted.
+
+    Warns
+    -----
+    UserWarning
+        ``fallback=True`` and too few clips: the split is frame-level, in time.
     """
     fr = np.asarray(fractions, dtype=float)
     if fr.ndim != 1 or len(fr) == 0 or np.any(fr < 0) or fr.sum() <= 0:
         raise ValueError(f"fractions: expected non-negative shares, got {fractions}")
     fr = fr / fr.sum()
     C = motions.n_clips
+    if fallback and C < int(np.count_nonzero(fr)):
+        warnings.warn(f"only {C} clip(s) for {int(np.count_nonzero(fr))} non-empty sets, too few for a clip-level "
+                      "split; splitting each clip in time instead (train first, test last), so held-out frames "
+                      "come from the same clips as the training frames", UserWarning, stacklevel=2)
+        return split_by_time(motions, fractions)
     lengths = motions.clip_lengths()
     order = np.random.default_rng(seed).permutation(C)
     target = fr * lengths.sum()
@@ -55,6 +70,32 @@ def split_by_clip(motions: MotionSet, fractions=(0.8, 0.1, 0.1), seed: int = 0):
         got[k] += lengths[c]
     return [np.sort(np.concatenate([motions.clip_frames(c) for c in cs])) if cs else np.zeros(0, np.int64)
             for cs in clips]
+
+
+def split_by_time(motions: MotionSet, fractions=(0.8, 0.1, 0.1)):
+    """Frame-level split: each clip is cut in time into consecutive segments, one per set, in order
+    (train = the first 80 % of every clip, val the next 10 %, test the last 10 %).
+
+    Neighbouring frames are nearly identical, so a random frame-level split would leak; contiguous
+    segments keep the leak to the segment borders. Use it only when there are too few clips for
+    :func:`split_by_clip`.
+
+    Returns
+    -------
+    list of ndarray
+        Frame indices of each set, sorted.
+    """
+    fr = np.asarray(fractions, dtype=float)
+    if fr.ndim != 1 or len(fr) == 0 or np.any(fr < 0) or fr.sum() <= 0:
+        raise ValueError(f"fractions: expected non-negative shares, got {fractions}")
+    edges = np.concatenate([[0.0], np.cumsum(fr / fr.sum())])
+    sets = [[] for _ in fr]
+    for c in range(motions.n_clips):
+        frames = motions.clip_frames(c)
+        cut = np.round(edges * len(frames)).astype(int)
+        for k in range(len(fr)):
+            sets[k].append(frames[cut[k]:cut[k + 1]])
+    return [np.sort(np.concatenate(s)) if s else np.zeros(0, np.int64) for s in sets]
 
 
 @dataclass
@@ -87,15 +128,21 @@ class NormStats:
         return np.asarray(z, dtype=float) * self.std + self.mean
 
     def to_arrays(self, prefix: str = "norm_") -> dict:
+        """``{prefix + "mean": mean, prefix + "std": std}``, e.g. for ``np.savez`` or a checkpoint
+        (:func:`posekit.learn.save_checkpoint`)."""
         return {prefix + "mean": self.mean, prefix + "std": self.std}
 
     @classmethod
     def from_arrays(cls, arrays, prefix: str = "norm_") -> "NormStats":
-        return cls(np.asarray(arrays[prefix + "mean"]), np.asarray(arrays[prefix + "std"]))
+        """Inverse of :meth:`to_arrays` (float64 arrays)."""
+        return cls(np.asarray(arrays[prefix + "mean"], dtype=float), np.asarray(arrays[prefix + "std"], dtype=float))
 
     def same_as(self, other: "NormStats", rtol: float = 1e-6) -> bool:
-        return (self.mean.shape == other.mean.shape and np.allclose(self.mean, other.mean, rtol=rtol)
-                and np.allclose(self.std, other.std, rtol=rtol))
+        """Same shapes and values to ``rtol``: a model trained on one must not be fed the other."""
+        a, b = np.asarray(self.mean), np.asarray(other.mean)
+        sa, sb = np.asarray(self.std), np.asarray(other.std)
+        return (a.shape == b.shape and sa.shape == sb.shape and np.allclose(a, b, rtol=rtol)
+                and np.allclose(sa, sb, rtol=rtol))
 
 
 def augment_positions(skeleton, global_pos, rng=None, mirror_prob: float = 0.5, rotate: bool = True):
@@ -145,7 +192,9 @@ def sample_pairs(motions: MotionSet, n: int, rng=None, max_gap: int | None = Non
     rng = np.random.default_rng(rng)
     frames = np.arange(motions.n_frames) if frames is None else np.sort(np.asarray(frames))
     if len(frames) < 2:
-        raise ValueError("sample_pairs needs at least two frames")
+        raise ValueError(f"sample_pairs needs at least two frames to draw pairs from, got {len(frames)} (of "
+                         f"{motions.n_frames} frames in {motions.n_clips} clip(s)); an empty split set usually "
+                         "means too few clips for a clip-level split: see split_by_clip(fallback=True)")
     clip = motions.clip_id[frames]
     # position of each frame's clip run inside `frames`
     lo = np.searchsorted(clip, clip, side="left")

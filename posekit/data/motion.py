@@ -38,6 +38,10 @@ class MotionSet:
         channels); None means ``skeleton.offsets``.
     source : str
         Where the data came from.
+    units : posekit.data.rigs.UnitGuess, optional
+        The file unit detected (or given) when read from BVH, and the scale applied to it.
+    rig : str
+        The naming convention recognised (``"cmu"``, ``"mixamo"``, ... see :mod:`posekit.data.rigs`).
     """
 
     skeleton: Skeleton
@@ -49,6 +53,8 @@ class MotionSet:
     frame_time: np.ndarray
     local_pos: np.ndarray | None = None
     source: str = ""
+    units: object = None
+    rig: str = ""
     _starts: np.ndarray = field(default=None, repr=False)
 
     def __post_init__(self):
@@ -118,7 +124,7 @@ class MotionSet:
         return MotionSet(
             self.skeleton, self.local_rot[frames], self.root_pos[frames], self.global_pos[frames],
             remap[self.clip_id[frames]], [self.clip_names[c] for c in kept], self.frame_time[kept],
-            None if self.local_pos is None else self.local_pos[frames], self.source,
+            None if self.local_pos is None else self.local_pos[frames], self.source, self.units, self.rig,
         )
 
     def recompute_global(self) -> "MotionSet":

@@ -130,6 +130,7 @@ def effector_set(skeleton: Skeleton, name: str, pose_pos, tolerance: float = 1e-
     """Effectors of a named set (:data:`EFFECTOR_SETS`) placed at the joints of ``pose_pos`` (J, 3)."""
     if name not in EFFECTOR_SETS:
         raise ValueError(f"unknown effector set {name!r}; valid: {', '.join(EFFECTOR_SETS)}")
+    skeleton.require_roles(EFFECTOR_SETS[name], f"effector set {name!r}")
     pose_pos = np.asarray(pose_pos, dtype=float)
     return [Effector(role, pose_pos[skeleton.index(role)], tolerance=tolerance) for role in EFFECTOR_SETS[name]]
 

@@ -5,13 +5,17 @@ Introduced in ``notebooks/00_skeletons_and_poses.ipynb``. Conventions: :mod:`pos
 
 The reader accepts any channel layout (0-6 channels on any joint; position channels give that
 joint's translation, replacing its OFFSET), any rotation order, ``End Site`` blocks, CRLF line ends,
-tabs, scientific notation, and a unit ``scale`` (0.01 for centimetre files). Malformed files raise
-:class:`BVHError` naming the file and the line.
+tabs, scientific notation, and a unit ``scale`` (0.01 for centimetre files, ``None`` to detect the unit
+from the skeleton's height: :func:`posekit.data.rigs.guess_units`). Joint roles are guessed from the
+names (:func:`posekit.data.rigs.guess_roles`) unless given. Malformed files raise :class:`BVHError`
+naming the file and the line; a ``Frames:`` count one short of the rows that follow (a common exporter
+slip) only warns (:class:`BVHWarning`) and all rows are read.
 """
 
 from __future__ import annotations
 
 import os
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -22,7 +26,7 @@ from ..kinematics import fk
 from ..rotations import quat_to_euler
 from ..skeleton import Skeleton
 
-__all__ = ["BVHError", "BVHMotion", "read_bvh", "write_bvh"]
+__all__ = ["BVHError", "BVHWarning", "BVHMotion", "read_bvh", "write_bvh"]
 
 _ROT = {"Xrotation": "X", "Yrotation": "Y", "Zrotation": "Z"}
 _POS = {"Xposition": 0, "Yposition": 1, "Zposition": 2}
@@ -35,6 +39,10 @@ class BVHError(ValueError):
         self.path, self.line = str(path), line
         where = f"{path}:{line}" if line else str(path)
         super().__init__(f"{where}: {message}")
+
+
+class BVHWarning(UserWarning):
+    """A BVH file that was read despite a slip (e.g. one more frame row than ``Frames:`` says)."""
 
 
 @dataclass
@@ -54,6 +62,11 @@ class BVHMotion:
     channels : list of tuple of str
         Each joint's channels as written.
     path : str
+    units : UnitGuess
+        The detected length unit, the scale applied and the standing height
+        (:class:`posekit.data.rigs.UnitGuess`).
+    rig : RolesReport
+        The recognised rig and the roles it lacks (:class:`posekit.data.rigs.RolesReport`).
     """
 
     skeleton: Skeleton
@@ -62,6 +75,8 @@ class BVHMotion:
     frame_time: float
     channels: list
     path: str = ""
+    units: object = None
+    rig: object = None
 
     @property
     def n_frames(self) -> int:
@@ -116,31 +131,46 @@ class _Tokens:
         return value
 
 
-def read_bvh(path, scale: float = 1.0, drop_tpose: bool = False, roles: dict | None = None,
+def read_bvh(path, scale: float | None = 1.0, drop_tpose: bool = False, roles: dict | None = None,
              name: str = "") -> BVHMotion:
     """Read a BVH file.
 
     Parameters
     ----------
     path : str or Path
-    scale : float
+    scale : float or None
         Multiplies every length (OFFSETs, position channels): 0.01 turns centimetres into metres.
+        The default 1 keeps the file's numbers. ``None`` detects the unit from the rest pose's
+        standing height (:func:`posekit.data.rigs.guess_units`) and warns when it is not metres.
     drop_tpose : bool
         Drop the first frame (many captures start with a T-pose).
     roles : dict, optional
-        Canonical roles for the skeleton (see :data:`posekit.skeleton.ROLES`).
+        Canonical roles (see :data:`posekit.skeleton.ROLES`) -> joint names. Default: guessed from
+        the joint names and hierarchy (:func:`posekit.data.rigs.guess_roles`); the roles given
+        replace the guessed ones of the same name, the others stay guessed.
     name : str
         Label for the skeleton.
 
     Returns
     -------
     BVHMotion
+        With ``units`` (detected unit, applied scale, height) and ``rig`` (rig name, missing roles).
 
     Raises
     ------
     BVHError
-        Malformed file, with its path and line number.
+        Malformed file, with its path and line number; also when ``Frames:`` says more frames than
+        the file has, or two or more fewer.
+
+    Warns
+    -----
+    BVHWarning
+        ``Frames:`` is exactly one less than the complete rows that follow: all rows are read.
+    UserWarning
+        ``scale=None`` and the detected unit is not metres (the message says which and how to override).
     """
+    from ..data.rigs import guess_roles, guess_units, rig_report, standing_height, unit_warning
+
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8", errors="replace")
@@ -236,8 +266,12 @@ def read_bvh(path, scale: float = 1.0, drop_tpose: bool = False, roles: dict | N
     if len(rows) < F:
         last = rows[-1][0] if rows else row_at
         raise BVHError(path, last, f"Frames: says {F} frames but the file has {len(rows)} (truncated?)")
+    if len(rows) == F + 1 and len(rows[F][1].split()) == n_ch:
+        warnings.warn(f"{path}:{rows[F][0]}: Frames: says {F} frames but the file has {F + 1} complete frame "
+                      f"rows; reading all {F + 1}", BVHWarning, stacklevel=2)
+        F += 1
     if len(rows) > F:
-        raise BVHError(path, rows[F][0], f"Frames: says {F} frames but more rows follow")
+        raise BVHError(path, rows[F][0], f"Frames: says {F} frames but {len(rows)} frame rows follow")
     for lineno, l in rows:
         if len(l.split()) != n_ch:
             raise BVHError(path, lineno, f"expected {n_ch} values in a frame row, found {len(l.split())}")
@@ -257,8 +291,34 @@ def read_bvh(path, scale: float = 1.0, drop_tpose: bool = False, roles: dict | N
     if drop_tpose and F > 0:
         data, F = data[1:], F - 1
 
-    J = len(names)
-    offsets = np.asarray(offsets) * scale
+    guessed = guess_roles(names, parents)
+    if roles is not None:
+        unknown = {r: j for r, j in roles.items() if j not in names}
+        if unknown:
+            raise ValueError(f"{path}: roles name joints the file does not have: {unknown}; "
+                             f"joints: {', '.join(names)}")
+        guessed.update(roles)
+    roles = guessed
+    height = standing_height(names, parents, offsets, roles)
+    if height <= 1e-9 and F:  # every OFFSET zero: measure the animated pose instead
+        raw = _decode(names, parents, offsets, channels, data[: min(F, 200)], 1.0)
+        height = standing_height(names, parents, offsets, roles,
+                                 fk(raw[0], raw[1], local_pos=raw[2])[0])
+    units = guess_units(height, scale)
+    if scale is None:
+        message = unit_warning(units, str(path))
+        if message:
+            warnings.warn(message, UserWarning, stacklevel=2)
+    skeleton, local_rot, local_pos = _decode(names, parents, offsets, channels, data, units.scale, roles,
+                                             name or path.stem, end_sites)
+    return BVHMotion(skeleton, local_rot, local_pos, float(frame_time), channels, str(path), units,
+                     rig_report(names, roles))
+
+
+def _decode(names, parents, offsets, channels, data, scale, roles=None, name="", end_sites=None):
+    """Skeleton, local quaternions (F, J, 4) and local translations (F, J, 3) from frame rows."""
+    F, J = len(data), len(names)
+    offsets = np.asarray(offsets, dtype=float) * scale
     local_pos = np.broadcast_to(offsets, (F, J, 3)).copy()
     local_rot = np.zeros((F, J, 4))
     local_rot[..., 3] = 1.0
@@ -272,9 +332,9 @@ def read_bvh(path, scale: float = 1.0, drop_tpose: bool = False, roles: dict | N
         if axes and F:
             local_rot[:, j] = Rotation.from_euler(axes, data[:, rot_cols], degrees=True).as_quat()
         col += len(chans)
-    skeleton = Skeleton(names, parents, offsets, roles=roles or {}, name=name or path.stem,
-                        end_sites={k: np.asarray(v) * scale for k, v in end_sites.items()})
-    return BVHMotion(skeleton, local_rot, local_pos, float(frame_time), channels, str(path))
+    skeleton = Skeleton(names, parents, offsets, roles=roles or {}, name=name,
+                        end_sites={k: np.asarray(v) * scale for k, v in (end_sites or {}).items()})
+    return skeleton, local_rot, local_pos
 
 
 def write_bvh(path, skeleton: Skeleton, local_rot, frame_time: float, local_pos=None, root_pos=None,
