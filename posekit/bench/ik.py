@@ -94,9 +94,11 @@ class Cases:
 
 def build_cases(motions: MotionSet, n_cases: int = 1000, seed: int = 0, start: str = "frame",
                 split=(0.8, 0.1, 0.1)) -> Cases:
-    """Held-out cases (see the module docstring)."""
+    """Held-out cases (see the module docstring). With fewer clips than split sets (one or two BVH
+    files) the held-out frames are the end of every clip instead, with a warning
+    (:func:`posekit.data.split_by_clip` with ``fallback=True``)."""
     s = motions.skeleton
-    test = split_by_clip(motions, split, seed=seed)[2]
+    test = split_by_clip(motions, split, seed=seed, fallback=True)[2]
     a, b = sample_pairs(motions, n_cases, rng=seed, frames=test)
     frames = np.unique(np.concatenate([a, b]))
     local, origin, angle = to_root_space(s, motions.global_pos[frames])
@@ -125,29 +127,44 @@ def build_cases(motions: MotionSet, n_cases: int = 1000, seed: int = 0, start: s
 
 
 def _numpy_fabrik(skeleton, start, eff, targets, tol=1e-3, max_iter=20):
-    """Baseline: the same full-body FABRIK written the straightforward way, numpy vector ops per
-    joint (no compilation, no proposal weights), as a newcomer would after the lesson."""
+    """Baseline: the same full-body FABRIK as :class:`~posekit.ik.FabrikSolver` — backward pass with
+    plain centroids at the sub-bases, near-extended chains straightened
+    (:func:`~posekit.ik.fabrik.straighten_chain`), forward pass — written the straightforward way,
+    numpy vector ops per joint and no compilation, as a newcomer would after the lesson."""
+    from ..ik.fabrik import effector_chains, straighten_chain
+
     parents = skeleton.parents
     pos = start.copy()
     L = np.linalg.norm(pos - pos[np.maximum(parents, 0)], axis=1)
-    fixed = set(skeleton.chain(base_index(skeleton), 0))
+    fixed = np.zeros(len(parents), dtype=bool)
+    fixed[skeleton.chain(base_index(skeleton), 0)] = True
     active = set()
     for e in eff:
         active.update(skeleton.chain(int(e), 0))
+    chains = effector_chains(skeleton, eff, fixed)
+    goal = {int(e): targets[k] for k, e in enumerate(eff)}
     it = 0
     while np.linalg.norm(pos[eff] - targets, axis=1).max() > tol and it < max_iter:
         back = pos.copy()
         for j in range(len(parents) - 1, -1, -1):
-            if j in fixed or j not in active:
+            if fixed[j] or j not in active:
                 continue
-            if j in eff:
-                back[j] = targets[list(eff).index(j)]
+            if j in goal:
+                back[j] = goal[j]
                 continue
             props = [back[c] + L[c] * (pos[j] - back[c]) / np.linalg.norm(pos[j] - back[c])
                      for c in np.nonzero(parents == j)[0] if c in active]
             back[j] = np.mean(props, axis=0)
+        for ch in chains:  # each chain as the forward pass would place it, straightened if near-extended
+            q = [back[ch[0]]]
+            for j in ch[1:]:
+                q.append(q[-1] + L[j] * (back[j] - q[-1]) / np.linalg.norm(back[j] - q[-1]))
+            straightened = straighten_chain(np.array(q), goal[int(ch[-1])])
+            if straightened is not None:
+                m, new = straightened
+                back[ch[m + 1:]] = new[m + 1:]
         for j in range(len(parents)):
-            if j in fixed:
+            if fixed[j]:
                 continue
             u = (back[j] if j in active else pos[j]) - pos[parents[j]]
             pos[j] = pos[parents[j]] + L[j] * u / np.linalg.norm(u)
@@ -195,8 +212,8 @@ def _ikpy_rows(cases: Cases, n: int, tolerance: float):
         import ikpy
         from ikpy.chain import Chain
         from ikpy.link import OriginLink, URDFLink
-    except ImportError:
-        return [{"method": "ikpy", "effectors": "left_hand", "note": "ikpy not installed"}]
+    except ImportError:  # a peer that is not installed is simply absent
+        return []
     from ..rotations import quat_to_euler
 
     chain_j = s.chain("left_hand", "pelvis")
@@ -235,11 +252,8 @@ def _ikpy_rows(cases: Cases, n: int, tolerance: float):
                               "latency_ms_median": float(np.median(l) * 1e3),
                               "effector_error_mm_median": float(np.median(e) * 1e3),
                               "converged_fraction": float(np.mean(np.array(e) <= tolerance))}
-    return [row(f"ikpy {version} (chain pelvis->left hand)", lat, err),
-            row("posekit fabrik (same single effector)", lat_pk, err_pk),
-            {"method": "pyfabrik 0.4.0", "effectors": "left_hand",
-             "note": "not run: with numpy 2 its Fabrik3D constructor fails (vectormath Vector3 "
-                     "difference is a plain ndarray: 'numpy.ndarray' object has no attribute 'length')"}]
+    return [row(f"ikpy {version} (one chain)", lat, err),
+            row("fabrik (same chain)", lat_pk, err_pk)]
 
 
 def run(motions: MotionSet, solvers=("fabrik", "ccd", "dls"), effector_sets=("2", "5"), n_cases: int = 1000,
@@ -296,6 +310,22 @@ def run(motions: MotionSet, solvers=("fabrik", "ccd", "dls"), effector_sets=("2"
     return rows
 
 
-TABLE_COLUMNS = ["method", "effectors", "cases", "latency_ms_median", "paper_latency_ms", "memory_kb",
-                 "effector_error_mm_median", "mpjpe_mm_median", "bone_length_error_mm_max",
-                 "converged_fraction", "iterations_median", "solves_per_s"]
+TABLES = [
+    ("Speed (one solve, one thread; batched: solves/s over all cases at once)",
+     ["method", "effectors", "cases", "latency_ms_median", "paper_latency_ms", "memory_kb", "solves_per_s"]),
+    ("Accuracy (medians over cases; bone error: the worst case)",
+     ["method", "effectors", "effector_error_mm_median", "mpjpe_mm_median", "bone_length_error_mm_max",
+      "converged_fraction", "iterations_median"]),
+]
+"""The tables ``posekit bench ik`` prints: (title, JSON keys). Each fits 100 columns."""
+
+TABLE_LABELS = {
+    "effectors": "effectors", "latency_ms_median": "ms", "paper_latency_ms": "paper ms", "memory_kb": "kB",
+    "solves_per_s": "solves/s", "effector_error_mm_median": "effector mm", "mpjpe_mm_median": "MPJPE mm",
+    "bone_length_error_mm_max": "bone mm", "converged_fraction": "converged", "iterations_median": "iterations",
+}
+"""Short table headers for the JSON keys (units in the header)."""
+
+TABLE_COLUMNS = [c for _, cols in TABLES for c in cols if c != "method"]
+TABLE_COLUMNS = ["method"] + list(dict.fromkeys(TABLE_COLUMNS))
+"""Every column in one table (``posekit bench ik --wide``)."""

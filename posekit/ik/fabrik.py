@@ -9,9 +9,12 @@ Units and axes: :mod:`posekit.conventions` (metres, Y up, facing +Z).
 * :class:`FabrikSolver` — the whole body with several end effectors (Sec. 4.2 of the paper): the
   backward pass runs from every effector towards the base; a *sub-base* (a joint where chains
   meet, e.g. the chest) goes to the centroid of the positions its chains propose; the forward pass
-  then runs from the fixed base (the pelvis) outwards. Optional joint constraints (Sec. 5): cone
-  limits on a bone's angle to its parent bone (shoulders, hips, elbows, knees) and a hinge rule
-  that knees do not bend forward. The kernel is compiled with numba.
+  then runs from the fixed base (the pelvis) outwards. Between the two passes, chains whose target
+  is close to their full reach — FABRIK's slow regime, a head on a straight spine — are
+  straightened just enough to reach it (:func:`straighten_chain`, the paper's unreachable-target
+  case generalised). Optional joint constraints (Sec. 5): cone limits on a bone's angle to its
+  parent bone (shoulders, hips, elbows, knees) and a hinge rule that knees do not bend forward. The
+  kernel (:mod:`posekit.ik.fabrik_kernel`) is compiled with numba.
 * :func:`fix_bone_lengths` — the backward pass alone, which restores bone lengths of predicted
   positions (the post-processing of Victor & Meyer 2020, Sec. 3.4).
 """
@@ -22,12 +25,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._jit import njit
 from ..skeleton import Skeleton
 from .api import IKResult, Pose, base_index, check_pose, resolve_effectors
+from .fabrik_kernel import _S_MAX, EXTENDED_RATIO, MIN_AXIAL, SECANT_STEPS, _fabrik_tree
 
 __all__ = ["fabrik_chain", "FabrikSolver", "Constraints", "default_constraints", "fix_bone_lengths",
-           "chain_lengths"]
+           "chain_lengths", "straighten_chain", "effector_chains"]
 
 
 # ---------------------------------------------------------------------------------------- one chain
@@ -93,6 +96,109 @@ def fabrik_chain(positions, target, tolerance: float = 1e-3, max_iter: int = 20,
     return out + (history,) if return_history else out
 
 
+# ------------------------------------------------------------------------------ near-extended chains
+def straighten_chain(positions, target, ratio: float = EXTENDED_RATIO, may_bend: bool = True):
+    """The near-extended chain step of :class:`FabrikSolver`, readable numpy (the kernel
+    :func:`posekit.ik.fabrik_kernel._extended_chain` does the same with scalars).
+
+    Generalises the first branch of Algorithm 1 of Aristidou & Lasenby 2011 — a target out of
+    reach gets the chain straight at it, no iterations — to targets *close to* full reach, where the
+    FABRIK passes are slowest (their contraction per iteration tends to 1 as the chain straightens;
+    ``notebooks/01_fabrik.ipynb`` section 2 measures it):
+
+    1. find the longest end part ``positions[m:]`` (two bones or more) whose target lies at
+       ``d >= ratio * R`` of its reach ``R``;
+    2. split each of its bones into the part along the axis ``e`` from ``positions[m]`` to the end
+       and the part across it, and scale every sideways part by one factor ``sigma``:
+       ``sigma = 0`` is the straight chain (the paper's unreachable case, taken when ``d >= R``),
+       ``sigma = 1`` the chain as it is; the squared span is close to linear in ``sigma^2``, so a
+       few secant steps from those two points find the ``sigma`` whose span is ``d``;
+    3. turn the part rigidly about ``positions[m]`` so its end is on the target.
+
+    Bone lengths are exact and the chain keeps its shape (where it bends, and which way) but for the
+    amount. A part with a bone more than 60 deg off its axis is left to the FABRIK passes.
+
+    Parameters
+    ----------
+    positions : ndarray, shape (n+1, 3), metres
+        The chain, base first (the solver passes it as the forward pass would place it).
+    target : ndarray, shape (3,)
+    ratio : float
+    may_bend : bool
+        False: only straighten (``sigma <= 1``), never bend further — the solver's choice for chains
+        with joint limits, where a larger bend could cross a hinge limit.
+
+    Returns
+    -------
+    (m, positions) : int and ndarray, shape (n+1, 3)
+        The new chain; only ``positions[m + 1:]`` moved. None when no end part qualifies.
+    """
+    q = np.array(positions, dtype=float)
+    t = np.asarray(target, dtype=float)
+    bones = np.diff(q, axis=0)
+    bl = np.linalg.norm(bones, axis=1)
+    for m in range(len(bl) - 1):
+        R, d = bl[m:].sum(), np.linalg.norm(t - q[m])
+        if d < ratio * R or d <= 1e-12:
+            continue
+        part = _straighten_part(q[m], bones[m:], bl[m:], R, t, may_bend)
+        if part is not None:
+            q[m + 1:] = part
+            return m, q
+    return None
+
+
+def _straighten_part(base, bones, bl, R, t, may_bend):
+    S = np.linalg.norm(bones.sum(axis=0))
+    d = np.linalg.norm(t - base)
+    if S < 1e-12 or (d < S and not may_bend):
+        return None
+    e = bones.sum(axis=0) / S
+    along = bones @ e
+    if np.any(along < MIN_AXIAL * bl):
+        return None
+    across = bones - along[:, None] * e
+
+    def chain(sig):
+        v = along[:, None] * e + sig * across
+        return np.cumsum(bl[:, None] * v / np.linalg.norm(v, axis=1, keepdims=True), axis=0)
+
+    sig = 0.0
+    if d < R:
+        g = lambda s: np.sum(chain(np.sqrt(s))[-1] ** 2) - d * d  # noqa: E731
+        (s0, g0), (s1, g1) = (0.0, R * R - d * d), (1.0, S * S - d * d)
+        if g0 - g1 < 1e-12 * R * R:
+            return None  # straight already: no sideways part to scale
+        for _ in range(SECANT_STEPS):
+            if g1 != g0 and abs(g1) > 1e-13 * d * d:
+                s0, g0, s1 = s1, g1, min(max(s1 - g1 * (s1 - s0) / (g1 - g0), 0.0), _S_MAX)
+                g1 = g(s1)
+        sig = np.sqrt(s1)
+    offsets = chain(sig)
+    a, b = offsets[-1] / np.linalg.norm(offsets[-1]), (t - base) / d
+    k, c = np.cross(a, b), a @ b
+    if c < -1.0 + 1e-9:
+        return None
+    # rotation a -> b without trigonometry: x -> c x + k x x + k (k . x) / (1 + c)
+    return base + c * offsets + np.cross(k, offsets) + np.outer(offsets @ k, k) / (1.0 + c)
+
+
+def effector_chains(skeleton: Skeleton, eff_idx, fixed) -> list[np.ndarray]:
+    """Every effector's chain for the near-extended step, base first: from the nearest joint above it
+    that is fixed or itself an effector, down to the effector. Ordered by effector index, so a chain
+    comes after the chains of the effectors above it (whose new positions it starts from)."""
+    effs = {int(e) for e in eff_idx}
+    chains = []
+    for e in sorted(effs):
+        c, j = [e], e
+        while not fixed[j] and (j == e or j not in effs):
+            j = int(skeleton.parents[j])
+            c.append(j)
+        if len(c) > 2:  # one bone is what the forward pass does anyway
+            chains.append(np.array(c[::-1], dtype=np.int64))
+    return chains
+
+
 # ---------------------------------------------------------------------------------------- full body
 @dataclass
 class Constraints:
@@ -133,155 +239,41 @@ def default_constraints(skeleton: Skeleton) -> Constraints:
     return Constraints(limits, no_fwd)
 
 
-_HINGE_SLACK = np.sin(np.radians(15.0))
-
-
-@njit
-def _fabrik_tree(pos, parents, lengths, child_start, child_idx, active, fixed, slot, eff_idx, targets, tols,
-                 max_iter, limit_cos, no_fwd, left_hip, right_hip, use_constraints, sub_eff, sub_reach):
-    """Full-body FABRIK in place on ``pos`` (J, 3). Returns (iterations, converged)."""
-    J = pos.shape[0]
-    K = targets.shape[0]
-    back = pos.copy()
-    it = 0
-    while True:
-        done = True
-        for k in range(K):
-            j = eff_idx[k]
-            dx = pos[j, 0] - targets[k, 0]
-            dy = pos[j, 1] - targets[k, 1]
-            dz = pos[j, 2] - targets[k, 2]
-            if dx * dx + dy * dy + dz * dz > tols[k] * tols[k]:
-                done = False
-        if done or it >= max_iter:
-            return it, done
-        # ---- backward: effectors to their targets, sub-bases to the centroid of proposals
-        for j in range(J - 1, -1, -1):
-            if fixed[j] or not active[j]:
-                back[j, 0] = pos[j, 0]
-                back[j, 1] = pos[j, 1]
-                back[j, 2] = pos[j, 2]
-                continue
-            if slot[j] >= 0:
-                back[j, 0] = targets[slot[j], 0]
-                back[j, 1] = targets[slot[j], 1]
-                back[j, 2] = targets[slot[j], 2]
-                continue
-            ax = 0.0
-            ay = 0.0
-            az = 0.0
-            n = 0.0
-            for ci in range(child_start[j], child_start[j + 1]):
-                c = child_idx[ci]
-                if not active[c]:
-                    continue
-                ux = pos[j, 0] - back[c, 0]
-                uy = pos[j, 1] - back[c, 1]
-                uz = pos[j, 2] - back[c, 2]
-                L = np.sqrt(ux * ux + uy * uy + uz * uz)
-                if L < 1e-12:
-                    ux = pos[j, 0] - pos[c, 0]
-                    uy = pos[j, 1] - pos[c, 1]
-                    uz = pos[j, 2] - pos[c, 2]
-                    L = np.sqrt(ux * ux + uy * uy + uz * uz)
-                s = lengths[c] / L
-                # weight of this chain's proposal: the less slack the chain has left to reach its
-                # effector from here, the more it decides where the sub-base goes
-                e = sub_eff[c]
-                tx = targets[e, 0] - pos[j, 0]
-                ty = targets[e, 1] - pos[j, 1]
-                tz = targets[e, 2] - pos[j, 2]
-                slack = sub_reach[c] - np.sqrt(tx * tx + ty * ty + tz * tz)
-                w = 1.0 / (max(slack, 0.0) + 0.01)
-                ax += w * (back[c, 0] + ux * s)
-                ay += w * (back[c, 1] + uy * s)
-                az += w * (back[c, 2] + uz * s)
-                n += w
-            back[j, 0] = ax / n
-            back[j, 1] = ay / n
-            back[j, 2] = az / n
-        # ---- forward: from the fixed base outwards, keeping bone lengths
-        for j in range(J):
-            if fixed[j]:
-                continue
-            p = parents[j]
-            if active[j]:
-                ux = back[j, 0] - pos[p, 0]
-                uy = back[j, 1] - pos[p, 1]
-                uz = back[j, 2] - pos[p, 2]
-            else:
-                ux = pos[j, 0] - pos[p, 0]
-                uy = pos[j, 1] - pos[p, 1]
-                uz = pos[j, 2] - pos[p, 2]
-            L = np.sqrt(ux * ux + uy * uy + uz * uz)
-            if L < 1e-12:
-                ux, uy, uz, L = 0.0, 1.0, 0.0, 1.0
-            ux /= L
-            uy /= L
-            uz /= L
-            if use_constraints and parents[p] >= 0:
-                g = parents[p]
-                ex = pos[p, 0] - pos[g, 0]
-                ey = pos[p, 1] - pos[g, 1]
-                ez = pos[p, 2] - pos[g, 2]
-                eL = np.sqrt(ex * ex + ey * ey + ez * ez)
-                if eL > 1e-12:
-                    ex /= eL
-                    ey /= eL
-                    ez /= eL
-                    if no_fwd[j] and left_hip >= 0:
-                        # hinge rule: with lat = left hip - right hip and f = lat x e (the side a
-                        # knee folds to), a bone bending the wrong way (u.f < -sin 15 deg) is
-                        # mirrored to the right side
-                        lx = pos[left_hip, 0] - pos[right_hip, 0]
-                        ly = pos[left_hip, 1] - pos[right_hip, 1]
-                        lz = pos[left_hip, 2] - pos[right_hip, 2]
-                        px = ly * ez - lz * ey
-                        py = lz * ex - lx * ez
-                        pz = lx * ey - ly * ex
-                        pL = np.sqrt(px * px + py * py + pz * pz)
-                        if pL > 1e-12:
-                            px /= pL
-                            py /= pL
-                            pz /= pL
-                            s = ux * px + uy * py + uz * pz
-                            if s < -_HINGE_SLACK:
-                                ux -= 2.0 * s * px
-                                uy -= 2.0 * s * py
-                                uz -= 2.0 * s * pz
-                    cosang = ux * ex + uy * ey + uz * ez
-                    if cosang < limit_cos[j]:  # outside the cone: rotate onto its rim
-                        vx = ux - cosang * ex
-                        vy = uy - cosang * ey
-                        vz = uz - cosang * ez
-                        vL = np.sqrt(vx * vx + vy * vy + vz * vz)
-                        if vL < 1e-12:  # pointing straight back: any perpendicular will do
-                            vx, vy, vz = -ey, ex, 0.0
-                            vL = np.sqrt(vx * vx + vy * vy)
-                            if vL < 1e-12:
-                                vx, vy, vz, vL = 0.0, -ez, ey, np.sqrt(ez * ez + ey * ey)
-                        sin_l = np.sqrt(max(0.0, 1.0 - limit_cos[j] * limit_cos[j]))
-                        ux = limit_cos[j] * ex + sin_l * vx / vL
-                        uy = limit_cos[j] * ey + sin_l * vy / vL
-                        uz = limit_cos[j] * ez + sin_l * vz / vL
-            pos[j, 0] = pos[p, 0] + lengths[j] * ux
-            pos[j, 1] = pos[p, 1] + lengths[j] * uy
-            pos[j, 2] = pos[p, 2] + lengths[j] * uz
-        it += 1
-
-
 class FabrikSolver:
     """Full-body FABRIK behind the :class:`~posekit.ik.api.Solver` interface.
+
+    One iteration (kernel: :func:`posekit.ik.fabrik_kernel._fabrik_tree`):
+
+    1. **backward** (Sec. 4.2 of Aristidou & Lasenby 2011): every effector goes onto its target,
+       every other joint on an effector's path to the line towards its moved child, at its bone
+       length; a sub-base where several chains meet goes to the plain centroid of their proposals;
+    2. **near-extended chains** (posekit's addition, :func:`straighten_chain`): each effector's chain
+       (from the nearest fixed joint or effector above it) is placed as the forward pass would place
+       it; where its target lies at >= 90 % of its reach it is straightened just enough and turned
+       onto the target — Algorithm 1's unreachable-target case, generalised;
+    3. **forward**: from the fixed base outwards every joint goes to the line towards its backward
+       position, at its bone length, within the joint limits of Sec. 5 if any; joints on no
+       effector's path follow their parent.
+
+    Why step 2: a spine is nearly straight, so a head target sits at 97–99.5 % of the pelvis->head
+    reach, where the passes shrink the error by only a factor 0.78–0.96 per iteration (a straight leg
+    or an outstretched arm likewise). Without it the 5-effector set (hands, feet, head) stayed
+    unconverged after 20 iterations in 71 % (DeepMimic) and 25 % (Bandai) of the benchmark cases;
+    with it 99.9 % and 99.8 % converge, in a median of 1–2 iterations. Measured and dropped:
+    over-relaxation (37–65 %; diverges from 0.85), aligning the start chain rigidly on the target (87 %
+    on the spine alone), and weighting sub-base proposals by their chain's slack (the previous
+    version; no effect once step 2 exists, so the paper's plain centroid is back).
 
     Parameters
     ----------
     skeleton : Skeleton
     max_iter : int
-        Iteration cap (Aristidou & Lasenby report convergence in a few iterations).
+        Iteration cap.
     base : str
         The joint that stays fixed, with all its ancestors (default the pelvis role, else joint 0).
     constraints : Constraints, True or None
-        Joint limits; ``True`` uses :func:`default_constraints`.
+        Joint limits; ``True`` uses :func:`default_constraints`. Chains through a limited joint are
+        then only ever straightened in step 2, never bent further.
 
     Notes
     -----
@@ -316,29 +308,26 @@ class FabrikSolver:
                 self._no_fwd[skeleton.index(name)] = True
             if "left_hip" in skeleton.roles and "right_hip" in skeleton.roles:
                 self._hips = (skeleton.index("left_hip"), skeleton.index("right_hip"))
+        self._limited = (self._limit_cos >= -1.0) | self._no_fwd
+        self._layouts = {}
 
-    def _active(self, eff_idx):
-        active = np.zeros(self.skeleton.n_joints, dtype=np.bool_)
-        for j in eff_idx:
-            while j >= 0 and not active[j]:
-                active[j] = True
-                j = self.skeleton.parents[j]
-        return active
-
-    def _chains(self, eff_idx, lengths):
-        """For every joint c: the effector (slot) closest below it, and the chain length from c's
-        parent down to that effector."""
-        J = self.skeleton.n_joints
-        sub_eff = np.zeros(J, dtype=np.int64)
-        sub_reach = np.full(J, np.inf)
-        for k, e in enumerate(eff_idx):
-            length, j = 0.0, int(e)
-            while j > 0:
-                length += lengths[j]
-                if length < sub_reach[j]:
-                    sub_reach[j], sub_eff[j] = length, k
-                j = int(self.skeleton.parents[j])
-        return sub_eff, sub_reach
+    def _layout(self, eff_idx):
+        """Per effector set (cached): the joints on an effector's path, and the effector chains
+        flattened for the kernel (starts, joints, may_bend per chain)."""
+        key = tuple(int(j) for j in eff_idx)
+        if key not in self._layouts:
+            active = np.zeros(self.skeleton.n_joints, dtype=np.bool_)
+            for j in key:
+                while j >= 0 and not active[j]:
+                    active[j] = True
+                    j = self.skeleton.parents[j]
+            chains = effector_chains(self.skeleton, key, self._fixed)
+            starts = np.cumsum([0] + [len(c) for c in chains]).astype(np.int64)
+            joints = np.concatenate(chains) if chains else np.zeros(0, dtype=np.int64)
+            limited = self.constraints is not None
+            bend = np.array([not (limited and self._limited[c[1:]].any()) for c in chains], dtype=np.bool_)
+            self._layouts[key] = (active, starts, joints, bend)
+        return self._layouts[key]
 
     def solve(self, start: Pose, effectors) -> IKResult:
         """Pose the skeleton so the effectors reach their targets; bone lengths are kept."""
@@ -353,12 +342,12 @@ class FabrikSolver:
         slot = np.full(self.skeleton.n_joints, -1, dtype=np.int64)
         slot[idx] = np.arange(len(idx))
         pos = np.ascontiguousarray(p, dtype=float).copy()
-        sub_eff, sub_reach = self._chains(idx, lengths)
+        active, starts, joints, bend = self._layout(idx)
         it, done = _fabrik_tree(pos, self.skeleton.parents, lengths, self._child_start, self._child_idx,
-                                self._active(idx), self._fixed, slot, idx.astype(np.int64),
-                                np.ascontiguousarray(targets), tols,
-                                self.max_iter, self._limit_cos, self._no_fwd, self._hips[0], self._hips[1],
-                                self.constraints is not None, sub_eff, sub_reach)
+                                active, self._fixed, slot, idx.astype(np.int64),
+                                np.ascontiguousarray(targets), tols, self.max_iter, self._limit_cos, self._no_fwd,
+                                self._hips[0], self._hips[1], self.constraints is not None, starts, joints, bend,
+                                EXTENDED_RATIO)
         err = np.linalg.norm(pos[idx] - targets, axis=1)
         return IKResult(Pose(pos), bool(np.all(err <= tols)), int(it), err)
 

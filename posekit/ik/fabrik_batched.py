@@ -1,9 +1,11 @@
 """Batched full-body FABRIK: many independent problems at once, for benchmarks and data generation.
 
 Introduced in ``notebooks/01_fabrik.ipynb``. Same algorithm and numbers as
-:class:`posekit.ik.fabrik.FabrikSolver` without joint constraints, laid out joint x xyz x batch
-``(J, 3, B)`` so every step is one vectorised numpy operation over the problems still unsolved;
-converged problems leave the working set after each iteration.
+:class:`posekit.ik.fabrik.FabrikSolver` without joint constraints — backward pass, near-extended
+chains straightened (:func:`posekit.ik.fabrik.straighten_chain`), forward pass — laid out joint x
+xyz x batch ``(J, 3, B)`` so every step is one vectorised numpy operation over the problems still
+unsolved; converged problems leave the working set after each iteration. The arithmetic follows the
+compiled kernel (:mod:`posekit.ik.fabrik_kernel`) operation by operation, so both agree to rounding.
 """
 
 from __future__ import annotations
@@ -12,8 +14,108 @@ import numpy as np
 
 from ..skeleton import Skeleton
 from .api import base_index
+from .fabrik import effector_chains
+from .fabrik_kernel import _S_MAX, EXTENDED_RATIO, MIN_AXIAL, SECANT_STEPS
 
 __all__ = ["fabrik_batched"]
+
+
+def _unit(u):
+    """(u / |u|, |u|) over the batch, with (0, 1, 0) where |u| < 1e-12 (as the kernel)."""
+    L = np.sqrt((u * u).sum(axis=0))
+    bad = L < 1e-12
+    if bad.any():
+        u = np.where(bad, np.array([0.0, 1.0, 0.0])[:, None], u)
+        L = np.where(bad, 1.0, L)
+    return u / L, L
+
+
+def _straighten(back, chain, q, bl, R, d, w, todo):
+    """:func:`posekit.ik.fabrik_kernel._straighten` for the problems ``todo`` (indices): writes the
+    straightened ones into ``back`` and returns a mask of them."""
+    q = [x[:, todo] for x in q]
+    bl = [x[todo] for x in bl]
+    R, d, w = R[todo], d[todo], w[:, todo]
+    n = len(q) - 1
+    e = q[n] - q[0]
+    S = np.sqrt((e * e).sum(axis=0))
+    ok = S >= 1e-12  # no joint limits here, so bending further is allowed (may_bend)
+    e = e / np.where(ok, S, 1.0)
+    ax, lat = [], []
+    for i in range(n):
+        v = q[i + 1] - q[i]
+        a = (v * e).sum(axis=0)
+        ok &= a >= MIN_AXIAL * bl[i]
+        ax.append(a)
+        lat.append(v - a * e)
+
+    def span2(sig):
+        s = 0.0
+        for i in range(n):
+            v = ax[i] * e + sig * lat[i]
+            s = s + (bl[i] / np.sqrt((v * v).sum(axis=0))) * v
+        return (s * s).sum(axis=0)
+
+    reach = d < R
+    d2 = d * d
+    g0 = R * R - d2
+    g1 = S * S - d2
+    ok &= ~(reach & (g0 - g1 < 1e-12 * R * R))
+    s0 = np.zeros_like(d)
+    s1 = np.ones_like(d)
+    live = ok & reach
+    for _ in range(SECANT_STEPS):
+        upd = live & (g1 != g0) & (np.abs(g1) > 1e-13 * d2)
+        if not upd.any():
+            break
+        s2 = np.minimum(np.maximum(s1 - g1 * (s1 - s0) / np.where(upd, g1 - g0, 1.0), 0.0), _S_MAX)
+        s0 = np.where(upd, s1, s0)
+        g0 = np.where(upd, g1, g0)
+        s1 = np.where(upd, s2, s1)
+        g1 = np.where(upd, span2(np.sqrt(s1)) - d2, g1)
+    sig = np.where(reach, np.sqrt(s1), 0.0)
+    offs = []
+    s = 0.0
+    for i in range(n):
+        v = ax[i] * e + sig * lat[i]
+        s = s + (bl[i] / np.sqrt((v * v).sum(axis=0))) * v
+        offs.append(s)
+    a = s / np.sqrt((s * s).sum(axis=0))
+    b = w / d
+    k = np.stack([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+    c = (a * b).sum(axis=0)
+    ok &= ~(c < -1.0 + 1e-9)
+    f = 1.0 / np.where(ok, 1.0 + c, 1.0)
+    for i in range(n):
+        x = offs[i]
+        kd = (k * x).sum(axis=0) * f
+        kxx = np.stack([k[1] * x[2] - k[2] * x[1], k[2] * x[0] - k[0] * x[2], k[0] * x[1] - k[1] * x[0]])
+        new = q[0] + (c * x + kxx + k * kd)
+        cols = todo[ok]
+        back[chain[i + 1]][:, cols] = new[:, ok]
+    out = np.zeros(back.shape[2], dtype=bool)
+    out[todo[ok]] = True
+    return out
+
+
+def _extended_chain(back, lengths, chain, t, ratio):
+    """:func:`posekit.ik.fabrik_kernel._extended_chain` over the batch: ``t`` (3, B) targets."""
+    q = [back[chain[0]].copy()]
+    bl = []
+    R = 0.0
+    for j in chain[1:]:
+        u, _ = _unit(back[j] - q[-1])
+        q.append(q[-1] + lengths[j] * u)
+        bl.append(lengths[j])
+        R = R + lengths[j]
+    done = np.zeros(back.shape[2], dtype=bool)
+    for m in range(len(chain) - 2):
+        w = t - q[m]
+        d = np.sqrt((w * w).sum(axis=0))
+        cand = np.nonzero(~done & (d >= ratio * R) & (d > 1e-12))[0]
+        if len(cand):
+            done |= _straighten(back, chain[m:], q[m:], bl[m:], R, d, w, cand)
+        R = R - bl[m]
 
 
 def fabrik_batched(skeleton: Skeleton, start_pos, eff_joints, targets, tolerance: float = 1e-3,
@@ -64,27 +166,15 @@ def fabrik_batched(skeleton: Skeleton, start_pos, eff_joints, targets, tolerance
     slot = np.full(J, -1)
     slot[eff] = np.arange(K)
     children = [np.nonzero((parents == j) & active)[0] for j in range(J)]
+    chains = effector_chains(skeleton, eff, fixed)
 
     # (J, 3, B) layout: one contiguous vector over problems per joint coordinate
-    pos = np.ascontiguousarray(start_pos.transpose(1, 2, 0))
+    pos = start_pos.transpose(1, 2, 0).copy()  # a copy always (a view when B == 1 would be written to)
     tgt = np.ascontiguousarray(targets.transpose(1, 2, 0))  # (K, 3, B)
     lengths = np.linalg.norm(pos - pos[np.maximum(parents, 0)], axis=1)  # (J, B)
     lengths[0] = 0.0
     if np.any(lengths[~fixed] < 1e-9):
         raise ValueError("zero-length bone: FABRIK needs every bone > 0")
-    # for each joint: its nearest effector below (by rest chain length) and, per problem, the chain
-    # length from the joint's parent down to it (the proposal weights of FabrikSolver)
-    sub_eff = np.zeros(J, int)
-    best = np.full(J, np.inf)
-    for k, e in enumerate(eff):
-        for j in skeleton.chain(int(e), 0)[1:]:
-            reach = lengths[skeleton.chain(int(e), j), 0].sum()
-            if reach < best[j]:
-                best[j], sub_eff[j] = reach, k
-    sub_reach = np.full((J, pos.shape[2]), np.inf)
-    for j in np.nonzero(np.isfinite(best))[0]:
-        sub_reach[j] = lengths[skeleton.chain(int(eff[sub_eff[j]]), int(j))].sum(axis=0)
-    tols = tolerance
 
     out_pos = np.empty_like(pos)
     out_it = np.zeros(pos.shape[2], int)
@@ -92,8 +182,8 @@ def fabrik_batched(skeleton: Skeleton, start_pos, eff_joints, targets, tolerance
     work = np.arange(pos.shape[2])
     it = 0
     while True:
-        err = np.sqrt(((pos[eff] - tgt) ** 2).sum(axis=1)).max(axis=0)  # (b,)
-        done = err <= tols
+        err2 = ((pos[eff] - tgt) ** 2).sum(axis=1)  # (K, b), as the kernel: squared distances
+        done = (err2 <= tolerance * tolerance).all(axis=0)
         if done.any() or it >= max_iter:
             leaving = done if it < max_iter else np.ones_like(done)
             out_pos[:, :, work[leaving]] = pos[:, :, leaving]
@@ -102,9 +192,8 @@ def fabrik_batched(skeleton: Skeleton, start_pos, eff_joints, targets, tolerance
             keep = ~leaving
             if not keep.any():
                 break
-            pos, tgt, lengths, sub_reach, work = (pos[:, :, keep], tgt[:, :, keep], lengths[:, keep],
-                                                  sub_reach[:, keep], work[keep])
-        # backward
+            pos, tgt, lengths, work = pos[:, :, keep], tgt[:, :, keep], lengths[:, keep], work[keep]
+        # backward: effectors on their targets, sub-bases at the centroid of their proposals
         back = pos.copy()
         for j in range(J - 1, -1, -1):
             if fixed[j] or not active[j]:
@@ -113,7 +202,6 @@ def fabrik_batched(skeleton: Skeleton, start_pos, eff_joints, targets, tolerance
                 back[j] = tgt[slot[j]]
                 continue
             acc = 0.0
-            wsum = 0.0
             for c in children[j]:
                 u = pos[j] - back[c]
                 L = np.sqrt((u * u).sum(axis=0))
@@ -122,20 +210,18 @@ def fabrik_batched(skeleton: Skeleton, start_pos, eff_joints, targets, tolerance
                     alt = pos[j] - pos[c]
                     u = np.where(degenerate, alt, u)
                     L = np.where(degenerate, np.sqrt((alt * alt).sum(axis=0)), L)
-                t = tgt[sub_eff[c]] - pos[j]
-                slack = sub_reach[c] - np.sqrt((t * t).sum(axis=0))
-                w = 1.0 / (np.maximum(slack, 0.0) + 0.01)
-                acc = acc + w * (back[c] + u * (lengths[c] / L))
-                wsum = wsum + w
-            back[j] = acc / wsum
+                acc = acc + (back[c] + u * (lengths[c] / L))
+            back[j] = acc / len(children[j])
+        # near-extended chains, straightened at their targets
+        with np.errstate(divide="ignore", invalid="ignore"):
+            for ch in chains:
+                _extended_chain(back, lengths, ch, tgt[slot[ch[-1]]], EXTENDED_RATIO)
         # forward
         for j in range(J):
             if fixed[j]:
                 continue
             p = parents[j]
-            u = (back[j] if active[j] else pos[j]) - pos[p]
-            L = np.sqrt((u * u).sum(axis=0))
-            L = np.where(L < 1e-12, 1.0, L)
-            pos[j] = pos[p] + u * (lengths[j] / L)
+            u, _ = _unit((back[j] if active[j] else pos[j]) - pos[p])
+            pos[j] = pos[p] + lengths[j] * u
         it += 1
     return out_pos.transpose(2, 0, 1).copy(), out_conv, out_it
