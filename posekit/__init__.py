@@ -1,11 +1,13 @@
 """posekit — the library behind a numbered series of notebooks on data-driven character posing.
 
-Layers point down (``../shared/STYLE.md``):
+Layers point down — a module imports only from its own layer or the ones above it in this list
+(the README's "The library" section draws the same table):
 
 1. core: :mod:`posekit.conventions`, :mod:`posekit.rotations`, :mod:`posekit.skeleton`,
    :mod:`posekit.kinematics`, :mod:`posekit.transforms`
 2. data: :mod:`posekit.io` (BVH, DeepMimic conversion), :mod:`posekit.data`, :mod:`posekit.paths`
-3. solvers (classical IK, inverse rig regression, neural models) — added lesson by lesson
+3. solvers: :mod:`posekit.ik` (lesson 01), the inverse rig mapping (lesson 02), :mod:`posekit.learn`
+   (the torch layer the learned models share) — neural models are added lesson by lesson
 4. top: :mod:`posekit.viz` (3D widget, matplotlib), :mod:`posekit.bench`, :mod:`posekit.cli`,
    :mod:`posekit.exercises`
 

@@ -107,6 +107,11 @@ def euler_to_quat(angles, order: str, degrees: bool = False):
     q : ndarray, shape (..., 4)
     """
     _check_last(angles, (3,), "euler_to_quat")
+    if is_torch(angles):
+        import roma
+
+        # roma reads the sequence as scipy does (upper case intrinsic, lower case extrinsic)
+        return roma.euler_to_unitquat(order, angles.unbind(-1), degrees=degrees)
     return _scipy_apply(
         lambda f: Rotation.from_euler(order, f, degrees=degrees).as_quat(), angles, (3,), (4,)
     )
@@ -115,6 +120,10 @@ def euler_to_quat(angles, order: str, degrees: bool = False):
 def quat_to_euler(q, order: str, degrees: bool = False):
     """Quaternions to Euler angles in the sequence ``order`` (see :func:`euler_to_quat`)."""
     _check_last(q, (4,), "quat_to_euler")
+    if is_torch(q):
+        import roma
+
+        return roma.unitquat_to_euler(order, q, degrees=degrees)
     import warnings
 
     with warnings.catch_warnings():  # gimbal lock is expected on some frames; scipy still answers
@@ -138,6 +147,14 @@ def axis_angle_to_quat(axis, angle):
     -------
     q : ndarray, shape (..., 4)
     """
+    if is_torch(axis) or is_torch(angle):
+        import torch
+
+        axis = torch.as_tensor(axis)
+        angle = torch.as_tensor(angle, dtype=axis.dtype, device=axis.device)
+        axis = axis / torch.linalg.norm(axis, dim=-1, keepdim=True)
+        half = 0.5 * angle[..., None]
+        return torch.cat([axis * torch.sin(half), torch.cos(half)], dim=-1)
     axis = np.asarray(axis, dtype=float)
     angle = np.asarray(angle, dtype=float)
     axis = axis / np.linalg.norm(axis, axis=-1, keepdims=True)

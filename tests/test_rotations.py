@@ -62,3 +62,21 @@ def test_wrong_shapes_are_refused():
         rot.sixd_to_matrix(np.zeros((3, 5)))
     with pytest.raises(ValueError, match=r"expected shape \(\.\.\., 3, 3\)"):
         rot.geodesic_distance(np.zeros((3, 3)), np.zeros((3, 4)))
+
+
+@pytest.mark.parametrize("order", ["ZXY", "XYZ", "zyx"])
+def test_euler_and_axis_angle_accept_torch(order):
+    # the module promises numpy *or* torch for every function: the torch path must agree
+    torch = pytest.importorskip("torch")
+    rng = np.random.default_rng(4)
+    angles = rng.uniform(-3, 3, (6, 3))
+    q_np = rot.euler_to_quat(angles, order)
+    q_t = rot.euler_to_quat(torch.tensor(angles, requires_grad=True), order)
+    assert torch.is_tensor(q_t)
+    np.testing.assert_allclose(rot.quat_to_matrix(q_t.detach().numpy()), rot.quat_to_matrix(q_np), atol=1e-12)
+    back = rot.quat_to_euler(torch.tensor(q_np), order)
+    np.testing.assert_allclose(rot.quat_to_matrix(rot.euler_to_quat(back.numpy(), order)), rot.quat_to_matrix(q_np),
+                               atol=1e-12)
+    axis, angle = rng.normal(size=(6, 3)), rng.uniform(0, 3, 6)
+    np.testing.assert_allclose(rot.axis_angle_to_quat(torch.tensor(axis), torch.tensor(angle)).numpy(),
+                               rot.axis_angle_to_quat(axis, angle), atol=1e-12)
