@@ -13,23 +13,35 @@ from ..paths import samples_dir
 from .nn import save_inverse_net, train_inverse_net
 from .sampling import METHODS, sample_controls
 
-__all__ = ["WEIGHTS", "weights_path", "train_all"]
+__all__ = ["WEIGHTS", "LICENCE", "weights_path", "command", "train_all"]
 
 WEIGHTS = "invrig_nn_{method}.pt"
 
 
 def weights_path(method: str, folder=None) -> Path:
+    """``folder/invrig_nn_{method}.pt`` (default ``data_samples/weights``)."""
     return Path(folder or samples_dir() / "weights") / WEIGHTS.format(method=method)
 
 
-def train_all(methods=METHODS, samples: int = 20_000, epochs: int = 20, seed: int = 0, out=None, progress=True):
-    """Train and save one network per sampling method; returns {method: path}."""
-    import torch
+LICENCE = ("MIT: made from the DeepMimic humanoid sample's skeleton (the DeepMimic code and data repository, MIT "
+           "licence; as redistributed in the pybullet wheel, zlib licence), posed by posekit's seeded rig animation. "
+           "Cite Peng et al. 2018.")
 
+
+def command(method: str, samples: int, epochs: int, seed: int) -> str:
+    """The command line that makes the weights of ``method`` (recorded in the checkpoint)."""
+    return f"posekit train invrig --methods {method} --samples {samples} --epochs {epochs} --seed {seed}"
+
+
+def train_all(methods=METHODS, samples: int = 20_000, epochs: int = 20, seed: int = 0, out=None, progress=True):
+    """Train and save one network per sampling method; returns {method: path}.
+
+    Each file is a :mod:`posekit.learn.checkpoint` recording the skeleton, the normalisation, the
+    config, the command, the seed, the data provenance and the licence (:data:`LICENCE`).
+    """
     from ..data import load_sample
     from ..rig import HumanoidRig, standard_sets
 
-    torch.set_num_threads(max(1, torch.get_num_threads()))
     rig = HumanoidRig(load_sample().skeleton)
     train, _, _ = standard_sets(rig, seed=0)
     paths = {}
@@ -37,9 +49,11 @@ def train_all(methods=METHODS, samples: int = 20_000, epochs: int = 20, seed: in
         Ys = sample_controls(m, train, samples, rig.low, rig.high, seed=seed)
         Xs = rig.evaluate(Ys)
         net, losses = train_inverse_net(Xs, Ys, epochs=epochs, seed=seed, progress=progress,
-                                        control_names=rig.names, joint_names=rig.skeleton.names)
-        path = weights_path(m, out)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        save_inverse_net(net, path, method=m, samples=samples, epochs=epochs, seed=seed, final_loss=losses[-1])
-        paths[m] = path
+                                        control_names=rig.names, skeleton=rig.skeleton)
+        data = (f"DeepMimic humanoid sample (data_samples/deepmimic_humanoid.npz), rig HumanoidRig, sampling {m}: "
+                f"{samples} control vectors drawn (seed {seed}) like the training animation of "
+                f"posekit.rig.standard_sets(rig, seed=0), joint positions from rig.evaluate")
+        paths[m] = save_inverse_net(net, weights_path(m, out), command=command(m, samples, epochs, seed), seed=seed,
+                                    data=data, licence=LICENCE, method=m, samples=samples, final_loss=losses[-1],
+                                    train_loss=losses)
     return paths

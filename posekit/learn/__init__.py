@@ -1,0 +1,12 @@
+"""Shared torch layer of the learned models (solver layer): checkpoints that carry skeleton,
+normalisation, config and provenance; one seeded training loop; a one-thread context.
+
+Introduced in ``notebooks/02_inverse_rig_mapping.ipynb`` (the inverse-rig network); the learned
+solvers of lessons 03-05 reuse it. ``posekit train --list`` names every model trained with it.
+"""
+
+from .checkpoint import FORMAT, FORMAT_VERSION, load_checkpoint, save_checkpoint
+from .threads import single_thread
+from .train import Curves, fit
+
+__all__ = ["save_checkpoint", "load_checkpoint", "FORMAT", "FORMAT_VERSION", "fit", "Curves", "single_thread"]
