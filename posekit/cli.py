@@ -8,13 +8,19 @@
     units times S) and ``frame_time``.
 ``posekit data build-sample [--pybullet-data DIR] [--out FILE]``
     Rebuilds ``data_samples/deepmimic_humanoid.npz`` from pybullet's wheel (extra ``build-data``).
-``posekit bench fk [--json]``
+``posekit bench fk [--poses N] [--repeats R] [--json]``
     FK throughput and load time, side by side with the baseline and the goal.
-``posekit bench ik [--solvers fabrik,ccd,dls] [--effectors 2,5] [--data sample|bandai1|PATH] [--json]``
-    Every IK solver on the same held-out real poses: latency, memory, effector/pose/bone errors.
+``posekit bench ik [--solvers fabrik,ccd,dls|all] [--effectors 2,5] [--start same-clip,other-clip,rest]``
+``[--data sample|bandai-mini|bandai1|PATH] [--cases N] [--wide] [--json]``
+    Every registered IK solver on the same held-out real poses, per start condition: latency,
+    memory, effector/pose/rotation/bone errors, naturalness.
 ``posekit bench invrig [--json]``
     Inverse rig mapping: joint and ground-truth errors and frames/s of every method (lesson 02).
-``posekit train invrig``
+``posekit bench NAME``
+    Any benchmark registered with :func:`posekit.bench.plugin.register_benchmark`.
+``posekit train --list``
+    Every trainable model: the files it makes, the lesson that loads them, about how long it takes.
+``posekit train invrig [--methods M,...] [--samples N] [--epochs E] [--seed S] [--out DIR]``
     Makes the inverse-rig network weights shipped in ``data_samples/weights`` (seeded).
 
 Errors in input files print ``file:line: message`` and exit with status 2.
@@ -31,10 +37,13 @@ import numpy as np
 
 
 def _inspect(args) -> int:
+    from .data.rigs import rig_report, standing_height
     from .data.sources import open_dataset
 
     ms = open_dataset(args.path, scale=args.scale, progress=not args.json and sys.stderr.isatty())
     skel = ms.skeleton
+    rig = getattr(ms, "rig", None) or rig_report(skel.names, skel.roles)
+    units = getattr(ms, "units", None)  # set when read from BVH
     info = {
         "source": ms.source,
         "joints": skel.n_joints,
@@ -47,6 +56,12 @@ def _inspect(args) -> int:
         "frame_time_max": float(ms.frame_time.max()) if ms.n_clips else None,
         "seconds": round(ms.duration(), 3),
         "roles": skel.roles,
+        "rig": rig.rig,
+        "missing_roles": list(rig.missing),
+        "unit": units.unit if units else None,
+        "scale": units.scale if units else None,
+        "height_m": round(units.height if units else standing_height(skel.names, skel.parents, skel.offsets,
+                                                                    skel.roles), 4),
     }
     if args.json:
         print(json.dumps(info, indent=2))
@@ -59,9 +74,15 @@ def _inspect(args) -> int:
         f"  (clips range {info['frame_time_min']:.6g}-{info['frame_time_max']:.6g})"
     print(f"frame time  {ft:.6g} s  ({1 / ft:.1f} fps){spread}" if ft else "frame time  -")
     print(f"clips       {info['clips']}")
-    print("hierarchy (index name  parent)")
+    print(f"units       {units.describe() if units else 'metres (stored)'}")
+    print(f"height      {info['height_m']:.2f} m (head joint above the feet, rest pose)")
+    print(f"rig         {rig.describe()}")
+    role_of = {}
+    for r, n in skel.roles.items():
+        role_of.setdefault(n, []).append(r)
+    print("hierarchy (index name  parent  roles)")
     for j, (n, p) in enumerate(zip(skel.names, skel.parents)):
-        print(f"  {j:3d} {n:<24s} {int(p):3d}")
+        print(f"  {j:3d} {n:<24s} {int(p):3d}  {', '.join(role_of.get(n, []))}".rstrip())
     return 0
 
 
@@ -86,6 +107,20 @@ def _build_sample(args) -> int:
     from .io.deepmimic import build_arrays
     from .paths import samples_dir
 
+    if getattr(args, "which", "deepmimic") == "bandai":
+        from .data.bandai_mini import build_bandai_mini
+
+        try:
+            r = build_bandai_mini(args.data_dir, out=args.out, workers=args.workers, progress=sys.stderr.isatty())
+        except (FileNotFoundError, ValueError) as e:
+            print(f"posekit: {e}", file=sys.stderr)
+            return 2
+        per = ", ".join(f"{s} {r['frames_per_split'][s]} frames / {r['clips_per_split'][s]} clips"
+                        for s in ("train", "val", "test"))
+        print(f"wrote {r['path']}: {r['frames']} frames, {r['clips']} clips ({per}), "
+              f"{r['bytes'] / 1e6:.2f} MB in {r['seconds']:.1f} s; float16 position error "
+              f"max {r['float16_pos_err_max'] * 1e3:.2f} mm, mean {r['float16_pos_err_mean'] * 1e3:.3f} mm")
+        return 0
     base = args.pybullet_data
     if base is None:
         try:
@@ -103,72 +138,41 @@ def _build_sample(args) -> int:
     return 0
 
 
-def _bench_fk(args) -> int:
-    from .bench import fk as bench_fk
-    from .bench.report import format_table, to_json
+def _bench(args) -> int:
+    """``posekit bench NAME``: run a registered benchmark (:mod:`posekit.bench.plugin`), print its
+    tables or ``--json``."""
+    from .bench.plugin import get_benchmark
+    from .bench.report import to_json
 
-    rows = bench_fk.run(n_poses=args.poses, repeats=args.repeats)
-    if args.json:
-        print(to_json(rows))
-    else:
-        print("Forward kinematics, one thread (best of repeats)")
-        print(format_table([r for r in rows if "poses_per_s" in r],
-                           ["method", "joints", "poses", "poses_per_s", "goal_poses_per_s"]))
-        print()
-        print(format_table([r for r in rows if "seconds" in r], ["method", "poses", "seconds", "goal_seconds"]))
+    b = get_benchmark(args.benchmark)
+    rows = b.run(args)
+    print(to_json(rows) if args.json else b.render(rows, args))
     return 0
 
 
-def _bench_ik(args) -> int:
-    from .bench import ik as bench_ik
-    from .bench.report import format_table, to_json
-    from .data.sources import open_dataset
-
-    motions = open_dataset(args.data, scale=args.scale, progress=not args.json and sys.stderr.isatty())
-    rows = bench_ik.run(motions, solvers=args.solvers.split(","), effector_sets=args.effectors.split(","),
-                        n_cases=args.cases, start=args.start, seed=args.seed, peers=not args.no_peers,
-                        progress=not args.json and sys.stderr.isatty())
-    if args.json:
-        print(to_json(rows))
-        return 0
-    print(f"IK benchmark: {rows[0]['data']}, {args.cases} held-out cases, start = {args.start}, one thread")
-    print("(latency and memory of one solve; errors in mm; converged = every effector within 1 mm)")
-    cols = [c for c in bench_ik.TABLE_COLUMNS if any(c in r for r in rows)]
-    print(format_table([r for r in rows if "note" not in r], cols))
-    for r in rows:
-        if "note" in r:
-            print(f"note: {r['method']}: {r['note']}")
-    return 0
+# every model `posekit train` makes: name -> (what it writes, which lesson loads it, about how long)
+_TRAINABLE = {
+    "invrig": ("data_samples/weights/invrig_nn_{uniform,gaussian,mvn,gmm,pca}.pt",
+               "inverse-rig networks, one per supersampling method (Holden et al. 2017)",
+               "lesson 02 (02_inverse_rig_mapping.ipynb) and posekit bench invrig",
+               "about 40 s on 2 idle cores (8 s per method)"),
+}
 
 
-def _bench_invrig(args) -> int:
-    from .bench import invrig
-    from .bench.report import format_table, to_json
-
-    rows = invrig.run(seed=args.seed, budget=args.budget, weights=args.weights)
-    if args.json:
-        print(to_json(rows))
-        return 0
-    setup = rows[-1]
-    print(f"Inverse rig mapping on the held-out test clips ({rows[0]['frames']} frames), one thread; "
-          f"GPR: multiquadric, theta0 = {setup['theta0']:.3g}, {setup['gpr_budget']} subsampled poses, "
-          f"fitted in {setup['fit_s']:.1f} s")
-    print("joint error: cm; ground-truth error: control error in training standard deviations")
-    print("\nTable 1 (paper: {}-{} frames/s with Maya in the loop)".format(*setup["paper_frames_per_s"]))
-    print(format_table([r for r in rows if r["table"] == 1],
-                       ["method", "joint_error", "ground_truth_error", "total_s", "frames_per_s", "clamped_values"]))
-    print("\nTable 2: the network by supersampling method")
-    print(format_table([r for r in rows if r["table"] == 2],
-                       ["method", "joint_error", "ground_truth_error", "joint_error_with_jacobian"]))
-    print("\nDrift (Fig. 11): three 1,000-frame test clips solved frame by frame")
-    print(format_table([r for r in rows if r["table"] == 3],
-                       ["method", "joint_error_first_200", "joint_error_last_200", "ground_truth_error_first_200",
-                        "ground_truth_error_last_200", "frames_per_s"]))
+def _train_list(args) -> int:
+    """``posekit train --list`` (and ``posekit train``): every trainable model and what it makes."""
+    print("posekit train NAME makes (seeded, reproducible):")
+    for name, (files, what, lesson, time) in _TRAINABLE.items():
+        print(f"\n  {name:<8}{what}\n    makes   {files}\n    used by {lesson}\n    takes   {time}")
+    print("\nposekit train NAME --help shows its options.")
     return 0
 
 
 def _train_invrig(args) -> int:
     from .regression.train import train_all
+
+    if args.list:
+        return _train_list(args)
 
     paths = train_all(methods=args.methods.split(","), samples=args.samples, epochs=args.epochs, seed=args.seed,
                       out=args.out, progress=sys.stderr.isatty())
@@ -186,50 +190,46 @@ def build_parser() -> argparse.ArgumentParser:
     p = dsub.add_parser("inspect", help="joints, parents, frames, frame time and clips of a dataset")
     p.add_argument("path", help="BVH file, folder of BVH files, .npz, or sample/bandai1/bandai2")
     p.add_argument("--json", action="store_true", help="print JSON")
-    p.add_argument("--scale", type=float, default=None, help="file units to metres for BVH (default 1)")
+    p.add_argument("--scale", type=float, default=None,
+                   help="file units to metres for BVH (default: detected from the skeleton's height)")
     p.set_defaults(fn=_inspect)
     p = dsub.add_parser("convert", help="BVH -> .npz of global joint positions")
     p.add_argument("input")
     p.add_argument("output")
     p.add_argument("--scale", type=float, default=1.0, help="multiply positions by S (0.01: cm -> m)")
     p.set_defaults(fn=_convert)
-    p = dsub.add_parser("build-sample", help="rebuild data_samples/deepmimic_humanoid.npz from pybullet")
+    p = dsub.add_parser("build-sample", help="rebuild data_samples/deepmimic_humanoid.npz from pybullet "
+                        "(default) or data_samples/bandai_mini/bandai_mini.npz from the Bandai Namco datasets")
+    p.add_argument("which", nargs="?", default="deepmimic", choices=("deepmimic", "bandai"),
+                   help="deepmimic (default): the DeepMimic sample; bandai: the Bandai mini set")
     p.add_argument("--pybullet-data", default=None, help="pybullet_data folder (default: the installed wheel's)")
+    p.add_argument("--data-dir", default=None,
+                   help="bandai: folder holding bandai-namco-1/ and bandai-namco-2-every4th/ (default $POSEKIT_DATA_DIR)")
+    p.add_argument("--workers", type=int, default=None, help="bandai: processes reading BVH (default: all CPUs)")
     p.add_argument("--out", default=None)
     p.set_defaults(fn=_build_sample)
 
+    from .bench.plugin import HelpFormatter, add_arguments, benchmark_names, get_benchmark
+
     bench = sub.add_parser("bench", help="benchmarks: tables and JSON")
     bsub = bench.add_subparsers(dest="cmd", required=True)
-    p = bsub.add_parser("fk", help="forward-kinematics throughput against the baseline and the goal")
-    p.add_argument("--json", action="store_true")
-    p.add_argument("--poses", type=int, default=20_000)
-    p.add_argument("--repeats", type=int, default=5)
-    p.set_defaults(fn=_bench_fk)
-    p = bsub.add_parser("ik", help="IK solvers on held-out real poses, side by side (Victor & Meyer Table 1 style)")
-    p.add_argument("--solvers", default="fabrik,ccd,dls", help="comma-separated: fabrik, fabrik-constrained, ccd, dls")
-    p.add_argument("--effectors", default="2,5", help="comma-separated effector sets: 2, 5, 5point")
-    p.add_argument("--cases", type=int, default=1000)
-    p.add_argument("--start", choices=["frame", "rest"], default="frame")
-    p.add_argument("--data", default="sample", help="sample, bandai1, bandai2, or a BVH file/folder")
-    p.add_argument("--scale", type=float, default=None, help="file units to metres for a BVH path")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--no-peers", action="store_true", help="skip ikpy")
-    p.add_argument("--json", action="store_true")
-    p.set_defaults(fn=_bench_ik)
-    p = bsub.add_parser("invrig", help="inverse rig mapping: Tables 1 and 2 of Holden et al. 2017 on our rig")
-    p.add_argument("--json", action="store_true")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--budget", type=int, default=500, help="GPR training poses after greedy subsampling")
-    p.add_argument("--weights", default=None, help="folder of invrig_nn_*.pt (default data_samples/weights)")
-    p.set_defaults(fn=_bench_invrig)
+    for name in benchmark_names():  # every registered benchmark plug-in is a subcommand
+        b = get_benchmark(name)
+        p = bsub.add_parser(name, help=b.help, description=b.help, formatter_class=HelpFormatter)
+        add_arguments(p, b)
+        p.set_defaults(fn=_bench, benchmark=name)
 
-    train = sub.add_parser("train", help="make the weights the lessons ship (seeded)")
-    tsub = train.add_subparsers(dest="cmd", required=True)
+    train = sub.add_parser("train", help="make the weights the lessons ship (seeded); --list names them")
+    train.add_argument("--list", action="store_true", help="list every trainable model, what it makes and which "
+                       "lesson loads it (also what `posekit train` alone prints)")
+    train.set_defaults(fn=_train_list)
+    tsub = train.add_subparsers(dest="cmd", metavar="NAME", help=", ".join(_TRAINABLE))
     p = tsub.add_parser("invrig", help="inverse-rig networks, one per supersampling method (lesson 02)")
-    p.add_argument("--methods", default="uniform,gaussian,mvn,gmm,pca")
-    p.add_argument("--samples", type=int, default=20_000)
-    p.add_argument("--epochs", type=int, default=20)
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--methods", default="uniform,gaussian,mvn,gmm,pca",
+                   help="comma-separated supersampling methods (default: uniform,gaussian,mvn,gmm,pca)")
+    p.add_argument("--samples", type=int, default=20_000, help="training samples per method (default: 20000)")
+    p.add_argument("--epochs", type=int, default=20, help="(default: 20)")
+    p.add_argument("--seed", type=int, default=0, help="(default: 0)")
     p.add_argument("--out", default=None, help="folder (default data_samples/weights)")
     p.set_defaults(fn=_train_invrig)
     return parser

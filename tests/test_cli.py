@@ -7,6 +7,7 @@ import pytest
 
 from posekit.cli import main
 
+from .test_bench import ensure_classical_solvers
 from .test_bvh import SIMPLE
 
 
@@ -71,16 +72,25 @@ def test_bench_fk_json():
     assert load["poses"] == 1620 and load["joints"] == 18
 
 
-def test_bench_ik_json_keys():
-    r = run("bench", "ik", "--solvers", "fabrik,dls", "--effectors", "2,5", "--cases", "20", "--json")
-    assert r.returncode == 0, r.stderr
-    rows = json.loads(r.stdout)
+def _bench_ik(capsys, *args):
+    ensure_classical_solvers()  # in-process: solvers a test registers count too
+    code = main(["bench", "ik", *args])
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def test_bench_ik_json_keys(capsys):
+    code, out, err = _bench_ik(capsys, "--solvers", "fabrik,dls", "--effectors", "2,5", "--cases", "20", "--json")
+    assert code == 0, err
+    rows = json.loads(out)
     keys = {"method", "effectors", "cases", "latency_ms_median", "effector_error_mm_median", "mpjpe_mm_median",
-            "bone_length_error_mm_max", "converged_fraction"}
+            "bone_length_error_mm_max", "converged_fraction", "natural_mm_median", "natural_floor_mm_median", "start"}
     solved = [row for row in rows if row["method"] in ("fabrik", "dls")]
     assert {(row["method"], row["effectors"]) for row in solved} == {("fabrik", "2"), ("fabrik", "5"), ("dls", "2"), ("dls", "5")}
     for row in solved:
         assert keys <= set(row) and row["cases"] == 20 and row["bone_length_error_mm_max"] < 1e-3
+        assert row["start"] == "same-clip"
+    assert all(row["start"] == "same-clip" for row in rows)
     import ikpy  # a dev dependency: the peer row must be a real run, not a placeholder
 
     peer = next(row for row in rows if row["method"].startswith("ikpy"))
@@ -91,11 +101,11 @@ def test_bench_ik_json_keys():
     assert next(row for row in rows if row["method"] == "fabrik" and row["effectors"] == "2")["paper_latency_ms"] == 6.56
 
 
-def test_bench_ik_rejects_unknown_solver_and_set():
-    r = run("bench", "ik", "--solvers", "magic", "--cases", "5", "--no-peers")
-    assert r.returncode == 2 and "unknown solver 'magic'" in r.stderr
-    r = run("bench", "ik", "--effectors", "7", "--cases", "5", "--no-peers")
-    assert r.returncode == 2 and "unknown effector set '7'" in r.stderr
+def test_bench_ik_rejects_unknown_solver_and_set(capsys):
+    code, _, err = _bench_ik(capsys, "--solvers", "magic", "--cases", "5", "--no-peers")
+    assert code == 2 and "unknown solver 'magic'" in err
+    code, _, err = _bench_ik(capsys, "--effectors", "7", "--cases", "5", "--no-peers")
+    assert code == 2 and "unknown effector set '7'" in err
 
 
 def test_bench_invrig_json():
@@ -111,18 +121,22 @@ def test_bench_invrig_json():
     assert len([row for row in rows if row["table"] == 3]) == 2
 
 
-def test_bench_ik_table_fits_100_columns_and_help_gives_defaults():
-    r = run("bench", "ik", "--solvers", "fabrik,dls", "--effectors", "2,5point", "--cases", "10")
-    assert r.returncode == 0, r.stderr
-    lines = r.stdout.splitlines()
+def test_bench_ik_table_fits_100_columns_and_help_gives_defaults(capsys):
+    code, out, err = _bench_ik(capsys, "--solvers", "fabrik,dls", "--effectors", "2,5point", "--cases", "10")
+    assert code == 0, err
+    lines = out.splitlines()
     assert max(len(line) for line in lines) <= 100, max(lines, key=len)
-    assert any(line.startswith("Speed") for line in lines) and any(line.startswith("Accuracy") for line in lines)
-    assert "baseline: numpy per-joint FABRIK" in r.stdout and "fabrik batched" in r.stdout
-    wide = run("bench", "ik", "--solvers", "fabrik", "--effectors", "2", "--cases", "5", "--no-peers", "--wide")
-    assert wide.returncode == 0 and "MPJPE mm" in wide.stdout.splitlines()[3]
-    h = run("bench", "ik", "--help").stdout
-    for arg, default in (("--cases", "1000"), ("--start", "frame"), ("--seed", "0"), ("--data", "sample")):
-        assert arg in h and f"(default: {default})" in " ".join(h.split())
+    for title in ("Start: same-clip", "Speed", "Accuracy", "Pose"):
+        assert sum(line.startswith(title) for line in lines) == 1, title
+    assert "baseline: numpy per-joint FABRIK" in out and "fabrik batched" in out
+    code, wide, _ = _bench_ik(capsys, "--solvers", "fabrik", "--effectors", "2", "--cases", "5", "--no-peers", "--wide")
+    header = next(line for line in wide.splitlines() if line.startswith("method"))
+    assert code == 0 and "MPJPE mm" in header and "ms" in header.split()  # speed and accuracy in one table
+    with pytest.raises(SystemExit):
+        main(["bench", "ik", "--help"])
+    h = " ".join(capsys.readouterr().out.split())
+    for arg, default in (("--cases", "1000"), ("--start", "same-clip"), ("--seed", "0"), ("--data", "sample")):
+        assert arg in h and f"(default: {default})" in h
 
 
 def test_missing_shared_data_names_only_real_options(monkeypatch, capsys):

@@ -15,6 +15,7 @@ import numpy as np
 from ..kinematics import fk
 from ..rotations import quat_to_matrix, random_rotations
 from ..skeleton import Skeleton
+from .plugin import arg, register_benchmark
 
 GOAL_POSES_PER_S = 500_000
 GOAL_LOAD_S = 1.0
@@ -49,7 +50,7 @@ def _best_rate(fn, n_poses, repeats):
 
 def run(n_poses: int = 20_000, repeats: int = 5, seed: int = 0) -> list[dict]:
     """Measure; returns one row per method with ``poses_per_s`` and ``goal``."""
-    from threadpoolctl import threadpool_limits
+    from ..learn.threads import single_thread
 
     rng = np.random.default_rng(seed)
     J = len(_PARENTS_22)
@@ -57,29 +58,24 @@ def run(n_poses: int = 20_000, repeats: int = 5, seed: int = 0) -> list[dict]:
     q = random_rotations((n_poses, J), rng)
     R = quat_to_matrix(q)
     rows = []
-    with threadpool_limits(1):
+    with single_thread():
         import torch
 
-        threads = torch.get_num_threads()
-        torch.set_num_threads(1)
-        try:
-            Rt = torch.from_numpy(R)
-            cases = [
-                ("posekit fk (numpy, matrices in)", lambda: fk(skel, R)),
-                ("posekit fk (numpy, quaternions in)", lambda: fk(skel, q)),
-                ("baseline: np.matmul per joint", lambda: _naive_fk(skel, R)),
-                ("posekit fk (torch, matrices in)", lambda: fk(skel, Rt)),
-            ]
-            reference = _naive_fk(skel, R)[0]
-            for name, fn in cases:
-                rate = _best_rate(fn, n_poses, repeats)
-                # every method must compute the same positions as the baseline, or its rate means nothing
-                pos = np.asarray(fn()[0])
-                rows.append({"method": name, "joints": J, "poses": n_poses, "poses_per_s": round(rate),
-                             "goal_poses_per_s": GOAL_POSES_PER_S,
-                             "max_diff_vs_baseline_m": float(np.abs(pos - reference).max())})
-        finally:
-            torch.set_num_threads(threads)
+        Rt = torch.from_numpy(R)
+        cases = [
+            ("posekit fk (numpy, matrices in)", lambda: fk(skel, R)),
+            ("posekit fk (numpy, quaternions in)", lambda: fk(skel, q)),
+            ("baseline: np.matmul per joint", lambda: _naive_fk(skel, R)),
+            ("posekit fk (torch, matrices in)", lambda: fk(skel, Rt)),
+        ]
+        reference = _naive_fk(skel, R)[0]
+        for name, fn in cases:
+            rate = _best_rate(fn, n_poses, repeats)
+            # every method must compute the same positions as the baseline, or its rate means nothing
+            pos = np.asarray(fn()[0])
+            rows.append({"method": name, "joints": J, "poses": n_poses, "poses_per_s": round(rate),
+                         "goal_poses_per_s": GOAL_POSES_PER_S,
+                         "max_diff_vs_baseline_m": float(np.abs(pos - reference).max())})
     from ..data import load_sample
 
     t = time.perf_counter()
@@ -88,3 +84,24 @@ def run(n_poses: int = 20_000, repeats: int = 5, seed: int = 0) -> list[dict]:
     rows.append({"method": "load shipped sample", "joints": ms.skeleton.n_joints, "poses": ms.n_frames,
                  "seconds": round(load_s, 4), "goal_seconds": GOAL_LOAD_S})
     return rows
+
+
+TABLES = [
+    ("Forward kinematics, one thread (best of repeats)",
+     ["method", "joints", "poses", "poses_per_s", "goal_poses_per_s", "max_diff_vs_baseline_m"],
+     lambda r: "poses_per_s" in r),
+    ("Load time", ["method", "poses", "seconds", "goal_seconds"], lambda r: "seconds" in r),
+]
+"""The tables ``posekit bench fk`` prints: (title, JSON keys, which rows)."""
+
+TABLE_LABELS = {"poses_per_s": "poses/s", "goal_poses_per_s": "goal", "max_diff_vs_baseline_m": "max diff (m)",
+                "goal_seconds": "goal s"}
+"""Short table headers for the JSON keys."""
+
+register_benchmark(
+    "fk", lambda args: run(n_poses=args.poses, repeats=args.repeats, seed=args.seed),
+    help="forward-kinematics throughput against the baseline and the goal",
+    args=[arg("--poses", type=int, default=20_000, help="poses per FK call"),
+          arg("--repeats", type=int, default=5, help="timed repeats (the best counts)"),
+          arg("--seed", type=int, default=0, help="seed of the random skeleton and rotations")],
+    tables=TABLES, labels=TABLE_LABELS, lesson="notebooks/00_skeletons_and_poses.ipynb", replace=True)

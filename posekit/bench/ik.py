@@ -1,35 +1,51 @@
 """``posekit bench ik``: every IK solver on the same held-out real poses, side by side in one run.
 
-Introduced in ``notebooks/01_fabrik.ipynb``. Cases come from the *test* clips of a clip-level split
-(no clip a learned solver trains on): the target is a real pose, the effectors are the true positions
-of its chosen joints, and the start is another frame of the same clip (``start="frame"``) or the rest
-pose (``start="rest"``). Both poses are expressed in the root frame (Victor & Meyer 2020, Sec. 3.2)
-and the start is shifted so its pelvis sits on the target's: every solver keeps the pelvis fixed, so
-every case is reachable and the target pose is one exact solution.
+Introduced in ``notebooks/01_fabrik.ipynb``. Cases come from :func:`posekit.data.cases.build_cases`:
+targets are real poses of the *test* clips (the set's own split, or a clip-level split), the
+effectors are the true positions of a named set of joints, and the start is another frame of the
+target's clip within 1 s (``same-clip``), a frame of another held-out clip (``other-clip``) or the
+rest pose (``rest``), pelvis on pelvis in the root frame. The targets are the same under every start
+condition, and every row says which start condition it was measured on (``start``).
 
-Metrics per method and effector set (JSON keys): ``latency_ms_median`` (one solve, one thread),
-``effector_error_mm_median`` (worst effector of a case), ``mpjpe_mm_median`` (mean distance of all
-joints to the true pose — the "naturalness" the learned solvers are about), ``bone_length_error_mm_max``,
-``converged_fraction`` (every effector within 1 mm), ``iterations_median``, ``memory_kb`` (peak Python
-allocation of one solve, tracemalloc), plus batched-FABRIK throughput, a plain numpy FABRIK as the
-baseline, peers (ikpy) and the paper's figures.
+What it runs
+------------
+* **Solvers** — any name in :func:`posekit.ik.registry.solver_names` (``--solvers``), built with
+  :func:`posekit.ik.registry.make_solver` and called one case at a time with ``solve(start, effectors)``:
+  a solver registered by a later lesson or a student's notebook is benchmarked without editing this
+  file (``--solvers all`` runs every registered solver that honours position effectors).
+* **Methods** — rows that are not one solver's solves: the plain numpy FABRIK baseline, batched
+  FABRIK throughput, peer libraries (ikpy). Each is a plug-in registered with :func:`register_method`
+  (the built-in ones live in :mod:`posekit.bench.ik_methods`) and called once per start condition with
+  a :class:`MethodContext`.
+
+Metrics (JSON keys; definitions in :mod:`posekit.data.metrics`, the same code for every solver):
+``latency_ms_median`` (one solve, one thread), ``effector_error_mm_median`` (worst effector of a
+case), ``mpjpe_mm_median`` (body joints, pelvis-relative), ``bone_length_error_mm_max``,
+``rotation_error_deg_median`` (solvers that return rotations), ``natural_mm_median`` (distance to the
+nearest training pose) and ``natural_floor_mm_median`` (the true pose's own), ``converged_fraction``
+(every effector within 1 mm), ``iterations_median``, ``memory_kb`` (peak Python allocation of one
+solve, tracemalloc), ``solves_per_s`` (batched), ``paper_latency_ms`` (Victor & Meyer 2020), ``start``.
 """
 
 from __future__ import annotations
 
 import time
 import tracemalloc
+import warnings
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
-from ..data import MotionSet, sample_pairs, split_by_clip
-from ..ik import CCDSolver, DLSSolver, FabrikSolver
-from ..ik.api import EFFECTOR_SETS, Effector, Pose, base_index, effector_set
-from ..kinematics import bone_lengths_of, fk
-from ..transforms import rotate_y_rotations, to_root_space
+from ..data.cases import START_ALIASES, START_CONDITIONS, Cases, build_cases, start_condition
+from ..data.metrics import NaturalnessIndex, score_poses
+from ..ik.api import EFFECTOR_SETS, effector_set
+from ..ik.registry import make_solver, solver_info, solver_names
+from .plugin import arg, register_benchmark
 
-__all__ = ["Cases", "build_cases", "SOLVERS", "register_solver", "make_solver", "run", "PAPER"]
+__all__ = ["Method", "MethodContext", "register_method", "unregister_method", "method_names", "get_method",
+           "resolve_solvers", "evaluate_solver", "run", "PAPER", "TABLES", "TABLE_LABELS",
+           "build_cases", "Cases", "make_solver"]
 
 PAPER = {
     ("fabrik", "2"): 6.56,  # Victor & Meyer 2020, Table 1: full-body FABRIK runtime, ms
@@ -38,294 +54,348 @@ PAPER = {
 """Paper figures shown beside ours (runtime in ms)."""
 
 
-SOLVERS = {
-    "fabrik": FabrikSolver,
-    "fabrik-constrained": lambda s: FabrikSolver(s, constraints=True),
-    "ccd": CCDSolver,
-    "dls": DLSSolver,
-}
-"""Solver name -> factory(skeleton). Later lessons register their solvers here."""
-
-
-def register_solver(name: str, factory):
-    """Make ``posekit bench ik --solvers NAME`` build a solver with ``factory(skeleton)``."""
-    SOLVERS[name] = factory
-
-
-def make_solver(name: str, skeleton):
-    if name not in SOLVERS:
-        raise ValueError(f"unknown solver {name!r}; valid: {', '.join(SOLVERS)}")
-    return SOLVERS[name](skeleton)
-
-
+# ---------------------------------------------------------------------------------------- methods
 @dataclass
-class Cases:
-    """Benchmark cases.
+class MethodContext:
+    """What a method plug-in gets, once per start condition.
 
     Attributes
     ----------
-    skeleton : Skeleton
-    start_rot : ndarray, shape (N, J, 4)
-    start_root : ndarray, shape (N, 3)
-    start_local_pos : ndarray, shape (N, J, 3) or None
-    start_pos : ndarray, shape (N, J, 3)
-    target_pos : ndarray, shape (N, J, 3)
-        True poses; effector targets are taken from them.
-    start : str
-    source : str
+    cases : Cases
+        The cases of this start condition (``cases.start``).
+    effector_sets : tuple of str
+        The run's effector sets (:data:`posekit.ik.EFFECTOR_SETS` names).
+    solvers : tuple of str
+        The run's solvers.
+    tolerance : float, metres
+    natural : NaturalnessIndex or None
+    natural_floor : ndarray, shape (N,), metres, or None
+        The true poses' own naturalness distance.
     """
 
-    skeleton: object
-    start_rot: np.ndarray
-    start_root: np.ndarray
-    start_local_pos: np.ndarray | None
-    start_pos: np.ndarray
-    target_pos: np.ndarray
-    start: str
-    source: str
+    cases: Cases
+    effector_sets: tuple
+    solvers: tuple
+    tolerance: float
+    natural: NaturalnessIndex | None = None
+    natural_floor: np.ndarray | None = None
 
-    def __len__(self):
-        return len(self.target_pos)
-
-    def pose(self, i) -> Pose:
-        lp = None if self.start_local_pos is None else self.start_local_pos[i]
-        return Pose(self.start_pos[i], self.start_rot[i], self.start_root[i], lp)
-
-
-def build_cases(motions: MotionSet, n_cases: int = 1000, seed: int = 0, start: str = "frame",
-                split=(0.8, 0.1, 0.1)) -> Cases:
-    """Held-out cases (see the module docstring). With fewer clips than split sets (one or two BVH
-    files) the held-out frames are the end of every clip instead, with a warning
-    (:func:`posekit.data.split_by_clip` with ``fallback=True``)."""
-    s = motions.skeleton
-    test = split_by_clip(motions, split, seed=seed, fallback=True)[2]
-    a, b = sample_pairs(motions, n_cases, rng=seed, frames=test)
-    frames = np.unique(np.concatenate([a, b]))
-    local, origin, angle = to_root_space(s, motions.global_pos[frames])
-    q, root = rotate_y_rotations(motions.local_rot[frames], motions.root_pos[frames] - origin, -angle)
-    where = {f: i for i, f in enumerate(frames)}
-    ia, ib = np.array([where[f] for f in a]), np.array([where[f] for f in b])
-    target = local[ib]
-    lp_all = None if motions.local_pos is None else motions.local_pos[frames]
-    pel = base_index(s)
-    if start == "frame":
-        rot, rpos = q[ia], root[ia].copy()
-        lp = None if lp_all is None else lp_all[ia]
-        pos = local[ia]
-    elif start == "rest":
-        if lp_all is not None:
-            raise ValueError(f"start='rest' needs a skeleton whose rest pose is a standing pose; "
-                             f"{s.name!r} animates joint translations, use start='frame'")
-        rot = np.broadcast_to([0.0, 0.0, 0.0, 1.0], (len(a), s.n_joints, 4)).copy()
-        rpos = np.broadcast_to(s.offsets[0], (len(a), 3)).copy()
-        lp = None
-        pos = fk(s, rot, rpos)[0]
-    else:
-        raise ValueError(f"start must be 'frame' or 'rest', got {start!r}")
-    shift = target[:, pel] - pos[:, pel]
-    return Cases(s, rot, rpos + shift, lp, pos + shift[:, None], target, start, motions.source)
+    def score(self, result_pos, effectors, result_rot=None, cases: Cases | None = None) -> dict:
+        """The shared accuracy metrics of poses a method produced (``score_poses(...).summary()``),
+        for the first ``len(result_pos)`` cases."""
+        c = self.cases if cases is None else cases
+        n = len(result_pos)
+        floor = None if self.natural_floor is None else self.natural_floor[:n]
+        return score_poses(_head(c, n), result_pos, effectors, result_rot, self.natural, floor,
+                           self.tolerance).summary()
 
 
-def _numpy_fabrik(skeleton, start, eff, targets, tol=1e-3, max_iter=20):
-    """Baseline: the same full-body FABRIK as :class:`~posekit.ik.FabrikSolver` — backward pass with
-    plain centroids at the sub-bases, near-extended chains straightened
-    (:func:`~posekit.ik.fabrik.straighten_chain`), forward pass — written the straightforward way,
-    numpy vector ops per joint and no compilation, as a newcomer would after the lesson."""
-    from ..ik.fabrik import effector_chains, straighten_chain
-
-    parents = skeleton.parents
-    pos = start.copy()
-    L = np.linalg.norm(pos - pos[np.maximum(parents, 0)], axis=1)
-    fixed = np.zeros(len(parents), dtype=bool)
-    fixed[skeleton.chain(base_index(skeleton), 0)] = True
-    active = set()
-    for e in eff:
-        active.update(skeleton.chain(int(e), 0))
-    chains = effector_chains(skeleton, eff, fixed)
-    goal = {int(e): targets[k] for k, e in enumerate(eff)}
-    it = 0
-    while np.linalg.norm(pos[eff] - targets, axis=1).max() > tol and it < max_iter:
-        back = pos.copy()
-        for j in range(len(parents) - 1, -1, -1):
-            if fixed[j] or j not in active:
-                continue
-            if j in goal:
-                back[j] = goal[j]
-                continue
-            props = [back[c] + L[c] * (pos[j] - back[c]) / np.linalg.norm(pos[j] - back[c])
-                     for c in np.nonzero(parents == j)[0] if c in active]
-            back[j] = np.mean(props, axis=0)
-        for ch in chains:  # each chain as the forward pass would place it, straightened if near-extended
-            q = [back[ch[0]]]
-            for j in ch[1:]:
-                q.append(q[-1] + L[j] * (back[j] - q[-1]) / np.linalg.norm(back[j] - q[-1]))
-            straightened = straighten_chain(np.array(q), goal[int(ch[-1])])
-            if straightened is not None:
-                m, new = straightened
-                back[ch[m + 1:]] = new[m + 1:]
-        for j in range(len(parents)):
-            if fixed[j]:
-                continue
-            u = (back[j] if j in active else pos[j]) - pos[parents[j]]
-            pos[j] = pos[parents[j]] + L[j] * u / np.linalg.norm(u)
-        it += 1
-    return pos
+def _head(cases: Cases, n: int) -> Cases:
+    if n == len(cases):
+        return cases
+    cut = lambda a: None if a is None or np.ndim(a) == 0 else a[:n]
+    return Cases(cases.skeleton, cases.start_rot[:n], cases.start_root[:n], cut(cases.start_local_pos),
+                 cases.start_pos[:n], cases.target_pos[:n], cases.start, cases.source, cut(cases.target_rot),
+                 cut(cases.target_root), cut(cases.target_local_pos), cut(cases.start_frame),
+                 cut(cases.target_frame), cases.train_frames, cases.split)
 
 
-def _evaluate(solver, cases: Cases, effectors: str, tolerance: float):
+@dataclass(frozen=True)
+class Method:
+    """A method plug-in of the ik benchmark (see :func:`register_method`)."""
+
+    key: str
+    run: Callable
+    group: str = "extra"
+    needs: tuple = ()
+    description: str = ""
+
+
+_METHODS: dict[str, Method] = {}
+
+
+def register_method(key: str, run: Callable, *, group: str = "extra", needs=(), description: str = "",
+                    replace: bool = False) -> Method:
+    """Add rows to every ``posekit bench ik`` run.
+
+    Parameters
+    ----------
+    key : str
+        Its name for ``--methods`` (e.g. ``"numpy-fabrik"``).
+    run : callable
+        ``run(ctx: MethodContext) -> list[dict]``, called once per start condition; each row needs
+        ``method`` (its label) and ``effectors``; ``start`` and ``data`` are filled in. Use
+        ``ctx.score(...)`` for accuracy columns so they mean what the solvers' mean.
+    group : str
+        ``"baseline"``, ``"batched"`` or ``"peer"`` (switched off by ``run(baseline=False)``, ...,
+        ``--no-peers``), or anything else.
+    needs : sequence of str
+        Solvers that must be in the run (the FABRIK baseline runs only next to ``fabrik``).
+    description : str
+        One line for ``--help``.
+    """
+    _load_builtin()
+    if key in _METHODS and not replace:
+        raise ValueError(f"an ik method named {key!r} is already registered; pass replace=True to redefine it")
+    m = Method(key, run, group, tuple(needs), description)
+    _METHODS[key] = m
+    return m
+
+
+def unregister_method(key: str) -> None:
+    """Remove a method (tests, notebooks)."""
+    _METHODS.pop(key, None)
+
+
+def method_names() -> list[str]:
+    """Every registered method key, in registration order."""
+    _load_builtin()
+    return list(_METHODS)
+
+
+def get_method(key: str) -> Method:
+    _load_builtin()
+    if key not in _METHODS:
+        raise ValueError(f"unknown ik method {key!r}; valid: {', '.join(_METHODS)}")
+    return _METHODS[key]
+
+
+_loading = False
+
+
+def _load_builtin():
+    global _loading
+    if _loading:
+        return
+    _loading = True
+    try:
+        from . import ik_methods  # noqa: F401  (registers the baseline, batched FABRIK and ikpy)
+    finally:
+        _loading = False
+
+
+# ---------------------------------------------------------------------------------------- solvers
+def resolve_solvers(solvers) -> tuple:
+    """Solver names of a run: a comma-separated string or a sequence; ``"all"`` is every registered
+    solver that honours position effectors. Unknown names raise with the valid ones listed."""
+    names = [n.strip() for n in (solvers.split(",") if isinstance(solvers, str) else solvers) if n.strip()]
+    if names == ["all"]:
+        names = [n for n in solver_names() if "position" in solver_info(n).kinds]
+        if not names:
+            raise ValueError("no registered solver honours position effectors (posekit.ik.registry is empty?)")
+    for n in names:
+        if "position" not in solver_info(n).kinds:  # raises for unknown names
+            raise ValueError(f"solver {n!r} honours {', '.join(solver_info(n).kinds)} effectors only; "
+                             "the ik benchmark's effector sets are positions")
+    return tuple(dict.fromkeys(names))
+
+
+def evaluate_solver(solver, cases: Cases, effectors: str, tolerance: float = 1e-3,
+                    natural: NaturalnessIndex | None = None, natural_floor=None) -> dict:
+    """One row's numbers: every case solved once from its start pose, timed one solve at a time on
+    the calling thread, then scored by :func:`posekit.data.metrics.score_poses`."""
     s = cases.skeleton
-    lengths0 = bone_lengths_of(s, cases.start_pos)
-    lat, eff_err, mpjpe, bl, conv, iters = [], [], [], [], [], []
-    solver.solve(cases.pose(0), effector_set(s, effectors, cases.target_pos[0], tolerance))  # warm-up (JIT)
+    effs = [effector_set(s, effectors, cases.target_pos[i], tolerance) for i in range(len(cases))]
+    solver.solve(cases.pose(0), effs[0])  # warm-up (JIT)
+    lat, iters, pos, rots = [], [], [], []
     for i in range(len(cases)):
-        effs = effector_set(s, effectors, cases.target_pos[i], tolerance)
         start = cases.pose(i)
         t = time.perf_counter()
-        res = solver.solve(start, effs)
+        res = solver.solve(start, effs[i])
         lat.append(time.perf_counter() - t)
-        pos = res.pose.global_pos
-        eff_err.append(res.effector_error.max())
-        mpjpe.append(np.linalg.norm(pos - cases.target_pos[i], axis=1).mean())
-        bl.append(np.abs(bone_lengths_of(s, pos) - lengths0[i]).max())
-        conv.append(res.converged)
+        pos.append(res.pose.global_pos)
+        rots.append(res.pose.local_rot)
         iters.append(res.iterations)
     tracemalloc.start()
-    solver.solve(cases.pose(0), effector_set(s, effectors, cases.target_pos[0], tolerance))
+    solver.solve(cases.pose(0), effs[0])
     peak = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
-    return {
-        "cases": len(cases),
-        "latency_ms_median": float(np.median(lat) * 1e3),
-        "effector_error_mm_median": float(np.median(eff_err) * 1e3),
-        "mpjpe_mm_median": float(np.median(mpjpe) * 1e3),
-        "bone_length_error_mm_max": float(np.max(bl) * 1e3),
-        "converged_fraction": float(np.mean(conv)),
-        "iterations_median": float(np.median(iters)),
-        "memory_kb": round(peak / 1024, 1),
-    }
+    rot = np.stack(rots) if all(r is not None for r in rots) else None
+    scores = score_poses(cases, np.stack(pos), effs, rot, natural, natural_floor, tolerance).summary()
+    return {"cases": len(cases), "latency_ms_median": float(np.median(lat) * 1e3), **scores,
+            "iterations_median": float(np.median(iters)), "memory_kb": round(peak / 1024, 1)}
 
 
-def _ikpy_rows(cases: Cases, n: int, tolerance: float):
-    """ikpy (a peer library) on one chain, pelvis -> left hand, against posekit on the same chain."""
-    s = cases.skeleton
-    try:
-        import ikpy
-        from ikpy.chain import Chain
-        from ikpy.link import OriginLink, URDFLink
-    except ImportError:  # a peer that is not installed is simply absent
-        return []
-    from ..rotations import quat_to_euler
-
-    chain_j = s.chain("left_hand", "pelvis")
-    links = [OriginLink()]
-    for j in chain_j[:-1]:
-        off = s.offsets[j] if j != chain_j[0] else np.zeros(3)
-        for k, axis in enumerate(np.eye(3)):
-            links.append(URDFLink(name=f"{s.names[j]}_{'xyz'[k]}", origin_translation=off if k == 0 else np.zeros(3),
-                                  origin_orientation=np.zeros(3), rotation=axis))
-    links.append(URDFLink(name=s.names[chain_j[-1]], origin_translation=s.offsets[chain_j[-1]],
-                          origin_orientation=np.zeros(3), joint_type="fixed"))
-    mask = [False] + [True] * (3 * (len(chain_j) - 1)) + [False]
-    chain = Chain(links, active_links_mask=mask)
-    lat, err, lat_pk, err_pk = [], [], [], []
-    solver = FabrikSolver(s)
-    hand = s.index("left_hand")
-    for i in range(min(n, len(cases))):
-        pel = cases.start_pos[i, chain_j[0]]
-        target = cases.target_pos[i, hand]
-        angles = [0.0]
-        for j in chain_j[:-1]:  # three revolute links x, y, z per joint: intrinsic XYZ Euler angles
-            angles += list(quat_to_euler(cases.start_rot[i, j], "XYZ"))
-        angles.append(0.0)
-        # ikpy's base frame is the pelvis position with the world axes: the pelvis rotation is its
-        # first three joints, as for posekit's solvers
-        t = time.perf_counter()
-        sol = chain.inverse_kinematics(target - pel, initial_position=np.array(angles))
-        lat.append(time.perf_counter() - t)
-        err.append(np.linalg.norm(chain.forward_kinematics(sol)[:3, 3] + pel - target))
-        t = time.perf_counter()
-        res = solver.solve(cases.pose(i), [Effector(hand, target, tolerance=tolerance)])
-        lat_pk.append(time.perf_counter() - t)
-        err_pk.append(res.effector_error.max())
-    version = getattr(ikpy, "__version__", "?")
-    row = lambda name, l, e: {"method": name, "effectors": "left_hand", "cases": len(l),
-                              "latency_ms_median": float(np.median(l) * 1e3),
-                              "effector_error_mm_median": float(np.median(e) * 1e3),
-                              "converged_fraction": float(np.mean(np.array(e) <= tolerance))}
-    return [row(f"ikpy {version} (one chain)", lat, err),
-            row("fabrik (same chain)", lat_pk, err_pk)]
+def _starts(start) -> tuple:
+    names = start.split(",") if isinstance(start, str) else list(start)
+    return tuple(dict.fromkeys(start_condition(n.strip()) for n in names if n.strip()))
 
 
-def run(motions: MotionSet, solvers=("fabrik", "ccd", "dls"), effector_sets=("2", "5"), n_cases: int = 1000,
-        start: str = "frame", seed: int = 0, tolerance: float = 1e-3, baseline: bool = True,
-        batched: bool = True, peers: bool = True, progress: bool = False) -> list[dict]:
-    """Run the benchmark; one row (dict) per method and effector set."""
-    from threadpoolctl import threadpool_limits
+def _methods(methods, baseline: bool, batched: bool, peers: bool, solvers) -> list[Method]:
+    if methods is None or methods == "all":
+        keys = method_names()
+    elif methods == "none":
+        keys = []
+    else:
+        keys = [k.strip() for k in (methods.split(",") if isinstance(methods, str) else methods) if k.strip()]
+    chosen = [get_method(k) for k in keys]
+    off = {g for g, on in (("baseline", baseline), ("batched", batched), ("peer", peers)) if not on}
+    return [m for m in chosen if m.group not in off and set(m.needs) <= set(solvers)]
 
+
+def run(motions, solvers=("fabrik", "ccd", "dls"), effector_sets=("2", "5"), n_cases: int = 1000,
+        start="same-clip", seed: int = 0, tolerance: float = 1e-3, baseline: bool = True,
+        batched: bool = True, peers: bool = True, methods=None, natural: bool = True,
+        progress: bool = False) -> list[dict]:
+    """Run the benchmark; one row (dict) per method, effector set and start condition.
+
+    Parameters
+    ----------
+    motions : MotionSet
+    solvers : str or sequence of str
+        Registered solver names (or ``"all"``).
+    effector_sets : sequence of str
+    n_cases : int
+        Cases per start condition.
+    start : str or sequence of str
+        Start conditions (comma-separated or a sequence): ``same-clip`` (alias ``frame``),
+        ``other-clip``, ``rest``.
+    seed : int
+    tolerance : float, metres
+    baseline, batched, peers : bool
+        Run the method plug-ins of these groups.
+    methods : str or sequence, optional
+        Method keys to run (default every registered method; ``"none"`` for solvers only).
+    natural : bool
+        Measure the naturalness distance (to the nearest training pose).
+    """
+    from ..learn.threads import single_thread
+
+    solvers = resolve_solvers(solvers)
+    effector_sets = tuple(effector_sets.split(",") if isinstance(effector_sets, str) else effector_sets)
     for e in effector_sets:
         if e not in EFFECTOR_SETS:
             raise ValueError(f"unknown effector set {e!r}; valid: {', '.join(EFFECTOR_SETS)}")
-    cases = build_cases(motions, n_cases, seed, start)
-    s = cases.skeleton
-    rows = []
-    jobs = [(name, e) for name in solvers for e in effector_sets]
+    starts = _starts(start)
+    extras = _methods(methods, baseline, batched, peers, solvers)
+    all_cases = {st: build_cases(motions, n_cases, seed, st) for st in starts}  # every refusal before any work
+    first = all_cases[starts[0]]
+    s = first.skeleton
+    nat = floor = None
+    if natural:
+        nat = NaturalnessIndex(s, motions.global_pos[first.train_frames], seed=seed)
+        floor = nat.distance(first.target_pos)  # the targets are the same under every start condition
+    built = {name: make_solver(name, s) for name in solvers}
+    jobs = [(st, name, e) for st in starts for name in solvers for e in effector_sets]
+    bar = None
     if progress:
         from tqdm.auto import tqdm
 
-        jobs = tqdm(jobs, desc="bench ik", unit="solver x set")
-    with threadpool_limits(1):
-        for name, e in jobs:
-            solver = make_solver(name, s)
-            row = {"method": name, "effectors": e, **_evaluate(solver, cases, e, tolerance)}
-            if (name, e) in PAPER:
-                row["paper_latency_ms"] = PAPER[(name, e)]
-            rows.append(row)
-        for e in effector_sets:
-            eff = s.indices(EFFECTOR_SETS[e])
-            if baseline and "fabrik" in solvers:
-                m = min(200, len(cases))
-                lat = []
-                for i in range(m):
-                    t = time.perf_counter()
-                    _numpy_fabrik(s, cases.start_pos[i], eff, cases.target_pos[i, eff], tolerance)
-                    lat.append(time.perf_counter() - t)
-                rows.append({"method": "baseline: numpy per-joint FABRIK", "effectors": e, "cases": m,
-                             "latency_ms_median": float(np.median(lat) * 1e3)})
-            if batched and "fabrik" in solvers:
-                from ..ik.fabrik_batched import fabrik_batched
-
-                reps = max(1, 20_000 // len(cases))
-                startb = np.tile(cases.start_pos, (reps, 1, 1))
-                tg = np.tile(cases.target_pos[:, eff], (reps, 1, 1))
-                t = time.perf_counter()
-                _, conv, _ = fabrik_batched(s, startb, eff, tg, tolerance)
-                dt = time.perf_counter() - t
-                rows.append({"method": "fabrik batched", "effectors": e, "cases": len(startb),
-                             "solves_per_s": round(len(startb) / dt), "converged_fraction": float(conv.mean())})
-        if peers:
-            rows += _ikpy_rows(cases, min(100, len(cases)), tolerance)
+        bar = tqdm(total=len(jobs) + len(starts) * len(extras), desc="bench ik", unit="row")
+    rows = []
+    with single_thread():
+        for st in starts:
+            cases = all_cases[st]
+            for name in solvers:
+                for e in effector_sets:
+                    row = {"method": name, "effectors": e, "start": st,
+                           **evaluate_solver(built[name], cases, e, tolerance, nat, floor)}
+                    if (name, e) in PAPER:
+                        row["paper_latency_ms"] = PAPER[(name, e)]
+                    rows.append(row)
+                    if bar is not None:
+                        bar.update()
+            ctx = MethodContext(cases, effector_sets, solvers, tolerance, nat, floor)
+            for m in extras:
+                for r in m.run(ctx):
+                    r.setdefault("start", st)
+                    rows.append(r)
+                if bar is not None:
+                    bar.update()
+    if bar is not None:
+        bar.close()
     for r in rows:
-        r.setdefault("start", start)
-        r.setdefault("data", cases.source)
+        r.setdefault("data", first.source)
     return rows
 
 
+# ---------------------------------------------------------------------------------------- the CLI
 TABLES = [
     ("Speed (one solve, one thread; batched: solves/s over all cases at once)",
      ["method", "effectors", "cases", "latency_ms_median", "paper_latency_ms", "memory_kb", "solves_per_s"]),
     ("Accuracy (medians over cases; bone error: the worst case)",
-     ["method", "effectors", "effector_error_mm_median", "mpjpe_mm_median", "bone_length_error_mm_max",
-      "converged_fraction", "iterations_median"]),
+     ["method", "effectors", "effector_error_mm_median", "effector_error_deg_median", "converged_fraction",
+      "iterations_median", "bone_length_error_mm_max"]),
+    ("Pose (medians over cases; body joints, pelvis-relative; floor: the true pose's own naturalness)",
+     ["method", "effectors", "mpjpe_mm_median", "rotation_error_deg_median", "natural_mm_median",
+      "natural_floor_mm_median"]),
 ]
-"""The tables ``posekit bench ik`` prints: (title, JSON keys). Each fits 100 columns."""
+"""The tables ``posekit bench ik`` prints per start condition: (title, JSON keys). Each fits 100 columns."""
 
 TABLE_LABELS = {
     "effectors": "effectors", "latency_ms_median": "ms", "paper_latency_ms": "paper ms", "memory_kb": "kB",
-    "solves_per_s": "solves/s", "effector_error_mm_median": "effector mm", "mpjpe_mm_median": "MPJPE mm",
-    "bone_length_error_mm_max": "bone mm", "converged_fraction": "converged", "iterations_median": "iterations",
+    "solves_per_s": "solves/s", "effector_error_mm_median": "effector mm", "effector_error_deg_median": "effector deg",
+    "converged_fraction": "converged", "iterations_median": "iters", "bone_length_error_mm_max": "bone mm",
+    "mpjpe_mm_median": "MPJPE mm", "rotation_error_deg_median": "rotation deg", "natural_mm_median": "natural mm",
+    "natural_floor_mm_median": "floor mm",
 }
 """Short table headers for the JSON keys (units in the header)."""
 
-TABLE_COLUMNS = [c for _, cols in TABLES for c in cols if c != "method"]
-TABLE_COLUMNS = ["method"] + list(dict.fromkeys(TABLE_COLUMNS))
+TABLE_COLUMNS = ["method"] + list(dict.fromkeys(c for _, cols in TABLES for c in cols if c != "method"))
 """Every column in one table (``posekit bench ik --wide``)."""
+
+
+def _cli_run(args) -> list[dict]:
+    import sys
+
+    from ..data.sources import open_dataset
+
+    solvers = resolve_solvers(args.solvers)  # refuse bad names before loading data
+    _starts(args.start)
+    show = not args.json and sys.stderr.isatty()
+    motions = open_dataset(args.data, scale=args.scale, progress=show)
+    return run(motions, solvers=solvers, effector_sets=args.effectors.split(","), n_cases=args.cases,
+               start=args.start, seed=args.seed, peers=not args.no_peers, methods=args.methods, progress=show)
+
+
+def _header(rows, args) -> str:
+    data = rows[0]["data"] if rows else args.data
+    return (f"IK benchmark: {data}, {args.cases} held-out cases per start condition (the same targets), one thread\n"
+            "errors in mm, angles in degrees; effector: the worst of a case; MPJPE, rotation and natural: body "
+            "joints, pelvis-relative; natural: distance to the nearest training pose; converged: every "
+            "effector within 1 mm")
+
+
+def _group_title(start: str) -> str:
+    return f"Start: {start} ({START_CONDITIONS.get(start, start)})"
+
+
+_START_HELP = ", ".join(f"{k} ({v})" for k, v in START_CONDITIONS.items())
+_ALIAS_HELP = ", ".join(f"{a} = {b}" for a, b in START_ALIASES.items())
+
+register_benchmark(
+    "ik", _cli_run,
+    help="IK solvers on held-out real poses, side by side (Victor & Meyer Table 1 style)",
+    args=[
+        arg("--solvers", default="fabrik,ccd,dls",
+            help="comma-separated registered solvers (posekit.ik.registry), e.g. fabrik, fabrik-constrained, "
+                 "ccd, dls, or all"),
+        arg("--effectors", default="2,5", help="comma-separated effector sets: 2 (hands), 5 (hands, feet, head), "
+                                               "5point (hands, feet, chest)"),
+        arg("--start", default="same-clip",
+            help=f"comma-separated start conditions: {_START_HELP}; alias {_ALIAS_HELP}"),
+        arg("--cases", type=int, default=1000, help="held-out (start, target) cases per start condition"),
+        arg("--data", default="sample", help="sample, bandai-mini, bandai1, bandai2, or a BVH file/folder or .npz"),
+        arg("--scale", type=float, default=None,
+            help="file units to metres for a BVH path (default: detected from the skeleton's height)"),
+        arg("--seed", type=int, default=0, help="seed of the held-out split and of the case draw"),
+        arg("--methods", default="all",
+            help="comma-separated extra methods (numpy-fabrik: the plain numpy baseline, fabrik-batched, ikpy), "
+                 "all or none"),
+        arg("--no-peers", action="store_true", help="skip peer libraries (ikpy)"),
+    ],
+    tables=TABLES, labels=TABLE_LABELS, header=_header, group_by="start", group_title=_group_title, wide=True,
+    lesson="notebooks/01_fabrik.ipynb", replace=True)
+
+
+def __getattr__(name):
+    # transition: names that moved (remove once the lessons and tests import from the new places)
+    if name == "_numpy_fabrik":
+        from .ik_methods import numpy_fabrik
+
+        return numpy_fabrik
+    if name == "SOLVERS":
+        warnings.warn("posekit.bench.ik.SOLVERS is gone: solvers live in posekit.ik.registry "
+                      "(solver_names(), make_solver(name, skeleton))", DeprecationWarning, stacklevel=2)
+        return {n: (lambda skeleton, n=n: make_solver(n, skeleton)) for n in solver_names()}
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -23,11 +23,10 @@ import warnings
 
 import numpy as np
 
-from ..data import load_sample
-from ..regression import GPR, METHODS, LearnedJacobian, greedy_subsample, line_search_theta0, refine
-from ..regression.nn import load_inverse_net
-from ..regression.train import weights_path
-from ..rig import HumanoidRig, animate, heuristic_inverse, standard_sets
+from .plugin import arg, register_benchmark
+
+# the rig, the regressors and torch are imported where they are used, so that building the
+# command line (which lists this benchmark) stays fast
 
 __all__ = ["Setup", "run", "drift", "PAPER_FPS"]
 
@@ -39,6 +38,10 @@ class Setup:
     """Rig, data and fitted GPR shared by the benchmark and the lesson."""
 
     def __init__(self, seed: int = 0, budget: int = 500, kernel: str = "multiquadric"):
+        from ..data import load_sample
+        from ..regression import GPR, LearnedJacobian, greedy_subsample, line_search_theta0
+        from ..rig import HumanoidRig, animate, standard_sets
+
         self.rig = HumanoidRig(load_sample().skeleton)
         self.train, self.test, self.test_clip = standard_sets(self.rig, seed)
         self.X = self.rig.evaluate(self.train).reshape(len(self.train), -1)
@@ -74,6 +77,9 @@ class Setup:
         return float(np.mean(np.abs(y - self.test[frames]) / self.sd))
 
     def net(self, method: str, folder=None):
+        from ..regression.nn import load_inverse_net
+        from ..regression.train import weights_path
+
         return load_inverse_net(weights_path(method, folder), self.rig.names, self.rig.skeleton.names)
 
 
@@ -87,6 +93,8 @@ def drift(s: Setup, guess: str = "previous", iterations: int = 3, progress: bool
     -------
     joint_error_cm, ground_truth_error : ndarray, shape (3, 1000)
     """
+    from ..regression import refine
+
     x = s.long_x  # (3, 1000, J, 3)
     n_clips, F = x.shape[:2]
     if guess == "gpr":
@@ -120,49 +128,84 @@ def _timed(fn):
 def run(seed: int = 0, budget: int = 500, weights=None, sampling: bool = True, drift_table: bool = True,
         setup_: Setup | None = None) -> list[dict]:
     """Measure Table 1 (and Table 2 with ``sampling``, Table 3 with ``drift_table``); one row per method."""
-    import torch
-    from threadpoolctl import threadpool_limits
+    from ..learn.threads import single_thread
+    from ..regression import METHODS, refine
+    from ..rig import heuristic_inverse
 
     s = setup_ or Setup(seed, budget)
     Xt = s.Xt3.reshape(len(s.test), -1)
     rows = []
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
-    try:
-        with threadpool_limits(1):
-            nn_pca = s.net("pca", weights)
-            methods = [
-                ("heuristic script", lambda: heuristic_inverse(s.rig, s.Xt3)),
-                ("GPR", lambda: s.gpr.predict(Xt)),
-                ("GPR + learned Jacobian", lambda: refine(s.rig, s.Xt3, s.gpr.predict(Xt), s.learned_jacobian)),
-                ("GPR + computed Jacobian", lambda: refine(s.rig, s.Xt3, s.gpr.predict(Xt), "computed")),
-                ("NN", lambda: nn_pca.predict(Xt)),
-                ("NN + computed Jacobian", lambda: refine(s.rig, s.Xt3, nn_pca.predict(Xt), "computed")),
-            ]
-            for name, fn in methods:
-                y, dt = _timed(fn)
-                rows.append({"table": 1, "method": name, "joint_error": s.joint_error(y),
-                             "ground_truth_error": s.ground_truth_error(y), "total_s": dt,
-                             "frames_per_s": len(Xt) / dt, "clamped_values": s.clamped_values(y)})
-            for guess, name in (("previous", "optimisation only (previous frame as guess)"),
-                                ("gpr", "GPR + computed Jacobian, every frame")) if drift_table else ():
-                (je, ge), dt = _timed(lambda: drift(s, guess))
-                rows.append({"table": 3, "method": name, "frames": je.size,
-                             "joint_error_first_200": float(je[:, :200].mean()),
-                             "joint_error_last_200": float(je[:, -200:].mean()),
-                             "ground_truth_error_first_200": float(ge[:, :200].mean()),
-                             "ground_truth_error_last_200": float(ge[:, -200:].mean()), "frames_per_s": je.size / dt})
-            if sampling:
-                for m in METHODS:
-                    y = s.net(m, weights).predict(Xt)
-                    yr = refine(s.rig, s.Xt3, y, "computed")
-                    rows.append({"table": 2, "method": f"NN, {m} sampling", "joint_error": s.joint_error(y),
-                                 "ground_truth_error": s.ground_truth_error(y),
-                                 "joint_error_with_jacobian": s.joint_error(yr)})
-    finally:
-        torch.set_num_threads(threads)
+    with single_thread():
+        nn_pca = s.net("pca", weights)
+        methods = [
+            ("heuristic script", lambda: heuristic_inverse(s.rig, s.Xt3)),
+            ("GPR", lambda: s.gpr.predict(Xt)),
+            ("GPR + learned Jacobian", lambda: refine(s.rig, s.Xt3, s.gpr.predict(Xt), s.learned_jacobian)),
+            ("GPR + computed Jacobian", lambda: refine(s.rig, s.Xt3, s.gpr.predict(Xt), "computed")),
+            ("NN", lambda: nn_pca.predict(Xt)),
+            ("NN + computed Jacobian", lambda: refine(s.rig, s.Xt3, nn_pca.predict(Xt), "computed")),
+        ]
+        for name, fn in methods:
+            y, dt = _timed(fn)
+            rows.append({"table": 1, "method": name, "joint_error": s.joint_error(y),
+                         "ground_truth_error": s.ground_truth_error(y), "total_s": dt,
+                         "frames_per_s": len(Xt) / dt, "clamped_values": s.clamped_values(y)})
+        for guess, name in (("previous", "optimisation only (previous frame as guess)"),
+                            ("gpr", "GPR + computed Jacobian, every frame")) if drift_table else ():
+            (je, ge), dt = _timed(lambda: drift(s, guess))
+            rows.append({"table": 3, "method": name, "frames": je.size,
+                         "joint_error_first_200": float(je[:, :200].mean()),
+                         "joint_error_last_200": float(je[:, -200:].mean()),
+                         "ground_truth_error_first_200": float(ge[:, :200].mean()),
+                         "ground_truth_error_last_200": float(ge[:, -200:].mean()), "frames_per_s": je.size / dt})
+        if sampling:
+            for m in METHODS:
+                y = s.net(m, weights).predict(Xt)
+                yr = refine(s.rig, s.Xt3, y, "computed")
+                rows.append({"table": 2, "method": f"NN, {m} sampling", "joint_error": s.joint_error(y),
+                             "ground_truth_error": s.ground_truth_error(y),
+                             "joint_error_with_jacobian": s.joint_error(yr)})
     for r in rows:
         r.setdefault("frames", len(Xt))
     rows.append({"table": 0, "method": "setup", "theta0": s.theta0, "gpr_budget": budget, "fit_s": s.fit_s,
                  "paper_frames_per_s": list(PAPER_FPS)})
     return rows
+
+
+def _header(rows, args) -> str:
+    setup = next(r for r in rows if r.get("table") == 0)
+    frames = next(r["frames"] for r in rows if r.get("table") == 1)
+    return (f"Inverse rig mapping on the held-out test clips ({frames} frames), one thread; GPR: multiquadric, "
+            f"theta0 = {setup['theta0']:.3g}, {setup['gpr_budget']} subsampled poses, "
+            f"fitted in {setup['fit_s']:.1f} s\n"
+            "joint error: cm; ground-truth error: control error in training standard deviations")
+
+
+TABLES = [
+    ("Table 1 (paper: {}-{} frames/s with Maya in the loop)".format(*PAPER_FPS),
+     ["method", "joint_error", "ground_truth_error", "total_s", "frames_per_s", "clamped_values"], {"table": 1}),
+    ("Table 2: the network by supersampling method",
+     ["method", "joint_error", "ground_truth_error", "joint_error_with_jacobian"], {"table": 2}),
+    ("Drift (Fig. 11): three 1,000-frame test clips solved frame by frame; joint error (cm) and control\n"
+     "error (sd) of the first and the last 200 frames",
+     ["method", "joint_error_first_200", "joint_error_last_200", "ground_truth_error_first_200",
+      "ground_truth_error_last_200", "frames_per_s"], {"table": 3}),
+]
+"""The tables ``posekit bench invrig`` prints: (title, JSON keys, which rows)."""
+
+TABLE_LABELS = {
+    "joint_error": "joint cm", "ground_truth_error": "control sd", "total_s": "total s", "frames_per_s": "frames/s",
+    "clamped_values": "clamped", "joint_error_with_jacobian": "joint cm + Jacobian",
+    "joint_error_first_200": "cm first", "joint_error_last_200": "cm last",
+    "ground_truth_error_first_200": "sd first", "ground_truth_error_last_200": "sd last",
+}
+"""Short table headers for the JSON keys (units in the header)."""
+
+register_benchmark(
+    "invrig", lambda args: run(seed=args.seed, budget=args.budget, weights=args.weights),
+    help="inverse rig mapping: Tables 1 and 2 of Holden et al. 2017 on our rig",
+    args=[arg("--seed", type=int, default=0, help="seed of the animation and the GPR fit"),
+          arg("--budget", type=int, default=500, help="GPR training poses after greedy subsampling"),
+          arg("--weights", default=None, help="folder of invrig_nn_*.pt (default data_samples/weights)")],
+    tables=TABLES, labels=TABLE_LABELS, header=_header, lesson="notebooks/02_inverse_rig_mapping.ipynb",
+    replace=True)

@@ -44,12 +44,23 @@ def format_table(rows: list[dict], columns: list[str] | None = None, labels: dic
     return "\n".join(lines)
 
 
-def format_tables(rows: list[dict], tables: list[tuple[str, list[str]]], labels: dict | None = None) -> str:
-    """Several tables over the same rows: ``tables`` is a list of (title, columns); a row enters a
-    table when it has a value in one of its columns besides the first two (the row's name)."""
+def _selects(where, row: dict) -> bool:
+    if callable(where):
+        return bool(where(row))
+    return all(row.get(k) == v for k, v in where.items())
+
+
+def format_tables(rows: list[dict], tables: list[tuple], labels: dict | None = None) -> str:
+    """Several tables over the same rows: ``tables`` is a list of (title, columns) or
+    (title, columns, where). A row enters a table when ``where`` selects it (a dict of required
+    values, or a predicate), or, without ``where``, when it has a value in one of the table's
+    columns besides the first two (the row's name)."""
     out = []
-    for title, columns in tables:
-        keep = [r for r in rows if any(r.get(c) is not None for c in columns[2:])]
+    for title, columns, *where in tables:
+        if where and where[0] is not None:
+            keep = [r for r in rows if _selects(where[0], r)]
+        else:
+            keep = [r for r in rows if any(r.get(c) is not None for c in columns[2:])]
         if keep:
             out.append(f"{title}\n{format_table(keep, columns, labels)}")
     return "\n\n".join(out)

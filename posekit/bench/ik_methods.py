@@ -1,0 +1,194 @@
+"""The ik benchmark's built-in method plug-ins: rows that are not one registered solver's solves.
+
+Introduced in ``notebooks/01_fabrik.ipynb``. Each function below is registered with
+:func:`posekit.bench.ik.register_method` and called once per start condition:
+
+* ``numpy-fabrik`` (group ``baseline``) — :func:`numpy_fabrik`, the same full-body FABRIK as
+  :class:`~posekit.ik.FabrikSolver` written the straightforward way; its latency is the yardstick of
+  the compiled solver (run only next to ``fabrik``);
+* ``fabrik-batched`` (group ``batched``) — :func:`posekit.ik.fabrik_batched.fabrik_batched`
+  throughput over all cases at once;
+* ``ikpy`` (group ``peer``) — the ikpy library on one chain (pelvis -> left hand), beside posekit's
+  FABRIK on the same chain; absent when ikpy is not installed.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..ik.api import EFFECTOR_SETS, Effector, base_index
+from ..ik.registry import make_solver
+from .ik import MethodContext, register_method
+
+__all__ = ["numpy_fabrik", "baseline_rows", "batched_rows", "ikpy_rows", "BASELINE_CASES", "BATCH_SOLVES",
+           "PEER_CASES"]
+
+BASELINE_CASES = 200
+"""Cases the (slow) numpy baseline solves per effector set."""
+
+BATCH_SOLVES = 20_000
+"""About how many problems batched FABRIK solves at once (the cases, repeated)."""
+
+PEER_CASES = 100
+"""Cases a peer library solves."""
+
+
+def numpy_fabrik(skeleton, start, eff, targets, tol=1e-3, max_iter=20):
+    """Baseline: the same full-body FABRIK as :class:`~posekit.ik.FabrikSolver` — backward pass with
+    plain centroids at the sub-bases, near-extended chains straightened
+    (:func:`~posekit.ik.fabrik.straighten_chain`), forward pass — written the straightforward way,
+    numpy vector ops per joint and no compilation, as a newcomer would after the lesson.
+
+    Parameters
+    ----------
+    skeleton : Skeleton
+    start : ndarray, shape (J, 3), metres
+    eff : ndarray of int, shape (K,)
+        Effector joints.
+    targets : ndarray, shape (K, 3), metres
+
+    Returns
+    -------
+    ndarray, shape (J, 3)
+    """
+    from ..ik.fabrik import effector_chains, straighten_chain
+
+    parents = skeleton.parents
+    pos = start.copy()
+    L = np.linalg.norm(pos - pos[np.maximum(parents, 0)], axis=1)
+    fixed = np.zeros(len(parents), dtype=bool)
+    fixed[skeleton.chain(base_index(skeleton), 0)] = True
+    active = set()
+    for e in eff:
+        active.update(skeleton.chain(int(e), 0))
+    chains = effector_chains(skeleton, eff, fixed)
+    goal = {int(e): targets[k] for k, e in enumerate(eff)}
+    it = 0
+    while np.linalg.norm(pos[eff] - targets, axis=1).max() > tol and it < max_iter:
+        back = pos.copy()
+        for j in range(len(parents) - 1, -1, -1):
+            if fixed[j] or j not in active:
+                continue
+            if j in goal:
+                back[j] = goal[j]
+                continue
+            props = [back[c] + L[c] * (pos[j] - back[c]) / np.linalg.norm(pos[j] - back[c])
+                     for c in np.nonzero(parents == j)[0] if c in active]
+            back[j] = np.mean(props, axis=0)
+        for ch in chains:  # each chain as the forward pass would place it, straightened if near-extended
+            q = [back[ch[0]]]
+            for j in ch[1:]:
+                q.append(q[-1] + L[j] * (back[j] - q[-1]) / np.linalg.norm(back[j] - q[-1]))
+            straightened = straighten_chain(np.array(q), goal[int(ch[-1])])
+            if straightened is not None:
+                m, new = straightened
+                back[ch[m + 1:]] = new[m + 1:]
+        for j in range(len(parents)):
+            if fixed[j]:
+                continue
+            u = (back[j] if j in active else pos[j]) - pos[parents[j]]
+            pos[j] = pos[parents[j]] + L[j] * u / np.linalg.norm(u)
+        it += 1
+    return pos
+
+
+def baseline_rows(ctx: MethodContext) -> list[dict]:
+    """The numpy baseline's latency on the first :data:`BASELINE_CASES` cases of each effector set."""
+    cases, s = ctx.cases, ctx.cases.skeleton
+    m = min(BASELINE_CASES, len(cases))
+    rows = []
+    for e in ctx.effector_sets:
+        eff = s.indices(EFFECTOR_SETS[e])
+        lat = []
+        for i in range(m):
+            t = time.perf_counter()
+            numpy_fabrik(s, cases.start_pos[i], eff, cases.target_pos[i, eff], ctx.tolerance)
+            lat.append(time.perf_counter() - t)
+        rows.append({"method": "baseline: numpy per-joint FABRIK", "effectors": e, "cases": m,
+                     "latency_ms_median": float(np.median(lat) * 1e3)})
+    return rows
+
+
+def batched_rows(ctx: MethodContext) -> list[dict]:
+    """Batched FABRIK over every case at once (repeated to about :data:`BATCH_SOLVES` problems)."""
+    from ..ik.fabrik_batched import fabrik_batched
+
+    cases, s = ctx.cases, ctx.cases.skeleton
+    rows = []
+    for e in ctx.effector_sets:
+        eff = s.indices(EFFECTOR_SETS[e])
+        reps = max(1, BATCH_SOLVES // len(cases))
+        start = np.tile(cases.start_pos, (reps, 1, 1))
+        targets = np.tile(cases.target_pos[:, eff], (reps, 1, 1))
+        t = time.perf_counter()
+        _, conv, _ = fabrik_batched(s, start, eff, targets, ctx.tolerance)
+        dt = time.perf_counter() - t
+        rows.append({"method": "fabrik batched", "effectors": e, "cases": len(start),
+                     "solves_per_s": round(len(start) / dt), "converged_fraction": float(conv.mean())})
+    return rows
+
+
+def ikpy_rows(ctx: MethodContext) -> list[dict]:
+    """ikpy (a peer library) on one chain, pelvis -> left hand, beside posekit's FABRIK on the same
+    chain (when ``fabrik`` is in the run)."""
+    try:
+        import ikpy
+        from ikpy.chain import Chain
+        from ikpy.link import OriginLink, URDFLink
+    except ImportError:  # a peer that is not installed is simply absent
+        return []
+    from ..rotations import quat_to_euler
+
+    cases, s, tolerance = ctx.cases, ctx.cases.skeleton, ctx.tolerance
+    n = min(PEER_CASES, len(cases))
+    chain_j = s.chain("left_hand", "pelvis")
+    links = [OriginLink()]
+    for j in chain_j[:-1]:
+        off = s.offsets[j] if j != chain_j[0] else np.zeros(3)
+        for k, axis in enumerate(np.eye(3)):
+            links.append(URDFLink(name=f"{s.names[j]}_{'xyz'[k]}", origin_translation=off if k == 0 else np.zeros(3),
+                                  origin_orientation=np.zeros(3), rotation=axis))
+    links.append(URDFLink(name=s.names[chain_j[-1]], origin_translation=s.offsets[chain_j[-1]],
+                          origin_orientation=np.zeros(3), joint_type="fixed"))
+    mask = [False] + [True] * (3 * (len(chain_j) - 1)) + [False]
+    chain = Chain(links, active_links_mask=mask)
+    ours = make_solver("fabrik", s) if "fabrik" in ctx.solvers else None
+    hand = s.index("left_hand")
+    lat, err, lat_pk, err_pk = [], [], [], []
+    for i in range(n):
+        pel = cases.start_pos[i, chain_j[0]]
+        target = cases.target_pos[i, hand]
+        angles = [0.0]
+        for j in chain_j[:-1]:  # three revolute links x, y, z per joint: intrinsic XYZ Euler angles
+            angles += list(quat_to_euler(cases.start_rot[i, j], "XYZ"))
+        angles.append(0.0)
+        # ikpy's base frame is the pelvis position with the world axes: the pelvis rotation is its
+        # first three joints, as for posekit's solvers
+        t = time.perf_counter()
+        sol = chain.inverse_kinematics(target - pel, initial_position=np.array(angles))
+        lat.append(time.perf_counter() - t)
+        err.append(np.linalg.norm(chain.forward_kinematics(sol)[:3, 3] + pel - target))
+        if ours is not None:
+            t = time.perf_counter()
+            res = ours.solve(cases.pose(i), [Effector(hand, target, tolerance=tolerance)])
+            lat_pk.append(time.perf_counter() - t)
+            err_pk.append(np.linalg.norm(res.pose.global_pos[hand] - target))
+    version = getattr(ikpy, "__version__", "?")
+    row = lambda name, l, e: {"method": name, "effectors": "left_hand", "cases": len(l),
+                              "latency_ms_median": float(np.median(l) * 1e3),
+                              "effector_error_mm_median": float(np.median(e) * 1e3),
+                              "converged_fraction": float(np.mean(np.array(e) <= tolerance))}
+    rows = [row(f"ikpy {version} (one chain)", lat, err)]
+    if ours is not None:
+        rows.append(row("fabrik (same chain)", lat_pk, err_pk))
+    return rows
+
+
+register_method("numpy-fabrik", baseline_rows, group="baseline", needs=("fabrik",), replace=True,
+                description="the same FABRIK in plain numpy, one joint at a time (the speed yardstick)")
+register_method("fabrik-batched", batched_rows, group="batched", needs=("fabrik",), replace=True,
+                description="batched FABRIK: solves/s over all cases at once")
+register_method("ikpy", ikpy_rows, group="peer", replace=True,
+                description="ikpy on the pelvis -> left hand chain, beside FABRIK on the same chain")
