@@ -169,7 +169,7 @@ def _train_list(args) -> int:
 
 
 def _train_invrig(args) -> int:
-    from .regression.train import train_all
+    from .invrig.train import train_all
 
     if args.list:
         return _train_list(args)

@@ -6,11 +6,11 @@ import pytest
 
 from posekit import rest_pose
 from posekit.kinematics import bone_lengths_of
-from posekit.regression import (GPR, KERNELS, METHODS, LearnedJacobian, greedy_subsample, line_search_theta0,
+from posekit.invrig import (GPR, KERNELS, METHODS, LearnedJacobian, greedy_subsample, line_search_theta0,
                                 refine, sample_controls)
-from posekit.regression.nn import load_inverse_net, train_inverse_net
-from posekit.regression.train import weights_path
-from posekit.rig import HumanoidRig, animate, heuristic_inverse, standard_sets
+from posekit.invrig.nn import load_inverse_net, train_inverse_net
+from posekit.invrig.train import weights_path
+from posekit.invrig import HumanoidRig, animate, heuristic_inverse, standard_sets
 
 
 @pytest.fixture(scope="module")

@@ -241,9 +241,9 @@ def test_single_thread_restores_the_thread_count():
 
 
 def test_shipped_invrig_weights_carry_their_provenance(sample):
-    from posekit.regression.nn import load_inverse_net
-    from posekit.regression.train import weights_path
-    from posekit.rig import HumanoidRig
+    from posekit.invrig.nn import load_inverse_net
+    from posekit.invrig.train import weights_path
+    from posekit.invrig import HumanoidRig
 
     skel = sample.skeleton
     d = load_checkpoint(weights_path("pca"), kind="invrig_nn", skeleton=skel,

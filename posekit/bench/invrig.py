@@ -1,7 +1,7 @@
 """``posekit bench invrig``: the shape of Tables 1 and 2 of Holden, Saito & Komura 2017 on our rig.
 
 Introduced in ``notebooks/02_inverse_rig_mapping.ipynb``. Training animation and held-out test clips
-come from :func:`posekit.rig.standard_sets` (seeded). Per method, on the 1,000 test frames:
+come from :func:`posekit.invrig.standard_sets` (seeded; the setup shared with the lesson is :mod:`posekit.invrig.lesson`). Per method, on the 1,000 test frames:
 
 * ``joint_error`` — mean distance between the rig's joints at the predicted controls and the true
   joints, cm (the paper's "Joint Error");
@@ -23,100 +23,16 @@ import warnings
 
 import numpy as np
 
+from ..invrig.lesson import Setup, drift
 from .plugin import arg, register_benchmark
 
 # the rig, the regressors and torch are imported where they are used, so that building the
 # command line (which lists this benchmark) stays fast
 
-__all__ = ["Setup", "run", "drift", "PAPER_FPS"]
+__all__ = ["run", "PAPER_FPS"]
 
 PAPER_FPS = (195, 656)
 """Frames per second the paper reports for its methods with Maya in the loop (range over methods)."""
-
-
-class Setup:
-    """Rig, data and fitted GPR shared by the benchmark and the lesson."""
-
-    def __init__(self, seed: int = 0, budget: int = 500, kernel: str = "multiquadric"):
-        from ..data import load_sample
-        from ..regression import GPR, LearnedJacobian, greedy_subsample, line_search_theta0
-        from ..rig import HumanoidRig, animate, standard_sets
-
-        self.rig = HumanoidRig(load_sample().skeleton)
-        self.train, self.test, self.test_clip = standard_sets(self.rig, seed)
-        self.X = self.rig.evaluate(self.train).reshape(len(self.train), -1)
-        self.Xt3 = self.rig.evaluate(self.test)
-        # control scale for the ground-truth error: the training standard deviation, floored at 1 % of
-        # the control's range (the never-animated controls have none)
-        self.sd = np.maximum(self.train.std(0), 0.01 * (self.rig.high - self.rig.low))
-        # three long continuous test clips (1,000 frames each) for the drift experiment, shape (3, 1000, C)
-        self.long = animate(self.rig, 3, 1000, key_every=10, extreme=1.6, seed=seed + 2)[0].reshape(3, 1000, -1)
-        self.long_x = self.rig.evaluate(self.long)
-        rng = np.random.default_rng(seed)
-        cv = rng.choice(len(self.X), 600, replace=False)
-        t = time.perf_counter()
-        self.theta0, self.cv_table = line_search_theta0(self.X[cv], self.train[cv], kernel, seed=seed)
-        self.subset = greedy_subsample(self.X, self.train, budget, kernel, self.theta0, seed=seed)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)
-            self.gpr = GPR(kernel, self.theta0).fit(self.X[self.subset], self.train[self.subset])
-            self.learned_jacobian = LearnedJacobian(self.rig, self.train[self.subset], theta0=self.theta0)
-        self.fit_s = time.perf_counter() - t
-
-    def joint_error(self, y, frames=slice(None)):
-        """Mean joint distance (cm) of the rig at ``y`` — clamped to the rig's ranges first, as the rig
-        would (:meth:`clamped_values` counts how many were outside) — to the test joints."""
-        y = self.rig.clamp(y)[0]
-        return float(np.linalg.norm(self.rig.evaluate(y) - self.Xt3[frames], axis=-1).mean() * 100)
-
-    def clamped_values(self, y) -> int:
-        """How many predicted control values lie outside the rig's ranges."""
-        return self.rig.clamp(y)[1].count
-
-    def ground_truth_error(self, y, frames=slice(None)):
-        return float(np.mean(np.abs(y - self.test[frames]) / self.sd))
-
-    def net(self, method: str, folder=None):
-        from ..regression.nn import load_inverse_net
-        from ..regression.train import weights_path
-
-        return load_inverse_net(weights_path(method, folder), self.rig.names, self.rig.skeleton.names)
-
-
-def drift(s: Setup, guess: str = "previous", iterations: int = 3, progress: bool = False):
-    """Per-frame errors on the three long test clips when every frame is solved by the
-    computed-Jacobian refinement starting from the previous frame's answer (``guess="previous"``:
-    pure optimisation, the paper's Fig. 11; frame 0 starts from the rest controls) or from the GPR
-    prediction (``guess="gpr"``, all frames at once since they are independent).
-
-    Returns
-    -------
-    joint_error_cm, ground_truth_error : ndarray, shape (3, 1000)
-    """
-    from ..regression import refine
-
-    x = s.long_x  # (3, 1000, J, 3)
-    n_clips, F = x.shape[:2]
-    if guess == "gpr":
-        flat = x.reshape(n_clips * F, -1)
-        y = refine(s.rig, x.reshape(n_clips * F, -1, 3), s.gpr.predict(flat), "computed", iterations)
-        y = y.reshape(s.long.shape)
-    elif guess == "previous":
-        y = np.empty_like(s.long)
-        prev = np.tile(s.rig.default(), (n_clips, 1))
-        frames = range(F)
-        if progress:
-            from tqdm.auto import tqdm
-
-            frames = tqdm(frames, desc="optimising frame by frame", unit="frame")
-        for f in frames:  # the clips advance together, frame by frame
-            prev = refine(s.rig, x[:, f], prev, "computed", iterations)
-            y[:, f] = prev
-    else:
-        raise ValueError(f"guess must be 'previous' or 'gpr', got {guess!r}")
-    je = np.linalg.norm(s.rig.evaluate(s.rig.clamp(y)[0]) - x, axis=-1).mean(-1) * 100
-    ge = np.mean(np.abs(y - s.long) / s.sd, axis=-1)
-    return je, ge
 
 
 def _timed(fn):
@@ -129,8 +45,7 @@ def run(seed: int = 0, budget: int = 500, weights=None, sampling: bool = True, d
         setup_: Setup | None = None) -> list[dict]:
     """Measure Table 1 (and Table 2 with ``sampling``, Table 3 with ``drift_table``); one row per method."""
     from ..learn.threads import single_thread
-    from ..regression import METHODS, refine
-    from ..rig import heuristic_inverse
+    from ..invrig import METHODS, heuristic_inverse, refine
 
     s = setup_ or Setup(seed, budget)
     Xt = s.Xt3.reshape(len(s.test), -1)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg
 
-from ..regression.gpr import KERNELS
+from ..invrig.gpr import KERNELS
 from ._check import report
 
 

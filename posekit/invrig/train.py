@@ -2,7 +2,7 @@
 ``data_samples/weights/`` (``posekit train invrig``); lesson 02 loads them.
 
 For each supersampling method: draw ``samples`` control vectors like the training animation, run the
-rig to get their joint positions, and train :func:`~posekit.regression.nn.train_inverse_net`.
+rig to get their joint positions, and train :func:`~posekit.invrig.nn.train_inverse_net`.
 """
 
 from __future__ import annotations
@@ -40,7 +40,8 @@ def train_all(methods=METHODS, samples: int = 20_000, epochs: int = 20, seed: in
     config, the command, the seed, the data provenance and the licence (:data:`LICENCE`).
     """
     from ..data import load_sample
-    from ..rig import HumanoidRig, standard_sets
+    from .animator import standard_sets
+    from .humanoid import HumanoidRig
 
     rig = HumanoidRig(load_sample().skeleton)
     train, _, _ = standard_sets(rig, seed=0)
@@ -52,7 +53,7 @@ def train_all(methods=METHODS, samples: int = 20_000, epochs: int = 20, seed: in
                                         control_names=rig.names, skeleton=rig.skeleton)
         data = (f"DeepMimic humanoid sample (data_samples/deepmimic_humanoid.npz), rig HumanoidRig, sampling {m}: "
                 f"{samples} control vectors drawn (seed {seed}) like the training animation of "
-                f"posekit.rig.standard_sets(rig, seed=0), joint positions from rig.evaluate")
+                f"posekit.invrig.standard_sets(rig, seed=0), joint positions from rig.evaluate")
         paths[m] = save_inverse_net(net, weights_path(m, out), command=command(m, samples, epochs, seed), seed=seed,
                                     data=data, licence=LICENCE, method=m, samples=samples, final_loss=losses[-1],
                                     train_loss=losses)
