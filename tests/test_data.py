@@ -186,7 +186,8 @@ def test_split_falls_back_to_time_with_too_few_clips(tmp_path):
 
 @pytest.mark.parametrize("clips", [1, 2])
 def test_bench_ik_on_one_or_two_clips(tmp_path, clips):
-    from posekit.bench.ik import build_cases, run
+    from posekit.bench.ik import run
+    from posekit.data.cases import build_cases
 
     with pytest.warns(UserWarning, match="cm"):
         ms = open_dataset(_folder(tmp_path, f"c{clips}", clips))

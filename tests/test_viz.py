@@ -3,8 +3,9 @@
 import numpy as np
 import pytest
 
-from posekit.bench.ik import build_cases, make_solver
+from posekit.data.cases import build_cases
 from posekit.ik import effector_set
+from posekit.ik.registry import make_solver
 from posekit.viz import SkeletonViewer, SolverPanel
 
 
