@@ -1,5 +1,5 @@
 """Small compiled helpers shared by the rotation-based solvers (CCD, DLS): FK of one pose,
-Rodrigues' formula and the shortest rotation between two directions. Conventions:
+Rodrigues' formula, the rotation vector of a matrix and the shortest rotation between two directions. Conventions:
 :mod:`posekit.conventions` (column vectors, parent-first FK)."""
 
 from __future__ import annotations
@@ -16,12 +16,19 @@ from .api import Pose
 def fk_one(parents, local_pos, Rl, root_pos, Rg, Pg):
     """FK of one pose into ``Rg`` (J, 3, 3) and ``Pg`` (J, 3); ``local_pos`` (J, 3)."""
     J = parents.shape[0]
-    Rg[0] = Rl[0]
-    Pg[0] = root_pos
+    for a in range(3):
+        Pg[0, a] = root_pos[a]
+        for b in range(3):
+            Rg[0, a, b] = Rl[0, a, b]
     for j in range(1, J):
         p = parents[j]
-        Rg[j] = Rg[p] @ Rl[j]
-        Pg[j] = Pg[p] + Rg[p] @ local_pos[j]
+        R = Rg[p] @ Rl[j]
+        o = Rg[p] @ local_pos[j]
+        # element copies: slice assignment (Rg[j] = ...) costs numba seconds of compile time
+        for a in range(3):
+            Pg[j, a] = Pg[p, a] + o[a]
+            for b in range(3):
+                Rg[j, a, b] = R[a, b]
 
 
 @njit
@@ -78,8 +85,9 @@ def rotate_joint(Rl, Rg, parents, j, Rw):
     a = R[:, 0] / np.sqrt(R[0, 0] ** 2 + R[1, 0] ** 2 + R[2, 0] ** 2)
     b = R[:, 1] - (a[0] * R[0, 1] + a[1] * R[1, 1] + a[2] * R[2, 1]) * a
     b = b / np.sqrt(b[0] ** 2 + b[1] ** 2 + b[2] ** 2)
-    Rl[j, :, 0] = a
-    Rl[j, :, 1] = b
+    for i in range(3):
+        Rl[j, i, 0] = a[i]
+        Rl[j, i, 1] = b[i]
     Rl[j, 0, 2] = a[1] * b[2] - a[2] * b[1]
     Rl[j, 1, 2] = a[2] * b[0] - a[0] * b[2]
     Rl[j, 2, 2] = a[0] * b[1] - a[1] * b[0]
@@ -101,20 +109,64 @@ def rotations_of(skeleton: Skeleton, start: Pose, who: str):
             np.ascontiguousarray(local_pos, dtype=float))
 
 
-def pose_from(Rl, root_pos, local_pos, Pg, skeleton: Skeleton, start: Pose) -> Pose:
-    return Pose(Pg.copy(), matrix_to_quat(Rl), root_pos.copy(),
-                None if start.local_pos is None else np.asarray(local_pos).copy())
+def pose_from(Rl, root_pos, Pg, local_pos=None) -> Pose:
+    """The :class:`~posekit.ik.api.Pose` a rotation solver returns.
+
+    Parameters
+    ----------
+    Rl : ndarray, shape (J, 3, 3)
+        Solved local rotations (stored as quaternions ``(x, y, z, w)``).
+    root_pos : ndarray, shape (3,), metres
+    Pg : ndarray, shape (J, 3), metres
+        Their FK positions (the kernel's, so the pose is exactly what was measured).
+    local_pos : ndarray, shape (J, 3), optional
+        The start pose's own joint translations, when it had them (None: the skeleton's offsets).
+    """
+    return Pose(Pg.copy(), matrix_to_quat(Rl), root_pos.copy(), None if local_pos is None else np.array(local_pos))
 
 
-def rotatable(skeleton: Skeleton, eff_idx, base: int) -> np.ndarray:
+def rotatable(skeleton: Skeleton, eff_idx, base: int, turns_self=None) -> np.ndarray:
     """Joints the rotation solvers may turn: those on a chain from an effector's parent up to the
-    base (the base turns too; its ancestors stay fixed). Shape (J,) bool."""
+    base (the base turns too; its ancestors stay fixed), and the effector itself where
+    ``turns_self[k]`` (rotation and look-at effectors: a joint's own rotation sets where it faces).
+    Shape (J,) bool."""
     fixed = np.zeros(skeleton.n_joints, dtype=bool)
     fixed[skeleton.chain(base, 0)[:-1]] = True
     out = np.zeros(skeleton.n_joints, dtype=bool)
-    for e in eff_idx:
-        j = int(skeleton.parents[e])
+    for k, e in enumerate(eff_idx):
+        j = int(e) if turns_self is not None and turns_self[k] else int(skeleton.parents[e])
         while j >= 0 and not fixed[j]:
             out[j] = True
             j = int(skeleton.parents[j])
     return out
+
+
+@njit
+def log_rotation(R):
+    """Rotation vector (axis * angle, radians, |w| <= pi) of the rotation matrix ``R`` (3, 3): the
+    inverse of :func:`rodrigues`; robust near 0 and pi."""
+    sx = R[2, 1] - R[1, 2]
+    sy = R[0, 2] - R[2, 0]
+    sz = R[1, 0] - R[0, 1]
+    tr = R[0, 0] + R[1, 1] + R[2, 2]
+    s = np.sqrt(sx * sx + sy * sy + sz * sz)  # 2 sin(angle)
+    ang = np.arctan2(0.5 * s, 0.5 * (tr - 1.0))
+    if s > 1e-6:
+        f = ang / s
+        return sx * f, sy * f, sz * f
+    if tr > 0.0:  # angle ~ 0: w ~ vee(R - R^T) / 2
+        return 0.5 * sx, 0.5 * sy, 0.5 * sz
+    # angle ~ pi: R + I ~ 2 a a^T; the column with the largest diagonal gives the axis
+    i = 0
+    if R[1, 1] > R[i, i]:
+        i = 1
+    if R[2, 2] > R[i, i]:
+        i = 2
+    d = np.sqrt(max(0.5 * (R[i, i] + 1.0), 1e-300))
+    ax = 0.5 * (R[0, i] + (1.0 if i == 0 else 0.0)) / d
+    ay = 0.5 * (R[1, i] + (1.0 if i == 1 else 0.0)) / d
+    az = 0.5 * (R[2, i] + (1.0 if i == 2 else 0.0)) / d
+    if ax * sx + ay * sy + az * sz < 0.0:
+        ax, ay, az = -ax, -ay, -az
+    n = np.sqrt(ax * ax + ay * ay + az * az)
+    return ax / n * ang, ay / n * ang, az / n * ang

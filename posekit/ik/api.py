@@ -2,9 +2,27 @@
 
 Introduced in ``notebooks/01_fabrik.ipynb``. FABRIK, CCD and damped least squares implement it now;
 the neural solvers, AE-GAN latent optimisation and ProtoRes implement it in later lessons, and the
-benchmark (:mod:`posekit.bench.ik`) and the viewer only ever talk to this interface.
+benchmark (:mod:`posekit.bench.ik`), the CLI and the viewer only ever talk to this interface and to
+the registry (:mod:`posekit.ik.registry`).
 
-Units and axes: :mod:`posekit.conventions` (metres, Y up, facing +Z).
+The contract (version 2)
+------------------------
+* ``solver.kinds`` — the effector kinds it honours (``"position"``, ``"rotation"``, ``"look_at"``;
+  :mod:`posekit.ik.effectors`). Any other kind is a ``ValueError`` naming the solver, the kind and
+  what it supports — never silently ignored.
+* ``solver.needs_start`` — whether ``solve`` needs a start pose. The classical solvers change a start
+  pose (True); a solver that predicts a whole pose from the effectors accepts ``start=None``.
+* ``solver.solve(start, effectors) -> IKResult`` — one problem.
+* ``solver.solve_batch(starts, effectors) -> list[IKResult]`` — B problems: ``starts`` a sequence of
+  B poses (or None), ``effectors`` one effector list shared by every problem or B lists; result ``b``
+  equals ``solve(starts[b], effectors[b])`` (FABRIK solves a batch vectorised, to rounding).
+* ``IKResult.effector_error`` and ``IKResult.converged`` always come from
+  :func:`~posekit.ik.effectors.effector_errors`, the one definition of every kind's error.
+
+:class:`SolverBase` holds the shared checks and the default batch loop; a solver subclasses it and
+writes ``_solve(start, resolved) -> IKResult``.
+
+Units and axes: :mod:`posekit.conventions` (metres, radians, Y up, facing +Z, quaternions xyzw).
 """
 
 from __future__ import annotations
@@ -16,12 +34,12 @@ import numpy as np
 
 from ..kinematics import fk
 from ..skeleton import Skeleton
+from .effectors import (DEFAULT_TOLERANCE, KINDS, Effector, ResolvedEffectors, check_look_at, effector_errors,
+                        effector_errors_batch, errors_of, resolve_effectors)
 
-__all__ = ["Effector", "Pose", "IKResult", "Solver", "EFFECTOR_SETS", "effector_set", "resolve_effectors",
-           "KINDS"]
-
-KINDS = ("position",)
-"""Effector kinds solvers understand so far (rotation and look-at arrive with ProtoRes, lesson 05)."""
+__all__ = ["Effector", "Pose", "IKResult", "Solver", "SolverBase", "EFFECTOR_SETS", "effector_set",
+           "resolve_effectors", "effector_errors", "effector_errors_batch", "KINDS", "DEFAULT_TOLERANCE",
+           "ResolvedEffectors"]
 
 EFFECTOR_SETS = {
     "2": ("left_hand", "right_hand"),
@@ -29,34 +47,6 @@ EFFECTOR_SETS = {
     "5point": ("chest", "left_hand", "right_hand", "left_foot", "right_foot"),  # Oreshkin et al. 2021
 }
 """Named effector sets, as joint roles."""
-
-
-@dataclass(frozen=True)
-class Effector:
-    """A goal for one joint.
-
-    Parameters
-    ----------
-    joint : str or int
-        Joint name, role (``"left_hand"``) or index.
-    target : array, shape (3,), metres
-        Where the joint should be (world frame).
-    kind : str
-        ``"position"`` (the only kind so far).
-    tolerance : float, metres
-        The effector counts as reached when its error is below this.
-    weight : float
-        Relative importance for solvers that trade effectors off (DLS, learned solvers).
-    """
-
-    joint: str | int
-    target: np.ndarray
-    kind: str = "position"
-    tolerance: float = 1e-3
-    weight: float = 1.0
-
-    def __post_init__(self):
-        object.__setattr__(self, "target", np.asarray(self.target, dtype=float))
 
 
 @dataclass
@@ -88,7 +78,7 @@ class Pose:
         return cls(fk(skeleton, local_rot, root_pos, lp)[0], local_rot, root_pos, lp)
 
     def copy(self) -> "Pose":
-        c = lambda a: None if a is None else np.array(a, copy=True)
+        c = lambda a: None if a is None else np.array(a, copy=True)  # noqa: E731
         return Pose(self.global_pos.copy(), c(self.local_rot), c(self.root_pos), c(self.local_pos))
 
 
@@ -102,10 +92,13 @@ class IKResult:
     converged : bool
         Every effector within its tolerance.
     iterations : int
-    effector_error : ndarray, shape (K,), metres
-        Distance of each effector from its target.
+    effector_error : ndarray, shape (K,)
+        Each effector's error (:func:`~posekit.ik.effectors.effector_errors`): metres for position
+        effectors, radians for rotation and look-at effectors.
     info : dict
         Solver-specific extras.
+    kinds : tuple of str, length K
+        The kind of each effector (so its error's unit is known); empty means all positions.
     """
 
     pose: Pose
@@ -113,17 +106,133 @@ class IKResult:
     iterations: int
     effector_error: np.ndarray
     info: dict = field(default_factory=dict)
+    kinds: tuple = ()
 
 
 @runtime_checkable
 class Solver(Protocol):
-    """Anything that poses a skeleton to meet effectors: ``solve(start, effectors) -> IKResult``."""
+    """Anything that poses a skeleton to meet effectors (the contract in the module docstring).
+    ``isinstance(x, Solver)`` only checks attribute names; ``tests/test_ik.py`` checks behaviour."""
 
     name: str
     skeleton: Skeleton
+    kinds: tuple
+    needs_start: bool
 
-    def solve(self, start: Pose, effectors: Sequence[Effector]) -> IKResult:
+    def solve(self, start: Pose | None, effectors: Sequence[Effector]) -> IKResult:
         ...
+
+    def solve_batch(self, starts, effectors) -> list:
+        ...
+
+
+class SolverBase:
+    """The shared part of every solver: effector and start-pose checks, the batch loop, the result.
+
+    A subclass sets ``name``, ``kinds``, ``needs_start`` and ``self.skeleton`` and implements
+    ``_solve(start, resolved) -> IKResult`` (``start`` a checked :class:`Pose`, or None when
+    ``needs_start`` is False and none was given; ``resolved`` the
+    :class:`~posekit.ik.effectors.ResolvedEffectors`). It may override ``_solve_many(starts,
+    resolved_list)`` to solve a batch at once (FABRIK does). :meth:`result` builds the
+    :class:`IKResult` with the shared error function.
+    """
+
+    name: str = "solver"
+    kinds: tuple = ("position",)
+    needs_start: bool = True
+    skeleton: Skeleton
+
+    def resolve(self, effectors) -> ResolvedEffectors:
+        """Check ``effectors`` against this solver's skeleton and kinds."""
+        if isinstance(effectors, ResolvedEffectors):
+            bad = [k for k in effectors.kinds if k not in self.kinds]
+            if bad:
+                raise ValueError(f"solver {self.name!r} does not support effector kind {bad[0]!r}; "
+                                 f"it supports: {', '.join(self.kinds)}")
+            return effectors
+        return resolve_effectors(self.skeleton, effectors, self.kinds, self.name)
+
+    def _prepare(self, start, effectors):
+        if start is None:
+            if self.needs_start:
+                raise ValueError(f"solver {self.name!r} needs a start pose (it changes one); got start=None")
+            return None, self.resolve(effectors)
+        pos = check_pose(self.skeleton, start)
+        res = self.resolve(effectors)
+        check_look_at(res, pos)
+        return start, res
+
+    def solve(self, start: Pose | None, effectors: Sequence[Effector]) -> IKResult:
+        """Pose the skeleton so the effectors reach their targets (one problem)."""
+        start, res = self._prepare(start, effectors)
+        return self._solve(start, res)
+
+    def solve_batch(self, starts, effectors) -> list[IKResult]:
+        """B problems at once; ``result[b]`` equals ``solve(starts[b], effectors[b])``.
+
+        Parameters
+        ----------
+        starts : sequence of B Pose, or None
+            None only for solvers with ``needs_start = False`` (then B comes from ``effectors``).
+        effectors : sequence of Effector, or sequence of B sequences of Effector
+            One list shared by every problem, or one list per problem.
+
+        Returns
+        -------
+        list of B IKResult
+        """
+        starts, effs = batch_arguments(starts, effectors)
+        shared = {}
+        prepared_s, prepared_r = [], []
+        for s, e in zip(starts, effs):
+            key = id(e)
+            if s is None or key not in shared:
+                s, r = self._prepare(s, e)
+                shared[key] = r
+            else:
+                s, r = self._prepare_start(s, shared[key])
+            prepared_s.append(s)
+            prepared_r.append(r)
+        return self._solve_many(prepared_s, prepared_r)
+
+    def _prepare_start(self, start, res):
+        check_look_at(res, check_pose(self.skeleton, start))
+        return start, res
+
+    def _solve(self, start, resolved) -> IKResult:
+        raise NotImplementedError
+
+    def _solve_many(self, starts, resolved) -> list[IKResult]:
+        return [self._solve(s, r) for s, r in zip(starts, resolved)]
+
+    def result(self, pose: Pose, resolved: ResolvedEffectors, iterations: int, info=None,
+               global_rot=None) -> IKResult:
+        """The :class:`IKResult` of ``pose``, errors and convergence by the shared error function;
+        ``global_rot`` (J, 3, 3), when the solver has it, saves recomputing FK."""
+        if global_rot is not None or not resolved.angular:
+            err, conv = errors_of(pose.global_pos, global_rot, resolved)
+        else:
+            err, conv = effector_errors(self.skeleton, pose, resolved)
+        return IKResult(pose, conv, int(iterations), err, {} if info is None else info, resolved.kinds)
+
+
+def batch_arguments(starts, effectors):
+    """Normalise ``solve_batch`` arguments to two lists of length B (see :meth:`SolverBase.solve_batch`)."""
+    shared = isinstance(effectors, ResolvedEffectors) or (
+        len(effectors) > 0 and all(isinstance(e, Effector) for e in effectors))
+    if starts is None:
+        B = 1 if shared else len(effectors)
+        starts = [None] * B
+    else:
+        if isinstance(starts, Pose):
+            raise ValueError("starts: expected a sequence of Pose (one per problem), got one Pose; "
+                             "use solve() for a single problem")
+        starts = list(starts)
+    effs = [effectors] * len(starts) if shared else list(effectors)
+    if len(effs) != len(starts):
+        raise ValueError(f"{len(starts)} start poses but {len(effs)} effector lists; give one list per "
+                         "problem, or one list of Effector objects for all")
+    return starts, effs
 
 
 def effector_set(skeleton: Skeleton, name: str, pose_pos, tolerance: float = 1e-3) -> list[Effector]:
@@ -133,39 +242,6 @@ def effector_set(skeleton: Skeleton, name: str, pose_pos, tolerance: float = 1e-
     skeleton.require_roles(EFFECTOR_SETS[name], f"effector set {name!r}")
     pose_pos = np.asarray(pose_pos, dtype=float)
     return [Effector(role, pose_pos[skeleton.index(role)], tolerance=tolerance) for role in EFFECTOR_SETS[name]]
-
-
-def resolve_effectors(skeleton: Skeleton, effectors: Sequence[Effector], kinds=KINDS):
-    """Validate effectors; returns joint indices (K,), targets (K, 3), tolerances (K,), weights (K,).
-
-    Raises
-    ------
-    ValueError
-        No effectors, an unknown joint (the message lists valid names), an unsupported kind, a target
-        that is not 3 finite numbers, a non-positive tolerance, or two effectors on one joint.
-    """
-    if len(effectors) == 0:
-        raise ValueError("expected at least one Effector")
-    idx, targets, tols, weights = [], [], [], []
-    for e in effectors:
-        if not isinstance(e, Effector):
-            raise ValueError(f"expected Effector objects, got {type(e).__name__}")
-        if e.kind not in kinds:
-            raise ValueError(f"effector on {e.joint!r}: kind {e.kind!r} is not supported here; expected one of {kinds}")
-        j = skeleton.index(e.joint)
-        if e.target.shape != (3,):
-            raise ValueError(f"effector on {e.joint!r}: target must have shape (3,), got {e.target.shape}")
-        if not np.all(np.isfinite(e.target)):
-            raise ValueError(f"effector on {e.joint!r}: target contains NaN or inf")
-        if not (e.tolerance > 0 and np.isfinite(e.tolerance)):
-            raise ValueError(f"effector on {e.joint!r}: tolerance must be a positive number of metres")
-        if j in idx:
-            raise ValueError(f"two effectors on joint {skeleton.names[j]}")
-        idx.append(j)
-        targets.append(e.target)
-        tols.append(float(e.tolerance))
-        weights.append(float(e.weight))
-    return np.array(idx), np.array(targets), np.array(tols), np.array(weights)
 
 
 def base_index(skeleton: Skeleton, base=None) -> int:

@@ -7,6 +7,10 @@ For each effector in turn, walk from its parent joint up to the base; at each jo
 the shortest rotation that takes the direction to the end effector, ``e - p_i``, onto the direction
 to the target, ``t - p_i``. Repeat the sweeps until every effector is within tolerance. Bone lengths
 are exact by construction (only rotations change); the base keeps its position.
+
+CCD here honours position effectors only (``kinds = ("position",)``): a rotation goal would need a
+second, competing turn per joint and a rule for sharing it, which is what the Jacobian of
+:mod:`posekit.ik.dls` does properly. Use ``"dls"`` for rotation and look-at effectors.
 """
 
 from __future__ import annotations
@@ -16,27 +20,30 @@ import numpy as np
 from .._jit import njit
 from ..skeleton import Skeleton
 from ._rigid import fk_one, pose_from, rotatable, rotate_joint, rotation_between, rotations_of
-from .api import IKResult, Pose, base_index, resolve_effectors
+from .api import IKResult, SolverBase, base_index
+from .effectors import errors_into
+from .registry import register
 
 __all__ = ["CCDSolver"]
 
 
 @njit
-def _ccd(Rl, root_pos, local_pos, parents, movable, eff_idx, targets, tols, max_iter):
+def _ccd(Rl, root_pos, local_pos, parents, movable, eff_idx, codes, targets, trot, axis, tols, max_iter):
     J = parents.shape[0]
     K = eff_idx.shape[0]
     Rg = np.empty((J, 3, 3))
     Pg = np.empty((J, 3))
+    err = np.empty(K)
     fk_one(parents, local_pos, Rl, root_pos, Rg, Pg)
     it = 0
     while True:
+        errors_into(Pg, Rg, eff_idx, codes, targets, trot, axis, err)
         done = True
         for k in range(K):
-            d = Pg[eff_idx[k]] - targets[k]
-            if np.sqrt(d[0] ** 2 + d[1] ** 2 + d[2] ** 2) > tols[k]:
+            if err[k] > tols[k]:
                 done = False
         if done or it >= max_iter:
-            return Pg, it, done
+            return Pg, Rg, it, done
         for k in range(K):
             e = eff_idx[k]
             j = parents[e]
@@ -48,7 +55,7 @@ def _ccd(Rl, root_pos, local_pos, parents, movable, eff_idx, targets, tols, max_
         it += 1
 
 
-class CCDSolver:
+class CCDSolver(SolverBase):
     """CCD behind the :class:`~posekit.ik.api.Solver` interface; needs a start pose with rotations.
 
     Parameters
@@ -61,17 +68,22 @@ class CCDSolver:
     """
 
     name = "ccd"
+    kinds = ("position",)
+    needs_start = True
 
     def __init__(self, skeleton: Skeleton, max_iter: int = 50, base: str | None = None):
         self.skeleton = skeleton
         self.max_iter = int(max_iter)
         self.base = base_index(skeleton, base)
 
-    def solve(self, start: Pose, effectors) -> IKResult:
+    def _solve(self, start, res) -> IKResult:
         Rl, root, local_pos = rotations_of(self.skeleton, start, "CCD")
-        idx, targets, tols, _ = resolve_effectors(self.skeleton, effectors)
-        movable = rotatable(self.skeleton, idx, self.base)
-        Pg, it, done = _ccd(Rl, root, local_pos, self.skeleton.parents, movable, idx.astype(np.int64),
-                            np.ascontiguousarray(targets), tols, self.max_iter)
-        err = np.linalg.norm(Pg[idx] - targets, axis=1)
-        return IKResult(pose_from(Rl, root, local_pos, Pg, self.skeleton, start), bool(np.all(err <= tols)), int(it), err)
+        movable = rotatable(self.skeleton, res.joints, self.base)
+        Pg, Rg, it, _ = _ccd(Rl, root, local_pos, self.skeleton.parents, movable, res.joints, res.codes,
+                             np.ascontiguousarray(res.position), res.rotation, res.axis, res.tolerance, self.max_iter)
+        return self.result(pose_from(Rl, root, Pg, start.local_pos), res, it, global_rot=Rg)
+
+
+register("ccd", CCDSolver, kinds=CCDSolver.kinds, needs_start=True, replace=True,
+         description="Cyclic Coordinate Descent: turn each joint towards its target, sweep after sweep",
+         lesson="notebooks/01_fabrik.ipynb")

@@ -17,6 +17,11 @@ Units and axes: :mod:`posekit.conventions` (metres, Y up, facing +Z).
   kernel (:mod:`posekit.ik.fabrik_kernel`) is compiled with numba.
 * :func:`fix_bone_lengths` — the backward pass alone, which restores bone lengths of predicted
   positions (the post-processing of Victor & Meyer 2020, Sec. 3.4).
+
+FABRIK moves positions only: it honours position effectors (``kinds = ("position",)``) and returns a
+:class:`~posekit.ik.api.Pose` without rotations. Zero-length bones (CMU's ``LHipJoint``, ``LowerBack``,
+``Neck``, ``LeftShoulder``, ...) are rigid attachments: such a joint sits on its parent, and its
+children hang from the parent (:func:`collapse_zero_bones`).
 """
 
 from __future__ import annotations
@@ -25,12 +30,17 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..kinematics import bone_lengths_of
 from ..skeleton import Skeleton
-from .api import IKResult, Pose, base_index, check_pose, resolve_effectors
+from .api import IKResult, Pose, SolverBase, base_index
 from .fabrik_kernel import _S_MAX, EXTENDED_RATIO, MIN_AXIAL, SECANT_STEPS, _fabrik_tree
+from .registry import register
 
 __all__ = ["fabrik_chain", "FabrikSolver", "Constraints", "default_constraints", "fix_bone_lengths",
-           "chain_lengths", "straighten_chain", "effector_chains"]
+           "chain_lengths", "straighten_chain", "effector_chains", "collapse_zero_bones", "ZERO_BONE"]
+
+ZERO_BONE = 1e-9
+"""A bone shorter than this (metres) is a rigid attachment (:func:`collapse_zero_bones`)."""
 
 
 # ---------------------------------------------------------------------------------------- one chain
@@ -183,20 +193,58 @@ def _straighten_part(base, bones, bl, R, t, may_bend):
     return base + c * offsets + np.cross(k, offsets) + np.outer(offsets @ k, k) / (1.0 + c)
 
 
-def effector_chains(skeleton: Skeleton, eff_idx, fixed) -> list[np.ndarray]:
+def effector_chains(skeleton, eff_idx, fixed) -> list[np.ndarray]:
     """Every effector's chain for the near-extended step, base first: from the nearest joint above it
     that is fixed or itself an effector, down to the effector. Ordered by effector index, so a chain
-    comes after the chains of the effectors above it (whose new positions it starts from)."""
+    comes after the chains of the effectors above it (whose new positions it starts from).
+    ``skeleton`` may also be a ``parents`` array (a tree without its zero-length bones)."""
+    parents = np.asarray(getattr(skeleton, "parents", skeleton))
     effs = {int(e) for e in eff_idx}
     chains = []
     for e in sorted(effs):
         c, j = [e], e
         while not fixed[j] and (j == e or j not in effs):
-            j = int(skeleton.parents[j])
+            j = int(parents[j])
             c.append(j)
         if len(c) > 2:  # one bone is what the forward pass does anyway
             chains.append(np.array(c[::-1], dtype=np.int64))
     return chains
+
+
+def collapse_zero_bones(parents, zero):
+    """The tree without its zero-length bones, for FABRIK.
+
+    A joint whose bone has zero length (CMU's ``LHipJoint``) has no direction, so FABRIK cannot place
+    it by one; it is rigidly attached instead: it sits on its parent, and its children hang from the
+    parent. This drops such joints and re-parents their children onto the nearest kept ancestor.
+
+    Parameters
+    ----------
+    parents : ndarray of int, shape (J,)
+    zero : ndarray of bool, shape (J,)
+        Joints whose bone has zero length (never the root).
+
+    Returns
+    -------
+    keep : ndarray of int, shape (J',)
+        The kept joints, in order (parents still before children).
+    rep : ndarray of int, shape (J,)
+        For every joint the index (into ``keep``) of the kept joint it sits on: itself if kept, else its
+        nearest kept ancestor. ``reduced_positions[rep]`` gives back all J joints.
+    reduced_parents : ndarray of int, shape (J',)
+    """
+    parents = np.asarray(parents)
+    zero = np.asarray(zero, dtype=bool)
+    if zero[0]:
+        raise ValueError("the root has no bone; it cannot be a zero-length bone")
+    keep = np.nonzero(~zero)[0]
+    new = np.full(len(parents), -1, dtype=np.int64)
+    new[keep] = np.arange(len(keep))
+    rep = np.empty(len(parents), dtype=np.int64)
+    for j in range(len(parents)):
+        rep[j] = new[j] if not zero[j] else rep[parents[j]]
+    reduced = np.array([-1 if parents[k] < 0 else rep[parents[k]] for k in keep], dtype=np.int64)
+    return keep, rep, reduced
 
 
 # ---------------------------------------------------------------------------------------- full body
@@ -239,7 +287,7 @@ def default_constraints(skeleton: Skeleton) -> Constraints:
     return Constraints(limits, no_fwd)
 
 
-class FabrikSolver:
+class FabrikSolver(SolverBase):
     """Full-body FABRIK behind the :class:`~posekit.ik.api.Solver` interface.
 
     One iteration (kernel: :func:`posekit.ik.fabrik_kernel._fabrik_tree`):
@@ -278,10 +326,16 @@ class FabrikSolver:
     Notes
     -----
     Bone lengths come from the start pose, so the solver works on any skeleton whose start pose is
-    given. Effector tolerances come from the :class:`Effector` objects.
+    given; a bone shorter than :data:`ZERO_BONE` is a rigid attachment (:func:`collapse_zero_bones`).
+    Effector tolerances come from the :class:`Effector` objects. Position effectors only
+    (``kinds``); :meth:`solve_batch` solves problems that share their effector joints with
+    :func:`posekit.ik.fabrik_batched.fabrik_batched` (no constraints), which agrees with
+    :meth:`solve` to rounding (1e-12 m) and in iterations.
     """
 
     name = "fabrik"
+    kinds = ("position",)
+    needs_start = True
 
     def __init__(self, skeleton: Skeleton, max_iter: int = 20, base: str | None = None, constraints=None):
         self.skeleton = skeleton
@@ -291,10 +345,6 @@ class FabrikSolver:
         fixed = np.zeros(J, dtype=np.bool_)
         fixed[skeleton.chain(b, 0)] = True
         self._fixed = fixed
-        order = np.argsort(skeleton.parents[1:], kind="stable") + 1
-        counts = np.bincount(skeleton.parents[1:], minlength=J)
-        self._child_start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-        self._child_idx = order.astype(np.int64)
         if constraints is True:
             constraints = default_constraints(skeleton)
         self.constraints = constraints
@@ -309,47 +359,100 @@ class FabrikSolver:
             if "left_hip" in skeleton.roles and "right_hip" in skeleton.roles:
                 self._hips = (skeleton.index("left_hip"), skeleton.index("right_hip"))
         self._limited = (self._limit_cos >= -1.0) | self._no_fwd
+        self._trees = {}
         self._layouts = {}
 
-    def _layout(self, eff_idx):
-        """Per effector set (cached): the joints on an effector's path, and the effector chains
-        flattened for the kernel (starts, joints, may_bend per chain)."""
-        key = tuple(int(j) for j in eff_idx)
+    def _tree(self, zero):
+        """The tree the kernel works on (cached per set of zero-length bones): kept joints, their
+        parents and children, and the joint limits on them."""
+        key = zero.tobytes()
+        if key not in self._trees:
+            J = self.skeleton.n_joints
+            if zero.any():
+                keep, rep, parents = collapse_zero_bones(self.skeleton.parents, zero)
+            else:
+                keep, rep, parents = np.arange(J), np.arange(J), self.skeleton.parents
+            n = len(keep)
+            order = np.argsort(parents[1:], kind="stable") + 1
+            counts = np.bincount(parents[1:], minlength=n)
+            hips = tuple(int(rep[h]) if h >= 0 else -1 for h in self._hips)
+            self._trees[key] = dict(keep=keep, rep=rep, parents=np.ascontiguousarray(parents, dtype=np.int64),
+                                    child_start=np.concatenate([[0], np.cumsum(counts)]).astype(np.int64),
+                                    child_idx=order.astype(np.int64), fixed=self._fixed[keep],
+                                    limit_cos=self._limit_cos[keep], no_fwd=self._no_fwd[keep],
+                                    limited=self._limited[keep], hips=hips, key=key)
+        return self._trees[key]
+
+    def _layout(self, tree, eff_idx):
+        """Per tree and effector set (cached): the joints on an effector's path, and the effector
+        chains flattened for the kernel (starts, joints, may_bend per chain)."""
+        key = (tree["key"], tuple(int(j) for j in eff_idx))
         if key not in self._layouts:
-            active = np.zeros(self.skeleton.n_joints, dtype=np.bool_)
-            for j in key:
+            parents = tree["parents"]
+            active = np.zeros(len(parents), dtype=np.bool_)
+            for j in key[1]:
                 while j >= 0 and not active[j]:
                     active[j] = True
-                    j = self.skeleton.parents[j]
-            chains = effector_chains(self.skeleton, key, self._fixed)
+                    j = parents[j]
+            chains = effector_chains(parents, key[1], tree["fixed"])
             starts = np.cumsum([0] + [len(c) for c in chains]).astype(np.int64)
             joints = np.concatenate(chains) if chains else np.zeros(0, dtype=np.int64)
             limited = self.constraints is not None
-            bend = np.array([not (limited and self._limited[c[1:]].any()) for c in chains], dtype=np.bool_)
+            bend = np.array([not (limited and tree["limited"][c[1:]].any()) for c in chains], dtype=np.bool_)
             self._layouts[key] = (active, starts, joints, bend)
         return self._layouts[key]
 
-    def solve(self, start: Pose, effectors) -> IKResult:
+    def _zero_bones(self, global_pos):
+        """Bone lengths (..., J) of start positions and the movable joints whose bone is zero-length."""
+        lengths = bone_lengths_of(self.skeleton, global_pos)
+        return lengths, ~self._fixed & (lengths < ZERO_BONE)
+
+    def _solve(self, start, res) -> IKResult:
         """Pose the skeleton so the effectors reach their targets; bone lengths are kept."""
-        p = check_pose(self.skeleton, start)
-        idx, targets, tols, _ = resolve_effectors(self.skeleton, effectors)
-        lengths = np.linalg.norm(p - p[np.maximum(self.skeleton.parents, 0)], axis=1)
-        lengths[0] = 0.0
-        movable = ~self._fixed
-        if np.any(lengths[movable] < 1e-9):
-            j = int(np.nonzero(movable & (lengths < 1e-9))[0][0])
-            raise ValueError(f"zero-length bone to joint {self.skeleton.names[j]}; FABRIK needs every bone > 0")
-        slot = np.full(self.skeleton.n_joints, -1, dtype=np.int64)
-        slot[idx] = np.arange(len(idx))
-        pos = np.ascontiguousarray(p, dtype=float).copy()
-        active, starts, joints, bend = self._layout(idx)
-        it, done = _fabrik_tree(pos, self.skeleton.parents, lengths, self._child_start, self._child_idx,
-                                active, self._fixed, slot, idx.astype(np.int64),
-                                np.ascontiguousarray(targets), tols, self.max_iter, self._limit_cos, self._no_fwd,
-                                self._hips[0], self._hips[1], self.constraints is not None, starts, joints, bend,
-                                EXTENDED_RATIO)
-        err = np.linalg.norm(pos[idx] - targets, axis=1)
-        return IKResult(Pose(pos), bool(np.all(err <= tols)), int(it), err)
+        p = np.asarray(start.global_pos, dtype=float)
+        lengths, zero = self._zero_bones(p)
+        tree = self._tree(zero)
+        eff = reduced_effectors(self.skeleton, tree["rep"], res.joints)
+        pos = np.ascontiguousarray(p[tree["keep"]], dtype=float)  # a copy: the start stays untouched
+        slot = np.full(len(pos), -1, dtype=np.int64)
+        slot[eff] = np.arange(len(eff))
+        active, starts, joints, bend = self._layout(tree, eff)
+        it, done = _fabrik_tree(pos, tree["parents"], np.ascontiguousarray(lengths[tree["keep"]]), tree["child_start"],
+                                tree["child_idx"], active, tree["fixed"], slot, eff, np.ascontiguousarray(res.position),
+                                res.tolerance, self.max_iter, tree["limit_cos"], tree["no_fwd"], tree["hips"][0],
+                                tree["hips"][1], self.constraints is not None, starts, joints, bend, EXTENDED_RATIO)
+        return self.result(Pose(pos[tree["rep"]]), res, it)
+
+    def _solve_many(self, starts, resolved) -> list[IKResult]:
+        """Problems that share their effector joints go through :func:`fabrik_batched` (vectorised
+        over the batch) when there are no joint limits; the rest one by one."""
+        from .fabrik_batched import fabrik_batched
+
+        joints = resolved[0].joints if resolved else None
+        if (len(starts) < 2 or self.constraints is not None
+                or any(not np.array_equal(r.joints, joints) for r in resolved)):
+            return super()._solve_many(starts, resolved)
+        P = np.stack([np.asarray(s.global_pos, dtype=float) for s in starts])
+        zero = self._zero_bones(P)[1]
+        if not (zero == zero[0]).all():  # different rigid attachments: different trees
+            return super()._solve_many(starts, resolved)
+        pos, _, it = fabrik_batched(self.skeleton, P, joints, np.stack([r.position for r in resolved]),
+                                    np.stack([r.tolerance for r in resolved]), self.max_iter, self.base)
+        return [self.result(Pose(pos[b]), r, it[b]) for b, r in enumerate(resolved)]
+
+
+def reduced_effectors(skeleton, rep, joints) -> np.ndarray:
+    """Effector joints in the tree without zero-length bones (:func:`collapse_zero_bones`); two
+    effectors that land on one point are refused."""
+    eff = rep[np.asarray(joints)].astype(np.int64)
+    if len(set(eff.tolist())) < len(eff):
+        for a in range(len(eff)):
+            for b in range(a):
+                if eff[a] == eff[b]:
+                    na, nb = skeleton.names[joints[a]], skeleton.names[joints[b]]
+                    raise ValueError(f"effectors on {nb} and {na}: a zero-length bone joins them, so they sit on "
+                                     "one point; keep one of them")
+    return eff
 
 
 def fix_bone_lengths(skeleton: Skeleton, global_pos, lengths=None, keep: str = "leaves") -> np.ndarray:
@@ -400,3 +503,11 @@ def fix_bone_lengths(skeleton: Skeleton, global_pos, lengths=None, keep: str = "
     for j in range(1, J):
         out[..., j, :] = place(pos[..., j, :], out[..., parents[j], :], L[j])
     return out
+
+
+register("fabrik", FabrikSolver, kinds=FabrikSolver.kinds, needs_start=True, replace=True,
+         description="Full-body FABRIK (Aristidou & Lasenby 2011) with near-extended chains straightened",
+         lesson="notebooks/01_fabrik.ipynb")
+register("fabrik-constrained", FabrikSolver, kinds=FabrikSolver.kinds, needs_start=True, replace=True,
+         description="FABRIK with joint limits: cones at shoulders, hips, elbows and knees; knees fold backwards",
+         lesson="notebooks/01_fabrik.ipynb", constraints=True)

@@ -12,9 +12,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..kinematics import bone_lengths_of
 from ..skeleton import Skeleton
 from .api import base_index
-from .fabrik import effector_chains
+from .effectors import position_errors
+from .fabrik import ZERO_BONE, collapse_zero_bones, effector_chains, reduced_effectors
 from .fabrik_kernel import _S_MAX, EXTENDED_RATIO, MIN_AXIAL, SECANT_STEPS
 
 __all__ = ["fabrik_batched"]
@@ -118,19 +120,24 @@ def _extended_chain(back, lengths, chain, t, ratio):
         R = R - bl[m]
 
 
-def fabrik_batched(skeleton: Skeleton, start_pos, eff_joints, targets, tolerance: float = 1e-3,
+def fabrik_batched(skeleton: Skeleton, start_pos, eff_joints, targets, tolerance=1e-3,
                    max_iter: int = 20, base: str | None = None):
     """Solve B full-body FABRIK problems with one effector set.
+
+    :meth:`posekit.ik.FabrikSolver.solve_batch` calls this; it agrees with
+    :meth:`~posekit.ik.FabrikSolver.solve` (no constraints) to rounding, iterations included.
 
     Parameters
     ----------
     skeleton : Skeleton
     start_pos : ndarray, shape (B, J, 3), metres
-        Start poses (their bone lengths are kept).
+        Start poses (their bone lengths are kept). A bone shorter than
+        :data:`posekit.ik.fabrik.ZERO_BONE` is a rigid attachment
+        (:func:`posekit.ik.fabrik.collapse_zero_bones`); it must be so in every start pose.
     eff_joints : sequence of str or int, length K
         Effector joints (names, roles or indices), the same for every problem.
     targets : ndarray, shape (B, K, 3), metres
-    tolerance : float, metres
+    tolerance : float or ndarray broadcastable to (B, K), metres
     max_iter : int
     base : str, optional
         Fixed joint (default the pelvis role); its ancestors are fixed too.
@@ -153,10 +160,37 @@ def fabrik_batched(skeleton: Skeleton, start_pos, eff_joints, targets, tolerance
         raise ValueError(f"targets: expected shape ({B}, {K}, 3), got {targets.shape}")
     if not (np.all(np.isfinite(start_pos)) and np.all(np.isfinite(targets))):
         raise ValueError("start_pos and targets must be finite")
-    parents = skeleton.parents
+    try:
+        tol = np.broadcast_to(np.asarray(tolerance, dtype=float), (B, K))
+    except ValueError:
+        raise ValueError(f"tolerance: expected a number or an array broadcastable to ({B}, {K}), "
+                         f"got shape {np.shape(tolerance)}") from None
+    if not (np.all(np.isfinite(tol)) and np.all(tol > 0)):
+        raise ValueError("tolerance must be positive (metres)")
     b = base_index(skeleton, base)
     fixed = np.zeros(J, bool)
     fixed[skeleton.chain(b, 0)] = True
+    lengths = bone_lengths_of(skeleton, start_pos)  # (B, J)
+    zero_each = ~fixed & (lengths < ZERO_BONE)
+    zero = zero_each.any(axis=0)
+    if (zero_each != zero).any():
+        j = int(np.nonzero((zero_each != zero).any(axis=0))[0][0])
+        raise ValueError(f"joint {skeleton.names[j]} has a zero-length bone in some start poses only; "
+                         "solve those apart")
+    if zero.any():
+        keep, rep, parents = collapse_zero_bones(skeleton.parents, zero)
+    else:
+        keep, rep, parents = np.arange(J), np.arange(J), skeleton.parents
+    eff_r = reduced_effectors(skeleton, rep, eff)
+    pos, conv, it = _solve(parents, fixed[keep], eff_r, start_pos[:, keep], targets, lengths[:, keep], tol, max_iter)
+    return pos[:, rep], conv, it
+
+
+def _solve(parents, fixed, eff, start_pos, targets, lengths, tol, max_iter):
+    """The batched passes on a tree without zero-length bones: ``start_pos`` (B, J, 3), ``lengths``
+    (B, J), ``targets`` (B, K, 3), ``tol`` (B, K)."""
+    J = len(parents)
+    K = len(eff)
     active = np.zeros(J, bool)
     for e in eff:
         j = int(e)
@@ -166,15 +200,13 @@ def fabrik_batched(skeleton: Skeleton, start_pos, eff_joints, targets, tolerance
     slot = np.full(J, -1)
     slot[eff] = np.arange(K)
     children = [np.nonzero((parents == j) & active)[0] for j in range(J)]
-    chains = effector_chains(skeleton, eff, fixed)
+    chains = effector_chains(parents, eff, fixed)
 
     # (J, 3, B) layout: one contiguous vector over problems per joint coordinate
     pos = start_pos.transpose(1, 2, 0).copy()  # a copy always (a view when B == 1 would be written to)
     tgt = np.ascontiguousarray(targets.transpose(1, 2, 0))  # (K, 3, B)
-    lengths = np.linalg.norm(pos - pos[np.maximum(parents, 0)], axis=1)  # (J, B)
-    lengths[0] = 0.0
-    if np.any(lengths[~fixed] < 1e-9):
-        raise ValueError("zero-length bone: FABRIK needs every bone > 0")
+    lengths = np.ascontiguousarray(lengths.T)  # (J, B)
+    tol = np.ascontiguousarray(tol.T)  # (K, B)
 
     out_pos = np.empty_like(pos)
     out_it = np.zeros(pos.shape[2], int)
@@ -182,8 +214,8 @@ def fabrik_batched(skeleton: Skeleton, start_pos, eff_joints, targets, tolerance
     work = np.arange(pos.shape[2])
     it = 0
     while True:
-        err2 = ((pos[eff] - tgt) ** 2).sum(axis=1)  # (K, b), as the kernel: squared distances
-        done = (err2 <= tolerance * tolerance).all(axis=0)
+        err = position_errors(pos[eff], tgt, axis=1)  # (K, b): the shared position error
+        done = (err <= tol).all(axis=0)
         if done.any() or it >= max_iter:
             leaving = done if it < max_iter else np.ones_like(done)
             out_pos[:, :, work[leaving]] = pos[:, :, leaving]
@@ -192,7 +224,7 @@ def fabrik_batched(skeleton: Skeleton, start_pos, eff_joints, targets, tolerance
             keep = ~leaving
             if not keep.any():
                 break
-            pos, tgt, lengths, work = pos[:, :, keep], tgt[:, :, keep], lengths[:, keep], work[keep]
+            pos, tgt, lengths, tol, work = pos[:, :, keep], tgt[:, :, keep], lengths[:, keep], tol[:, keep], work[keep]
         # backward: effectors on their targets, sub-bases at the centroid of their proposals
         back = pos.copy()
         for j in range(J - 1, -1, -1):

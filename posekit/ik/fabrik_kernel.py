@@ -1,7 +1,7 @@
 """The compiled kernel of :class:`posekit.ik.fabrik.FabrikSolver` (numba): full-body FABRIK with the
 near-extended chain step. Read :mod:`posekit.ik.fabrik` first — it describes the algorithm and has
 the readable numpy version of every step (:func:`~posekit.ik.fabrik.straighten_chain`); the
-plain-numpy baseline :func:`posekit.bench.ik._numpy_fabrik` runs the same algorithm, and
+plain-numpy baseline :func:`posekit.bench.ik_methods.numpy_fabrik` runs the same algorithm, and
 :func:`posekit.ik.fabrik_batched.fabrik_batched` the same arithmetic over a batch.
 
 Everything is written with scalar arithmetic and square roots only (no trigonometry), so the single
@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import njit
+from .effectors import position_errors_into
 
 EXTENDED_RATIO = 0.9
 """A chain whose target lies at >= this fraction of its reach is straightened directly (see
@@ -195,15 +196,13 @@ def _fabrik_tree(pos, parents, lengths, child_start, child_idx, active, fixed, s
     bl = np.empty(nmax)
     ax = np.empty(nmax)
     lat = np.empty((nmax, 3))
+    err = np.empty(K)
     it = 0
     while True:
+        position_errors_into(pos, eff_idx, targets, err)  # the shared error (posekit.ik.effectors)
         done = True
         for k in range(K):
-            j = eff_idx[k]
-            dx = pos[j, 0] - targets[k, 0]
-            dy = pos[j, 1] - targets[k, 1]
-            dz = pos[j, 2] - targets[k, 2]
-            if dx * dx + dy * dy + dz * dz > tols[k] * tols[k]:
+            if err[k] > tols[k]:
                 done = False
         if done or it >= max_iter:
             return it, done

@@ -7,6 +7,7 @@ solvers. Talks to solvers only through the :class:`~posekit.ik.api.Solver` inter
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -18,10 +19,19 @@ __all__ = ["SolverPanel"]
 
 def status_line(result, ms: float) -> str:
     """One solver's status under its view, as HTML on three lines: reached or not, the worst
-    effector error (mm), iterations and time (ms)."""
+    effector error (mm for positions; degrees for rotation and look-at effectors, when there are any),
+    iterations and time (ms)."""
     mark = "✓ reached" if result.converged else "✗ not reached"
     it = result.iterations
-    return (f"<b>{mark}</b><br>worst effector {result.effector_error.max() * 1000:.1f} mm<br>"
+    err = np.asarray(result.effector_error, dtype=float)
+    kinds = tuple(getattr(result, "kinds", ()) or ("position",) * len(err))
+    angular = np.array([k != "position" for k in kinds], dtype=bool)
+    parts = []
+    if (~angular).any():
+        parts.append(f"{err[~angular].max() * 1000:.1f} mm")
+    if angular.any():
+        parts.append(f"{np.degrees(err[angular].max()):.1f}°")
+    return (f"<b>{mark}</b><br>worst effector {', '.join(parts)}<br>"
             f"{it} iteration{'' if it == 1 else 's'}, {ms:.2f} ms")
 
 
@@ -33,11 +43,13 @@ class SolverPanel:
     ----------
     skeleton : Skeleton
     solvers : dict
-        Name -> solver (anything with ``solve(start, effectors)``).
+        Name -> solver (anything with ``solve(start, effectors)``; e.g. from
+        :func:`posekit.ik.make_solver`).
     start : Pose
         Start pose of every solve (rotation-based solvers need its rotations).
     effectors : list of Effector
-        Initial effectors; moving a joint without one adds it.
+        Initial effectors (one per joint: the viewer moves one point per joint); moving a joint
+        without one adds a position effector, moving a look-at target moves the point looked at.
     truth : ndarray, shape (J, 3), optional
         Shown as the ghost in every viewer.
 
@@ -74,9 +86,14 @@ class SolverPanel:
         display(self.widget)
 
     def _on_target(self, joint, position):
+        # the viewer moves points: a position or look-at effector keeps its kind, tolerance and weight
+        # and gets the new point; a joint without one (or with a rotation effector) gets a position one
         old = self.effectors.get(joint)
-        tol = old.tolerance if old is not None else 1e-3
-        self.effectors[joint] = Effector(joint, np.asarray(position, float), tolerance=tol)
+        position = np.asarray(position, float)
+        if old is not None and old.kind in ("position", "look_at"):
+            self.effectors[joint] = replace(old, target=position)
+        else:
+            self.effectors[joint] = Effector(joint, position)
         self.solve()
 
     def move_target(self, joint, position):
@@ -87,7 +104,9 @@ class SolverPanel:
     def solve(self):
         """Solve with every solver and refresh the views."""
         effs = list(self.effectors.values())
-        targets = {e.joint if isinstance(e.joint, str) else self.skeleton.names[e.joint]: e.target for e in effs}
+        # points to draw: position and look-at targets (a rotation has none)
+        targets = {self.skeleton.names[self.skeleton.index(e.joint)]: e.target for e in effs
+                   if e.kind in ("position", "look_at")}
         for name, solver in self.solvers.items():
             t = time.perf_counter()
             res = solver.solve(self.start, effs)
