@@ -12,7 +12,8 @@ from posekit.ik import (DEFAULT_TOLERANCE, EFFECTOR_SETS, KINDS, Effector, Fabri
                         SolverBase, default_constraints, effector_errors, effector_errors_batch, effector_set,
                         fabrik_chain, fix_bone_lengths, make_solver, register, solver_info, solver_names)
 from posekit.ik import registry
-from posekit.ik.fabrik import collapse_zero_bones, straighten_chain
+from posekit.ik.fabrik import collapse_zero_bones
+from posekit.ik.single_chain import straighten_chain
 from posekit.ik.fabrik_batched import fabrik_batched
 from posekit.ik.two_bone import two_bone_ik
 from posekit.kinematics import bone_lengths_of

@@ -38,7 +38,7 @@ PEER_CASES = 100
 def numpy_fabrik(skeleton, start, eff, targets, tol=1e-3, max_iter=20):
     """Baseline: the same full-body FABRIK as :class:`~posekit.ik.FabrikSolver` — backward pass with
     plain centroids at the sub-bases, near-extended chains straightened
-    (:func:`~posekit.ik.fabrik.straighten_chain`), forward pass — written the straightforward way,
+    (:func:`~posekit.ik.single_chain.straighten_chain`), forward pass — written the straightforward way,
     numpy vector ops per joint and no compilation, as a newcomer would after the lesson.
 
     Parameters
@@ -53,7 +53,8 @@ def numpy_fabrik(skeleton, start, eff, targets, tol=1e-3, max_iter=20):
     -------
     ndarray, shape (J, 3)
     """
-    from ..ik.fabrik import effector_chains, straighten_chain
+    from ..ik.fabrik import effector_chains
+    from ..ik.single_chain import straighten_chain
 
     parents = skeleton.parents
     pos = start.copy()

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..ik.fabrik import fabrik_chain
+from ..ik.single_chain import fabrik_chain
 from ..ik.two_bone import two_bone_ik
 from ._check import report
 

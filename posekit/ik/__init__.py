@@ -11,13 +11,15 @@
 
 from .api import (DEFAULT_TOLERANCE, EFFECTOR_SETS, KINDS, Effector, IKResult, Pose, ResolvedEffectors, Solver,
                   SolverBase, effector_errors, effector_errors_batch, effector_set, resolve_effectors)
-from .fabrik import Constraints, FabrikSolver, default_constraints, fabrik_chain, fix_bone_lengths  # noqa: I001
+from .fabrik import Constraints, FabrikSolver, default_constraints  # noqa: I001
+from .single_chain import fabrik_chain, straighten_chain
+from .fix_bones import fix_bone_lengths
 from .ccd import CCDSolver
 from .dls import DLSSolver
 from .registry import SolverInfo, make_solver, register, solver_info, solver_names
 
 __all__ = ["Effector", "Pose", "IKResult", "Solver", "SolverBase", "EFFECTOR_SETS", "effector_set",
            "resolve_effectors", "effector_errors", "effector_errors_batch", "KINDS", "DEFAULT_TOLERANCE",
-           "ResolvedEffectors", "FabrikSolver", "CCDSolver", "DLSSolver", "fabrik_chain", "fix_bone_lengths",
+           "ResolvedEffectors", "FabrikSolver", "CCDSolver", "DLSSolver", "fabrik_chain", "straighten_chain", "fix_bone_lengths",
            "Constraints", "default_constraints", "SolverInfo", "register", "make_solver", "solver_names",
            "solver_info"]

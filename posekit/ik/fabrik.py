@@ -3,20 +3,20 @@
 Introduced in ``notebooks/01_fabrik.ipynb``, where the single chain is derived step by step.
 Units and axes: :mod:`posekit.conventions` (metres, Y up, facing +Z).
 
-* :func:`fabrik_chain` — one chain, readable numpy (Algorithm 1 of the paper): the backward pass
-  puts the end on the target and walks to the base keeping bone lengths, the forward pass puts
-  the base back and walks out again. An unreachable target stretches the chain straight at it.
+* one chain, readable numpy (Algorithm 1 of the paper) and the near-extended step:
+  :mod:`posekit.ik.single_chain` (:func:`~posekit.ik.single_chain.fabrik_chain`,
+  :func:`~posekit.ik.single_chain.straighten_chain`);
 * :class:`FabrikSolver` — the whole body with several end effectors (Sec. 4.2 of the paper): the
   backward pass runs from every effector towards the base; a *sub-base* (a joint where chains
   meet, e.g. the chest) goes to the centroid of the positions its chains propose; the forward pass
   then runs from the fixed base (the pelvis) outwards. Between the two passes, chains whose target
   is close to their full reach — FABRIK's slow regime, a head on a straight spine — are
-  straightened just enough to reach it (:func:`straighten_chain`, the paper's unreachable-target
+  straightened just enough to reach it (:func:`~posekit.ik.single_chain.straighten_chain`, the paper's unreachable-target
   case generalised). Optional joint constraints (Sec. 5): cone limits on a bone's angle to its
   parent bone (shoulders, hips, elbows, knees) and a hinge rule that knees do not bend forward. The
   kernel (:mod:`posekit.ik.fabrik_kernel`) is compiled with numba.
-* :func:`fix_bone_lengths` — the backward pass alone, which restores bone lengths of predicted
-  positions (the post-processing of Victor & Meyer 2020, Sec. 3.4).
+* the backward pass alone, which restores bone lengths of predicted positions (the post-processing
+  of Victor & Meyer 2020, Sec. 3.4): :func:`posekit.ik.fix_bones.fix_bone_lengths`.
 
 FABRIK moves positions only: it honours position effectors (``kinds = ("position",)``) and returns a
 :class:`~posekit.ik.api.Pose` without rotations. Zero-length bones (CMU's ``LHipJoint``, ``LowerBack``,
@@ -33,164 +33,14 @@ import numpy as np
 from ..kinematics import bone_lengths_of
 from ..skeleton import Skeleton
 from .api import IKResult, Pose, SolverBase, base_index
-from .fabrik_kernel import _S_MAX, EXTENDED_RATIO, MIN_AXIAL, SECANT_STEPS, _fabrik_tree
+from .fabrik_kernel import EXTENDED_RATIO, _fabrik_tree
 from .registry import register
 
-__all__ = ["fabrik_chain", "FabrikSolver", "Constraints", "default_constraints", "fix_bone_lengths",
-           "chain_lengths", "straighten_chain", "effector_chains", "collapse_zero_bones", "ZERO_BONE"]
+__all__ = ["FabrikSolver", "Constraints", "default_constraints", "effector_chains", "collapse_zero_bones",
+           "ZERO_BONE"]
 
 ZERO_BONE = 1e-9
 """A bone shorter than this (metres) is a rigid attachment (:func:`collapse_zero_bones`)."""
-
-
-# ---------------------------------------------------------------------------------------- one chain
-def chain_lengths(positions) -> np.ndarray:
-    """Bone lengths of a chain of joint positions (n+1, 3) -> (n,)."""
-    positions = np.asarray(positions, dtype=float)
-    return np.linalg.norm(np.diff(positions, axis=0), axis=1)
-
-
-def fabrik_chain(positions, target, tolerance: float = 1e-3, max_iter: int = 20, return_history: bool = False):
-    """FABRIK on a single chain (Algorithm 1 of Aristidou & Lasenby 2011).
-
-    Parameters
-    ----------
-    positions : ndarray, shape (n+1, 3), metres
-        Joint positions from the base (index 0, stays fixed) to the end effector (index n).
-    target : ndarray, shape (3,), metres
-    tolerance : float, metres
-        Stop when the end is this close to the target.
-    max_iter : int
-    return_history : bool
-        Also return the positions after every iteration (for figures).
-
-    Returns
-    -------
-    positions : ndarray, shape (n+1, 3)
-    converged : bool
-        False for an unreachable target (the chain is then stretched straight towards it).
-    iterations : int
-    history : list of ndarray, only with ``return_history``
-    """
-    p = np.array(positions, dtype=float)
-    t = np.asarray(target, dtype=float)
-    if p.ndim != 2 or p.shape[1] != 3 or len(p) < 2:
-        raise ValueError(f"positions: expected shape (n+1, 3) with n >= 1, got {p.shape}")
-    if t.shape != (3,) or not np.all(np.isfinite(t)) or not np.all(np.isfinite(p)):
-        raise ValueError("target must be 3 finite numbers and positions finite")
-    d = chain_lengths(p)
-    if np.any(d < 1e-9):
-        raise ValueError(f"zero-length bone in the chain (bone {int(np.argmin(d))})")
-    history = [p.copy()]
-    base = p[0].copy()
-    if np.linalg.norm(t - base) > d.sum():  # unreachable: stretch towards the target
-        for i in range(len(d)):
-            u = (t - p[i]) / np.linalg.norm(t - p[i])
-            p[i + 1] = p[i] + d[i] * u
-        history.append(p.copy())
-        out = (p, False, 1)
-        return out + (history,) if return_history else out
-    it = 0
-    while np.linalg.norm(p[-1] - t) > tolerance and it < max_iter:
-        p[-1] = t  # backward: end on the target, walk to the base
-        for i in range(len(d) - 1, -1, -1):
-            u = p[i] - p[i + 1]
-            p[i] = p[i + 1] + d[i] * u / np.linalg.norm(u)
-        p[0] = base  # forward: base back in place, walk to the end
-        for i in range(len(d)):
-            u = p[i + 1] - p[i]
-            p[i + 1] = p[i] + d[i] * u / np.linalg.norm(u)
-        it += 1
-        history.append(p.copy())
-    out = (p, bool(np.linalg.norm(p[-1] - t) <= tolerance), it)
-    return out + (history,) if return_history else out
-
-
-# ------------------------------------------------------------------------------ near-extended chains
-def straighten_chain(positions, target, ratio: float = EXTENDED_RATIO, may_bend: bool = True):
-    """The near-extended chain step of :class:`FabrikSolver`, readable numpy (the kernel
-    :func:`posekit.ik.fabrik_kernel._extended_chain` does the same with scalars).
-
-    Generalises the first branch of Algorithm 1 of Aristidou & Lasenby 2011 — a target out of
-    reach gets the chain straight at it, no iterations — to targets *close to* full reach, where the
-    FABRIK passes are slowest (their contraction per iteration tends to 1 as the chain straightens;
-    ``notebooks/01_fabrik.ipynb`` section 2 measures it):
-
-    1. find the longest end part ``positions[m:]`` (two bones or more) whose target lies at
-       ``d >= ratio * R`` of its reach ``R``;
-    2. split each of its bones into the part along the axis ``e`` from ``positions[m]`` to the end
-       and the part across it, and scale every sideways part by one factor ``sigma``:
-       ``sigma = 0`` is the straight chain (the paper's unreachable case, taken when ``d >= R``),
-       ``sigma = 1`` the chain as it is; the squared span is close to linear in ``sigma^2``, so a
-       few secant steps from those two points find the ``sigma`` whose span is ``d``;
-    3. turn the part rigidly about ``positions[m]`` so its end is on the target.
-
-    Bone lengths are exact and the chain keeps its shape (where it bends, and which way) but for the
-    amount. A part with a bone more than 60 deg off its axis is left to the FABRIK passes.
-
-    Parameters
-    ----------
-    positions : ndarray, shape (n+1, 3), metres
-        The chain, base first (the solver passes it as the forward pass would place it).
-    target : ndarray, shape (3,)
-    ratio : float
-    may_bend : bool
-        False: only straighten (``sigma <= 1``), never bend further — the solver's choice for chains
-        with joint limits, where a larger bend could cross a hinge limit.
-
-    Returns
-    -------
-    (m, positions) : int and ndarray, shape (n+1, 3)
-        The new chain; only ``positions[m + 1:]`` moved. None when no end part qualifies.
-    """
-    q = np.array(positions, dtype=float)
-    t = np.asarray(target, dtype=float)
-    bones = np.diff(q, axis=0)
-    bl = np.linalg.norm(bones, axis=1)
-    for m in range(len(bl) - 1):
-        R, d = bl[m:].sum(), np.linalg.norm(t - q[m])
-        if d < ratio * R or d <= 1e-12:
-            continue
-        part = _straighten_part(q[m], bones[m:], bl[m:], R, t, may_bend)
-        if part is not None:
-            q[m + 1:] = part
-            return m, q
-    return None
-
-
-def _straighten_part(base, bones, bl, R, t, may_bend):
-    S = np.linalg.norm(bones.sum(axis=0))
-    d = np.linalg.norm(t - base)
-    if S < 1e-12 or (d < S and not may_bend):
-        return None
-    e = bones.sum(axis=0) / S
-    along = bones @ e
-    if np.any(along < MIN_AXIAL * bl):
-        return None
-    across = bones - along[:, None] * e
-
-    def chain(sig):
-        v = along[:, None] * e + sig * across
-        return np.cumsum(bl[:, None] * v / np.linalg.norm(v, axis=1, keepdims=True), axis=0)
-
-    sig = 0.0
-    if d < R:
-        g = lambda s: np.sum(chain(np.sqrt(s))[-1] ** 2) - d * d  # noqa: E731
-        (s0, g0), (s1, g1) = (0.0, R * R - d * d), (1.0, S * S - d * d)
-        if g0 - g1 < 1e-12 * R * R:
-            return None  # straight already: no sideways part to scale
-        for _ in range(SECANT_STEPS):
-            if g1 != g0 and abs(g1) > 1e-13 * d * d:
-                s0, g0, s1 = s1, g1, min(max(s1 - g1 * (s1 - s0) / (g1 - g0), 0.0), _S_MAX)
-                g1 = g(s1)
-        sig = np.sqrt(s1)
-    offsets = chain(sig)
-    a, b = offsets[-1] / np.linalg.norm(offsets[-1]), (t - base) / d
-    k, c = np.cross(a, b), a @ b
-    if c < -1.0 + 1e-9:
-        return None
-    # rotation a -> b without trigonometry: x -> c x + k x x + k (k . x) / (1 + c)
-    return base + c * offsets + np.cross(k, offsets) + np.outer(offsets @ k, k) / (1.0 + c)
 
 
 def effector_chains(skeleton, eff_idx, fixed) -> list[np.ndarray]:
@@ -453,56 +303,6 @@ def reduced_effectors(skeleton, rep, joints) -> np.ndarray:
                     raise ValueError(f"effectors on {nb} and {na}: a zero-length bone joins them, so they sit on "
                                      "one point; keep one of them")
     return eff
-
-
-def fix_bone_lengths(skeleton: Skeleton, global_pos, lengths=None, keep: str = "leaves") -> np.ndarray:
-    """Restore bone lengths of predicted joint positions with one FABRIK pass.
-
-    Parameters
-    ----------
-    global_pos : ndarray, shape (..., J, 3), metres
-        Positions whose bones may have the wrong length (e.g. a network's output).
-    lengths : ndarray, shape (J,), optional
-        Wanted bone lengths; default ``skeleton.bone_lengths()``.
-    keep : {"leaves", "root"}
-        ``"leaves"``: the backward pass of FABRIK — leaves stay where they are and every parent is
-        placed at the right distance from its children (at the centroid where several children
-        meet), so the hands and feet keep their positions; then one forward pass from the root
-        (now moved) makes every bone exact. ``"root"``: only the forward pass from the root.
-
-    Returns
-    -------
-    ndarray, shape (..., J, 3) with every bone length equal to ``lengths``.
-    """
-    pos = np.array(global_pos, dtype=float)
-    J = skeleton.n_joints
-    if pos.shape[-2:] != (J, 3):
-        raise ValueError(f"global_pos: expected shape (..., {J}, 3), got {pos.shape}")
-    if not np.all(np.isfinite(pos)):
-        raise ValueError("global_pos contains NaN or inf")
-    L = skeleton.bone_lengths() if lengths is None else np.asarray(lengths, dtype=float)
-    parents = skeleton.parents
-
-    def place(child, parent_pos, length):
-        u = child - parent_pos
-        n = np.linalg.norm(u, axis=-1, keepdims=True)
-        return parent_pos + length * u / np.maximum(n, 1e-12)
-
-    if keep == "leaves":
-        back = pos.copy()
-        for j in range(J - 1, 0, -1):
-            kids = np.nonzero(parents == j)[0]
-            if len(kids):
-                back[..., j, :] = np.mean([place(back[..., j, :], back[..., c, :], L[c]) for c in kids], axis=0)
-        kids = np.nonzero(parents == 0)[0]
-        back[..., 0, :] = np.mean([place(back[..., 0, :], back[..., c, :], L[c]) for c in kids], axis=0)
-        pos = back
-    elif keep != "root":
-        raise ValueError(f"keep must be 'leaves' or 'root', got {keep!r}")
-    out = pos.copy()
-    for j in range(1, J):
-        out[..., j, :] = place(pos[..., j, :], out[..., parents[j], :], L[j])
-    return out
 
 
 register("fabrik", FabrikSolver, kinds=FabrikSolver.kinds, needs_start=True, replace=True,

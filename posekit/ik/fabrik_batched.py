@@ -2,7 +2,7 @@
 
 Introduced in ``notebooks/01_fabrik.ipynb``. Same algorithm and numbers as
 :class:`posekit.ik.fabrik.FabrikSolver` without joint constraints — backward pass, near-extended
-chains straightened (:func:`posekit.ik.fabrik.straighten_chain`), forward pass — laid out joint x
+chains straightened (:func:`posekit.ik.single_chain.straighten_chain`), forward pass — laid out joint x
 xyz x batch ``(J, 3, B)`` so every step is one vectorised numpy operation over the problems still
 unsolved; converged problems leave the working set after each iteration. The arithmetic follows the
 compiled kernel (:mod:`posekit.ik.fabrik_kernel`) operation by operation, so both agree to rounding.

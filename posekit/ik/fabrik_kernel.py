@@ -1,6 +1,6 @@
 """The compiled kernel of :class:`posekit.ik.fabrik.FabrikSolver` (numba): full-body FABRIK with the
 near-extended chain step. Read :mod:`posekit.ik.fabrik` first — it describes the algorithm and has
-the readable numpy version of every step (:func:`~posekit.ik.fabrik.straighten_chain`); the
+the readable numpy version of every step (:func:`~posekit.ik.single_chain.straighten_chain`); the
 plain-numpy baseline :func:`posekit.bench.ik_methods.numpy_fabrik` runs the same algorithm, and
 :func:`posekit.ik.fabrik_batched.fabrik_batched` the same arithmetic over a batch.
 
@@ -17,7 +17,7 @@ from .effectors import position_errors_into
 
 EXTENDED_RATIO = 0.9
 """A chain whose target lies at >= this fraction of its reach is straightened directly (see
-:func:`posekit.ik.fabrik.straighten_chain`). Plain FABRIK's contraction per iteration on a two-bone
+:func:`posekit.ik.single_chain.straighten_chain`). Plain FABRIK's contraction per iteration on a two-bone
 chain is 0.38 at 90 % of the reach, 0.78 at 97 %, 0.92 at 99 % and 0.99 at 99.9 %. Measured on the
 benchmark's 5-effector cases: 0.95 left 3.4 % (DeepMimic) unconverged, 0.9 and 0.8 0.1 %."""
 
