@@ -6,7 +6,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from posekit import fk
-from posekit.bench.ik import build_cases
+from posekit.data.cases import build_cases
 from posekit.conventions import FORWARD
 from posekit.ik import (DEFAULT_TOLERANCE, EFFECTOR_SETS, KINDS, Effector, FabrikSolver, IKResult, Pose, Solver,
                         SolverBase, default_constraints, effector_errors, effector_errors_batch, effector_set,
@@ -620,14 +620,14 @@ def test_fabrik_batched_equals_the_kernel(skel, cases, effectors):
 
 
 def test_numpy_baseline_runs_the_same_algorithm(skel, cases):
-    from posekit.bench.ik_methods import numpy_fabrik
+    from posekit.ik.fabrik_numpy import fabrik_numpy
 
     solver = FabrikSolver(skel)  # the benchmark's speed comparison is like with like
     for effectors in ("2", "5", "5point"):
         eff = skel.indices(EFFECTOR_SETS[effectors])
         for i in range(0, len(cases), 8):
             res = solver.solve(Pose(cases.start_pos[i]), [Effector(int(e), cases.target_pos[i, e]) for e in eff])
-            np.testing.assert_allclose(numpy_fabrik(skel, cases.start_pos[i], eff, cases.target_pos[i, eff]),
+            np.testing.assert_allclose(fabrik_numpy(skel, cases.start_pos[i], eff, cases.target_pos[i, eff]),
                                        res.pose.global_pos, atol=1e-9)
 
 

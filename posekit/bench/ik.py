@@ -31,7 +31,6 @@ from __future__ import annotations
 
 import time
 import tracemalloc
-import warnings
 from dataclasses import dataclass
 from typing import Callable
 
@@ -44,8 +43,7 @@ from ..ik.registry import make_solver, solver_info, solver_names
 from .plugin import arg, register_benchmark
 
 __all__ = ["Method", "MethodContext", "register_method", "unregister_method", "method_names", "get_method",
-           "resolve_solvers", "evaluate_solver", "run", "PAPER", "TABLES", "TABLE_LABELS",
-           "build_cases", "Cases", "make_solver"]
+           "resolve_solvers", "evaluate_solver", "run", "PAPER", "TABLES", "TABLE_LABELS"]
 
 PAPER = {
     ("fabrik", "2"): 6.56,  # Victor & Meyer 2020, Table 1: full-body FABRIK runtime, ms
@@ -386,16 +384,3 @@ register_benchmark(
     ],
     tables=TABLES, labels=TABLE_LABELS, header=_header, group_by="start", group_title=_group_title, wide=True,
     lesson="notebooks/01_fabrik.ipynb", replace=True)
-
-
-def __getattr__(name):
-    # transition: names that moved (remove once the lessons and tests import from the new places)
-    if name == "_numpy_fabrik":
-        from .ik_methods import numpy_fabrik
-
-        return numpy_fabrik
-    if name == "SOLVERS":
-        warnings.warn("posekit.bench.ik.SOLVERS is gone: solvers live in posekit.ik.registry "
-                      "(solver_names(), make_solver(name, skeleton))", DeprecationWarning, stacklevel=2)
-        return {n: (lambda skeleton, n=n: make_solver(n, skeleton)) for n in solver_names()}
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -3,7 +3,7 @@
 Introduced in ``notebooks/01_fabrik.ipynb``. Each function below is registered with
 :func:`posekit.bench.ik.register_method` and called once per start condition:
 
-* ``numpy-fabrik`` (group ``baseline``) — :func:`numpy_fabrik`, the same full-body FABRIK as
+* ``numpy-fabrik`` (group ``baseline``) — :func:`posekit.ik.fabrik_numpy.fabrik_numpy`, the same full-body FABRIK as
   :class:`~posekit.ik.FabrikSolver` written the straightforward way; its latency is the yardstick of
   the compiled solver (run only next to ``fabrik``);
 * ``fabrik-batched`` (group ``batched``) — :func:`posekit.ik.fabrik_batched.fabrik_batched`
@@ -18,11 +18,12 @@ import time
 
 import numpy as np
 
-from ..ik.api import EFFECTOR_SETS, Effector, base_index
+from ..ik.api import EFFECTOR_SETS, Effector
+from ..ik.fabrik_numpy import fabrik_numpy
 from ..ik.registry import make_solver
 from .ik import MethodContext, register_method
 
-__all__ = ["numpy_fabrik", "baseline_rows", "batched_rows", "ikpy_rows", "BASELINE_CASES", "BATCH_SOLVES",
+__all__ = ["baseline_rows", "batched_rows", "ikpy_rows", "BASELINE_CASES", "BATCH_SOLVES",
            "PEER_CASES"]
 
 BASELINE_CASES = 200
@@ -35,66 +36,6 @@ PEER_CASES = 100
 """Cases a peer library solves."""
 
 
-def numpy_fabrik(skeleton, start, eff, targets, tol=1e-3, max_iter=20):
-    """Baseline: the same full-body FABRIK as :class:`~posekit.ik.FabrikSolver` — backward pass with
-    plain centroids at the sub-bases, near-extended chains straightened
-    (:func:`~posekit.ik.single_chain.straighten_chain`), forward pass — written the straightforward way,
-    numpy vector ops per joint and no compilation, as a newcomer would after the lesson.
-
-    Parameters
-    ----------
-    skeleton : Skeleton
-    start : ndarray, shape (J, 3), metres
-    eff : ndarray of int, shape (K,)
-        Effector joints.
-    targets : ndarray, shape (K, 3), metres
-
-    Returns
-    -------
-    ndarray, shape (J, 3)
-    """
-    from ..ik.fabrik import effector_chains
-    from ..ik.single_chain import straighten_chain
-
-    parents = skeleton.parents
-    pos = start.copy()
-    L = np.linalg.norm(pos - pos[np.maximum(parents, 0)], axis=1)
-    fixed = np.zeros(len(parents), dtype=bool)
-    fixed[skeleton.chain(base_index(skeleton), 0)] = True
-    active = set()
-    for e in eff:
-        active.update(skeleton.chain(int(e), 0))
-    chains = effector_chains(skeleton, eff, fixed)
-    goal = {int(e): targets[k] for k, e in enumerate(eff)}
-    it = 0
-    while np.linalg.norm(pos[eff] - targets, axis=1).max() > tol and it < max_iter:
-        back = pos.copy()
-        for j in range(len(parents) - 1, -1, -1):
-            if fixed[j] or j not in active:
-                continue
-            if j in goal:
-                back[j] = goal[j]
-                continue
-            props = [back[c] + L[c] * (pos[j] - back[c]) / np.linalg.norm(pos[j] - back[c])
-                     for c in np.nonzero(parents == j)[0] if c in active]
-            back[j] = np.mean(props, axis=0)
-        for ch in chains:  # each chain as the forward pass would place it, straightened if near-extended
-            q = [back[ch[0]]]
-            for j in ch[1:]:
-                q.append(q[-1] + L[j] * (back[j] - q[-1]) / np.linalg.norm(back[j] - q[-1]))
-            straightened = straighten_chain(np.array(q), goal[int(ch[-1])])
-            if straightened is not None:
-                m, new = straightened
-                back[ch[m + 1:]] = new[m + 1:]
-        for j in range(len(parents)):
-            if fixed[j]:
-                continue
-            u = (back[j] if j in active else pos[j]) - pos[parents[j]]
-            pos[j] = pos[parents[j]] + L[j] * u / np.linalg.norm(u)
-        it += 1
-    return pos
-
-
 def baseline_rows(ctx: MethodContext) -> list[dict]:
     """The numpy baseline's latency on the first :data:`BASELINE_CASES` cases of each effector set."""
     cases, s = ctx.cases, ctx.cases.skeleton
@@ -105,7 +46,7 @@ def baseline_rows(ctx: MethodContext) -> list[dict]:
         lat = []
         for i in range(m):
             t = time.perf_counter()
-            numpy_fabrik(s, cases.start_pos[i], eff, cases.target_pos[i, eff], ctx.tolerance)
+            fabrik_numpy(s, cases.start_pos[i], eff, cases.target_pos[i, eff], ctx.tolerance)
             lat.append(time.perf_counter() - t)
         rows.append({"method": "baseline: numpy per-joint FABRIK", "effectors": e, "cases": m,
                      "latency_ms_median": float(np.median(lat) * 1e3)})

@@ -19,15 +19,12 @@ a learned first guess every frame; errors of the first and the last 200 frames.
 from __future__ import annotations
 
 import time
-import warnings
-
-import numpy as np
 
 from ..invrig.lesson import Setup, drift
 from .plugin import arg, register_benchmark
 
-# the rig, the regressors and torch are imported where they are used, so that building the
-# command line (which lists this benchmark) stays fast
+# torch is imported only when the networks are loaded, so that building the command line (which
+# lists this benchmark) stays fast
 
 __all__ = ["run", "PAPER_FPS"]
 
