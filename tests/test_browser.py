@@ -187,7 +187,7 @@ def test_three_solvers_solve_live_side_by_side(lab, chromium):
     page = chromium.new_page(viewport={"width": 1500, "height": 1100})
     try:
         _open_and_run_all(page, url, token, PANEL_NOTEBOOK)
-        labels = page.locator(".widget-html-content", has_text=" it., ")
+        labels = page.locator(".widget-html-content", has_text="worst effector")
         labels.first.wait_for(timeout=240_000)
         cell = page.locator(".jp-CodeCell", has=labels.first)
         cell.scroll_into_view_if_needed()
