@@ -324,3 +324,16 @@ def test_bench_ik_on_bandai_mini_every_start_condition(solvers, capsys, monkeypa
     assert [line.split(" (")[0] for line in lines if line.startswith("Start: ")] == \
         ["Start: rest", "Start: same-clip", "Start: other-clip"]
     assert "natural mm" in out and "floor mm" in out and "rotation deg" in out
+
+
+def test_review_edges_give_clear_answers(sample):
+    # effector lists with spaces, a zero case count, an argparse-made default namespace
+    from posekit.bench.ik import run
+    from posekit.bench.plugin import get_benchmark
+
+    rows = run(sample, solvers="fabrik", effector_sets="2, 5", n_cases=5, methods="none", natural=False)
+    assert {r["effectors"] for r in rows if r["method"] == "fabrik"} == {"2", "5"}
+    with pytest.raises(ValueError, match="at least 1"):
+        run(sample, solvers="fabrik", effector_sets="2", n_cases=0, methods="none")
+    ns = get_benchmark("ik").namespace()
+    assert ns.cases == 1000 and ns.no_peers is False and ns.json is False

@@ -726,3 +726,11 @@ def test_solvers_on_bandai(shared_data):
             assert np.all(np.isfinite(res.pose.global_pos))
             np.testing.assert_allclose(bone_lengths_of(ms.skeleton, res.pose.global_pos)[2:],
                                        bone_lengths_of(ms.skeleton, cases.start_pos[i])[2:], atol=1e-6)
+
+
+def test_fabrik_constraints_false_means_none_and_effectors_compare_by_identity(skel):
+    assert FabrikSolver(skel, constraints=False).constraints is None
+    with pytest.raises(ValueError, match="expected a Constraints"):
+        FabrikSolver(skel, constraints="yes")
+    a = Effector("left_hand", [0.1, 1.0, 0.2])
+    assert a in [a] and a != Effector("left_hand", [0.1, 1.0, 0.2]) and len({a}) == 1

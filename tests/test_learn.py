@@ -273,3 +273,17 @@ def test_train_list_names_every_trainable_model(capsys, argv):
     assert "invrig" in out and "invrig_nn_{uniform,gaussian,mvn,gmm,pca}.pt" in out and "lesson 02" in out
     listed = {line.split()[0] for line in out.splitlines() if line.startswith("  ") and not line.startswith("   ")}
     assert listed == _train_names() == {"invrig"}
+
+
+def test_fit_refuses_a_nan_validation_loss():
+    import torch
+
+    from posekit.learn import fit
+
+    torch.manual_seed(0)
+    model = torch.nn.Linear(2, 1)
+    x, y = torch.randn(32, 2), torch.randn(32, 1)
+    bad = (torch.full((8, 2), float("nan")), torch.randn(8, 1))
+    loss = lambda m, a, b: ((m(a) - b) ** 2).mean()
+    with pytest.raises(ValueError, match="validation loss"):
+        fit(model, loss, (x, y), bad, epochs=2, batch=8, lr=1e-2, seed=0, patience=1, progress=False)

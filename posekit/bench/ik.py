@@ -215,7 +215,7 @@ def evaluate_solver(solver, cases: Cases, effectors: str, tolerance: float = 1e-
 
 
 def _starts(start) -> tuple:
-    names = start.split(",") if isinstance(start, str) else list(start)
+    names = [n.strip() for n in (start.split(",") if isinstance(start, str) else list(start)) if n.strip()]
     return tuple(dict.fromkeys(start_condition(n.strip()) for n in names if n.strip()))
 
 
@@ -260,10 +260,13 @@ def run(motions, solvers=("fabrik", "ccd", "dls"), effector_sets=("2", "5"), n_c
     from ..learn.threads import single_thread
 
     solvers = resolve_solvers(solvers)
-    effector_sets = tuple(effector_sets.split(",") if isinstance(effector_sets, str) else effector_sets)
+    effector_sets = tuple(e.strip() for e in (effector_sets.split(",") if isinstance(effector_sets, str)
+                                              else effector_sets) if str(e).strip())
     for e in effector_sets:
         if e not in EFFECTOR_SETS:
             raise ValueError(f"unknown effector set {e!r}; valid: {', '.join(EFFECTOR_SETS)}")
+    if int(n_cases) < 1:
+        raise ValueError(f"--cases must be at least 1, got {n_cases}")
     starts = _starts(start)
     extras = _methods(methods, baseline, batched, peers, solvers)
     all_cases = {st: build_cases(motions, n_cases, seed, st) for st in starts}  # every refusal before any work

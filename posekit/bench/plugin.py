@@ -70,12 +70,10 @@ class Benchmark:
 
     def namespace(self, **overrides) -> argparse.Namespace:
         """The arguments ``run`` receives, at their defaults unless overridden (``json=False``)."""
-        values = {"json": False, "wide": False}
+        parser = argparse.ArgumentParser(add_help=False)  # argparse itself decides every default
         for a in self.args:
-            if a.kwargs.get("action") == "store_true":
-                values[a.dest] = False
-            else:
-                values[a.dest] = a.kwargs.get("default")
+            parser.add_argument(*a.flags, **a.kwargs)
+        values = {"json": False, "wide": False, **vars(parser.parse_args([]))}
         unknown = set(overrides) - set(values)
         if unknown:
             raise ValueError(f"benchmark {self.name!r} has no argument(s) {', '.join(sorted(unknown))}; "

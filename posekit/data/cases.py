@@ -146,7 +146,7 @@ def case_split(motions: MotionSet, seed: int = 0, fractions=(0.8, 0.1, 0.1)):
     """
     own = getattr(motions, "split", None)
     if own is not None and all(hasattr(own, k) for k in ("train", "val", "test")):
-        return (np.asarray(own.train), np.asarray(own.val), np.asarray(own.test),
+        return (np.sort(np.asarray(own.train)), np.sort(np.asarray(own.val)), np.sort(np.asarray(own.test)),
                 f"{motions.source.split(' ')[0] or 'the set'}'s own split")
     train, val, test = split_by_clip(motions, fractions, seed=seed, fallback=True)
     return train, val, test, f"split_by_clip(seed={seed})"

@@ -24,8 +24,9 @@ kind            target                                     error (what ``toleran
 ``p_j`` and ``R_j`` are the joint's world position and rotation (``global_pos``, ``global_rot`` of
 :func:`posekit.kinematics.fk`). An effector set is *converged* when every error is at most its
 effector's tolerance. :func:`effector_errors` (one pose) and :func:`effector_errors_batch` (B poses)
-are the only implementation: every solver reports its errors through them and its iteration loop
-stops on the same compiled kernel (:func:`errors_into`).
+are the solvers' one implementation: every solver reports its errors through them and its
+iteration loop stops on the same compiled kernel (:func:`errors_into`). (The benchmark scores
+results independently, in :mod:`posekit.data.metrics`, so that a solver cannot grade itself.)
 """
 
 from __future__ import annotations
@@ -70,7 +71,7 @@ def normalise_kind(kind) -> str:
     return k
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # compared by identity: its targets are arrays
 class Effector:
     """A goal for one joint (see the table of kinds in :mod:`posekit.ik.effectors`).
 

@@ -197,6 +197,11 @@ class FabrikSolver(SolverBase):
         self._fixed = fixed
         if constraints is True:
             constraints = default_constraints(skeleton)
+        elif constraints is False:
+            constraints = None
+        elif constraints is not None and not isinstance(constraints, Constraints):
+            raise ValueError(f"constraints: expected a Constraints, True, False or None, got "
+                             f"{type(constraints).__name__}")
         self.constraints = constraints
         self._limit_cos = np.full(J, -2.0)
         self._no_fwd = np.zeros(J, dtype=np.bool_)

@@ -177,6 +177,9 @@ def fit(model: torch.nn.Module, loss_fn, train_data, val_data=None, *, epochs: i
             model.eval()
             score = _mean_loss(model, loss_fn, val_data, batch)
             curves.val.append(score)
+            if not math.isfinite(score):
+                raise ValueError(f"fit: the validation loss became {score} in epoch {epoch}; "
+                                 "check the validation data for NaN or lower lr")
         if progress:
             it.set_postfix(loss=f"{curves.train[-1]:.4g}", **({"val": f"{score:.4g}"} if val_data is not None else {}))
         if score < best:
