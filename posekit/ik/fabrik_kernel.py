@@ -35,8 +35,9 @@ _HINGE_SLACK = np.sin(np.radians(15.0))
 
 
 @njit
-def _span2(bl, ax, lat, n, ex, ey, ez, sig):
-    """Squared span |sum_i bl[i] * normalize(ax[i] e + sig lat[i])|^2 of a straightened chain."""
+def _span(bl, ax, lat, n, ex, ey, ez, sig, write):
+    """Span ``sum_i bl[i] * normalize(ax[i] e + sig lat[i])`` of a straightened chain, as (x, y, z);
+    with ``write``, ``lat[i]`` becomes the offset of joint ``i + 1`` from the chain's base."""
     sx = 0.0
     sy = 0.0
     sz = 0.0
@@ -48,6 +49,17 @@ def _span2(bl, ax, lat, n, ex, ey, ez, sig):
         sx += s * vx
         sy += s * vy
         sz += s * vz
+        if write:
+            lat[i, 0] = sx
+            lat[i, 1] = sy
+            lat[i, 2] = sz
+    return sx, sy, sz
+
+
+@njit
+def _span2(bl, ax, lat, n, ex, ey, ez, sig):
+    """Squared span |sum_i bl[i] * normalize(ax[i] e + sig lat[i])|^2 of a straightened chain."""
+    sx, sy, sz = _span(bl, ax, lat, n, ex, ey, ez, sig, False)
     return sx * sx + sy * sy + sz * sz
 
 
@@ -98,20 +110,7 @@ def _straighten(back, chain, q, bl, R, d, wx, wy, wz, ax, lat, may_bend):
         sig = np.sqrt(s1)
     # rebuild as offsets from q[0], then the rotation a -> b (unit vectors, k = a x b, c = a . b):
     # x -> c x + k x x + k (k . x) / (1 + c)
-    sx = 0.0
-    sy = 0.0
-    sz = 0.0
-    for i in range(n):
-        vx = ax[i] * ex + sig * lat[i, 0]
-        vy = ax[i] * ey + sig * lat[i, 1]
-        vz = ax[i] * ez + sig * lat[i, 2]
-        s = bl[i] / np.sqrt(vx * vx + vy * vy + vz * vz)
-        sx += s * vx
-        sy += s * vy
-        sz += s * vz
-        lat[i, 0] = sx
-        lat[i, 1] = sy
-        lat[i, 2] = sz
+    sx, sy, sz = _span(bl, ax, lat, n, ex, ey, ez, sig, True)
     sL = np.sqrt(sx * sx + sy * sy + sz * sz)
     ax_ = sx / sL
     ay_ = sy / sL
