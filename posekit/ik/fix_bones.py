@@ -8,9 +8,44 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._jit import njit
 from ..skeleton import Skeleton
 
 __all__ = ["fix_bone_lengths"]
+
+
+@njit
+def _place(out, j, child, anchor, length, w):
+    """``out[j] += w * (anchor + length * (child - anchor) / |child - anchor|)``."""
+    ux, uy, uz = child[0] - anchor[0], child[1] - anchor[1], child[2] - anchor[2]
+    f = length / max(np.sqrt(ux * ux + uy * uy + uz * uz), 1e-12)
+    out[j, 0] += w * (anchor[0] + f * ux)
+    out[j, 1] += w * (anchor[1] + f * uy)
+    out[j, 2] += w * (anchor[2] + f * uz)
+
+
+@njit
+def _fix_kernel(pos, parents, lengths, child_start, child_idx, backward):
+    """The passes of :func:`fix_bone_lengths` on (N, J, 3) positions, in place."""
+    N, J = pos.shape[0], pos.shape[1]
+    tmp = np.zeros((1, 3))
+    for n in range(N):
+        p = pos[n]
+        if backward:
+            for j in range(J - 1, -1, -1):
+                a, b = child_start[j], child_start[j + 1]
+                if b == a:
+                    continue
+                tmp[0, 0] = tmp[0, 1] = tmp[0, 2] = 0.0
+                for k in range(a, b):
+                    c = child_idx[k]
+                    _place(tmp, 0, p[j], p[c], lengths[c], 1.0 / (b - a))
+                p[j, 0], p[j, 1], p[j, 2] = tmp[0, 0], tmp[0, 1], tmp[0, 2]
+        for j in range(1, J):
+            q = parents[j]
+            tmp[0, 0] = tmp[0, 1] = tmp[0, 2] = 0.0
+            _place(tmp, 0, p[j], p[q], lengths[j], 1.0)
+            p[j, 0], p[j, 1], p[j, 2] = tmp[0, 0], tmp[0, 1], tmp[0, 2]
 
 
 def fix_bone_lengths(skeleton: Skeleton, global_pos, lengths=None, keep: str = "leaves") -> np.ndarray:
@@ -38,26 +73,14 @@ def fix_bone_lengths(skeleton: Skeleton, global_pos, lengths=None, keep: str = "
         raise ValueError(f"global_pos: expected shape (..., {J}, 3), got {pos.shape}")
     if not np.all(np.isfinite(pos)):
         raise ValueError("global_pos contains NaN or inf")
-    L = skeleton.bone_lengths() if lengths is None else np.asarray(lengths, dtype=float)
-    parents = skeleton.parents
-
-    def place(child, parent_pos, length):
-        u = child - parent_pos
-        n = np.linalg.norm(u, axis=-1, keepdims=True)
-        return parent_pos + length * u / np.maximum(n, 1e-12)
-
-    if keep == "leaves":
-        back = pos.copy()
-        for j in range(J - 1, 0, -1):
-            kids = np.nonzero(parents == j)[0]
-            if len(kids):
-                back[..., j, :] = np.mean([place(back[..., j, :], back[..., c, :], L[c]) for c in kids], axis=0)
-        kids = np.nonzero(parents == 0)[0]
-        back[..., 0, :] = np.mean([place(back[..., 0, :], back[..., c, :], L[c]) for c in kids], axis=0)
-        pos = back
-    elif keep != "root":
+    if keep not in ("leaves", "root"):
         raise ValueError(f"keep must be 'leaves' or 'root', got {keep!r}")
-    out = pos.copy()
-    for j in range(1, J):
-        out[..., j, :] = place(pos[..., j, :], out[..., parents[j], :], L[j])
-    return out
+    L = skeleton.bone_lengths() if lengths is None else np.asarray(lengths, dtype=float)
+    parents = np.asarray(skeleton.parents, dtype=np.int64)
+    kids = [np.nonzero(parents == j)[0] for j in range(J)]
+    child_start = np.concatenate([[0], np.cumsum([len(k) for k in kids])]).astype(np.int64)
+    child_idx = np.concatenate(kids).astype(np.int64) if J > 1 else np.zeros(0, np.int64)
+    shape = pos.shape
+    out = np.ascontiguousarray(pos.reshape(-1, J, 3))
+    _fix_kernel(out, parents, np.ascontiguousarray(L, dtype=float), child_start, child_idx, keep == "leaves")
+    return out.reshape(shape)

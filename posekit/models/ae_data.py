@@ -1,0 +1,183 @@
+"""Lesson 03's data: poses as root-relative feature vectors, and (start, target) training pairs.
+
+Introduced in ``notebooks/03_autoencoder_solvers.ipynb`` (Victor & Meyer 2020, Sec. 3.2). Units and
+axes: :mod:`posekit.conventions` (metres, Y up, facing +Z).
+
+A pose becomes one vector ``x`` of ``3 B`` numbers: the positions of its *body joints*
+(:func:`posekit.data.metrics.body_joints`: every joint but a helper root such as Bandai's
+``joint_Root``, which only carries the world position) in the pose's **root frame** — the pelvis
+projected on the floor is the origin, the character faces +Z (:func:`posekit.transforms.to_root_space`).
+The pelvis's x and z are therefore exactly 0; z-scoring (:class:`~posekit.data.dataset.NormStats`)
+floors every standard deviation at :data:`STD_FLOOR` so those constant features do not divide by zero.
+
+Training pairs are two frames of one clip at most :data:`PAIR_MAX_S` seconds apart: the solver learns
+to move the *start* pose so chosen joints reach the *target* pose's positions. Pairs much further apart
+teach a solver to ignore its start (measured for the issue: errors of 170-250 mm), so they stay close.
+Mirroring (:func:`posekit.transforms.mirror_positions`) doubles the training poses.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..data.dataset import NormStats
+from ..data.metrics import body_joints
+from ..data.motion import MotionSet
+from ..transforms import from_root_space, mirror_positions, rotate_y_positions, to_root_space
+
+__all__ = ["STD_FLOOR", "PAIR_MAX_S", "pose_vectors", "poses_from_vectors", "targets_in_root_frame",
+           "feature_columns", "PoseData", "pose_data", "training_pairs"]
+
+STD_FLOOR = 0.01
+"""Smallest standard deviation of a feature in the z-score, metres (the pelvis x/z are exactly 0)."""
+
+PAIR_MAX_S = 1.0
+"""Largest time between the start and the target frame of a training pair, seconds (the
+benchmark's same-clip cases use the same limit, :data:`posekit.data.cases.SAME_CLIP_MAX_S`)."""
+
+
+def pose_vectors(skeleton, global_pos):
+    """Poses as feature vectors in their root frame.
+
+    Parameters
+    ----------
+    skeleton : Skeleton
+    global_pos : ndarray, shape (N, J, 3), metres
+
+    Returns
+    -------
+    x : ndarray, shape (N, 3 B), metres
+        Body joints (:func:`~posekit.data.metrics.body_joints`) in the root frame, flattened joint by
+        joint (``x[:, 3 i : 3 i + 3]`` is body joint ``i``).
+    origin : ndarray, shape (N, 3)
+    angle : ndarray, shape (N,), radians
+        The root frame (:func:`posekit.transforms.root_frame`), for :func:`poses_from_vectors`.
+    """
+    p = np.asarray(global_pos, dtype=float)
+    if p.ndim != 3 or p.shape[1:] != (skeleton.n_joints, 3):
+        raise ValueError(f"global_pos: expected shape (N, {skeleton.n_joints}, 3), got {p.shape}")
+    local, origin, angle = to_root_space(skeleton, p)
+    return local[:, body_joints(skeleton)].reshape(len(p), -1), origin, angle
+
+
+def poses_from_vectors(skeleton, x, origin=None, angle=None) -> np.ndarray:
+    """Inverse of :func:`pose_vectors`: global positions (N, J, 3) from feature vectors (N, 3 B).
+
+    Joints that are not body joints (a helper root) are put back at their rest offset from the
+    pelvis: the joints above the pelvis are taken not to rotate (true of Bandai's ``joint_Root``).
+    Without ``origin``/``angle`` the poses stay in their root frame.
+    """
+    x = np.asarray(x, dtype=float)
+    b = body_joints(skeleton)
+    n = len(x)
+    if x.shape[-1] != 3 * len(b):
+        raise ValueError(f"x: expected {3 * len(b)} features ({len(b)} body joints of {skeleton.name or 'the skeleton'}"
+                         f" x 3), got {x.shape[-1]}")
+    local = np.zeros((n, skeleton.n_joints, 3))
+    local[:, b] = x.reshape(n, len(b), 3)
+    pel = skeleton.pelvis()
+    j = pel
+    while j != 0:  # the placement chain above the pelvis (Bandai: joint_Root, 0.94 m below Hips)
+        parent = int(skeleton.parents[j])
+        local[:, parent] = local[:, j] - skeleton.offsets[j]
+        j = parent
+    if origin is None:
+        return local
+    return from_root_space(local, origin, angle)
+
+
+def targets_in_root_frame(points, origin, angle) -> np.ndarray:
+    """World points (N, K, 3) expressed in the root frames ``origin`` (N, 3), ``angle`` (N,)."""
+    return rotate_y_positions(np.asarray(points, dtype=float) - np.asarray(origin)[:, None, :], -np.asarray(angle))
+
+
+def feature_columns(skeleton, joints) -> np.ndarray:
+    """Columns of the feature vector holding ``joints`` (names, roles or indices), shape (3 K,)."""
+    b = list(body_joints(skeleton))
+    cols = []
+    for j in joints:
+        k = skeleton.index(j)
+        if k not in b:
+            raise ValueError(f"joint {skeleton.names[k]!r} is not a body joint of {skeleton.name or 'the skeleton'} "
+                             "(a helper root carries no pose); choose a body joint")
+        i = b.index(k)
+        cols += [3 * i, 3 * i + 1, 3 * i + 2]
+    return np.array(cols, dtype=np.int64)
+
+
+@dataclass
+class PoseData:
+    """Training poses of one split as vectors, mirrored copies appended.
+
+    Attributes
+    ----------
+    x : ndarray, shape (M, 3 B), float32, metres
+        ``M = n`` poses, or ``2 n`` with mirroring (row ``n + i`` mirrors row ``i``).
+    frames : ndarray of int, shape (n,)
+        The MotionSet frames of the first ``n`` rows.
+    mirrored : bool
+    norm : NormStats
+        z-score of ``x`` (std floored at :data:`STD_FLOOR`), fitted on these rows, or the one given.
+    """
+
+    x: np.ndarray
+    frames: np.ndarray
+    mirrored: bool
+    norm: NormStats
+
+    @property
+    def n(self) -> int:
+        """Poses before mirroring."""
+        return len(self.frames)
+
+    def normalized(self) -> np.ndarray:
+        """``x`` z-scored, float32."""
+        return self.norm.normalize(self.x).astype(np.float32)
+
+
+def pose_data(motions: MotionSet, frames, mirror: bool = True, norm: NormStats | None = None) -> PoseData:
+    """The poses of ``frames`` as :class:`PoseData` (mirrored copies appended when ``mirror``)."""
+    frames = np.sort(np.asarray(frames, dtype=np.int64))
+    if len(frames) == 0:
+        raise ValueError(f"pose_data: no frames given from {motions.source!r}")
+    s = motions.skeleton
+    pos = motions.global_pos[frames]
+    if mirror:
+        pos = np.concatenate([pos, mirror_positions(s, pos)])
+    x = pose_vectors(s, pos)[0]
+    if norm is None:
+        norm = NormStats.fit(x, eps=STD_FLOOR)
+    return PoseData(x.astype(np.float32), frames, bool(mirror), norm)
+
+
+def training_pairs(motions: MotionSet, data: PoseData, n: int, seed: int = 0, max_s: float = PAIR_MAX_S):
+    """``n`` (start, target) row pairs of ``data``: two frames of one clip at most ``max_s`` apart
+    (never the same frame), each pair mirrored with probability 1/2 when ``data`` is mirrored.
+
+    Returns
+    -------
+    start, target : ndarray of int, shape (n,)
+        Rows of ``data.x``.
+    """
+    rng = np.random.default_rng(seed)
+    frames = data.frames
+    clip = motions.clip_id[frames]
+    lo = np.searchsorted(clip, clip, side="left")
+    hi = np.searchsorted(clip, clip, side="right")
+    if np.all(hi - lo < 2):
+        raise ValueError(f"training_pairs: every clip of {motions.source!r} in this split has a single frame")
+    gap = np.maximum(1, np.floor(max_s / motions.frame_time[clip] + 1e-9)).astype(np.int64)
+    ok = np.nonzero(hi - lo >= 2)[0]
+    a = ok[rng.integers(0, len(ok), n)]
+    first = np.maximum(lo[a], a - gap[a])
+    last = np.minimum(hi[a] - 1, a + gap[a])
+    # a uniform other frame in [first, last] \ {a}
+    b = first + (rng.random(n) * (last - first)).astype(np.int64)
+    b = b + (b >= a)
+    if data.mirrored:
+        flip = rng.random(n) < 0.5
+        a = a + flip * data.n
+        b = b + flip * data.n
+    return a.astype(np.int64), b.astype(np.int64)

@@ -1,0 +1,210 @@
+"""Training lesson 03's networks (Victor & Meyer 2020) and the command that makes the shipped weights.
+
+Introduced in ``notebooks/03_autoencoder_solvers.ipynb``; ``posekit train ae-solvers`` runs
+:func:`train_ae_solvers`. Every loop is :func:`posekit.learn.fit` (seeded mini-batches, tqdm). In order:
+
+1. the autoencoder on the training poses (mirrored), ``MSE(D(E(x)), x)`` on z-scored vectors, Adam;
+2. one solver per joint set of :data:`~posekit.models.ae_solvers.GROUPS`, autoencoder frozen, on
+   (start, target) pairs of one clip at most 1 s apart (:func:`~posekit.models.ae_data.training_pairs`),
+   loss Eq. (1) with ``k`` (:func:`solver_loss`);
+3. chaining-aware copies (Sec. 3.5): each solver after the first of :data:`~posekit.models.ae_solvers.CHAIN`
+   fine-tuned on the codes the earlier solvers produce, its target joints being every joint the chain
+   has been asked for so far (so a later stage learns not to undo an earlier one).
+
+Validation losses use the split's ``val`` clips (held-out dataset-1 takes for the Bandai mini set).
+"""
+
+from __future__ import annotations
+
+import copy
+import time
+
+import numpy as np
+import torch
+
+from ..learn import fit
+from .ae_data import pose_data, training_pairs
+from .ae_solvers import CHAIN, GROUPS, AEConfig, AESolvers
+
+__all__ = ["LICENCE", "WEIGHTS", "DEFAULTS", "solver_loss", "train_autoencoder", "train_solver", "train_chained",
+           "train_ae_solvers", "command", "weights_path"]
+
+WEIGHTS = "ae_solvers.pt"
+"""File name of the shipped weights in ``data_samples/weights/``."""
+
+LICENCE = ("CC BY-NC 4.0 (non-commercial): trained on the Bandai mini set (data_samples/bandai_mini/), "
+           "frames subsampled from the Bandai Namco Research Motion Datasets 1 and 2, (c) Bandai Namco "
+           "Research Inc., CC BY-NC 4.0 (Kobayashi et al. 2023, arXiv 2306.08861).")
+"""Licence recorded in weights trained on the Bandai mini set."""
+
+DEFAULTS = dict(ae_epochs=40, ae_lr=1e-3, solver_epochs=8, solver_lr=1e-3, chain_epochs=4, pairs=200_000,
+                batch=256, k=0.01)
+"""Training settings of the shipped weights (``posekit train ae-solvers``)."""
+
+
+def weights_path(folder=None):
+    from pathlib import Path
+
+    from ..paths import samples_dir
+
+    return Path(folder or samples_dir() / "weights") / WEIGHTS
+
+
+def command(**settings) -> str:
+    """The command line that makes weights with these settings."""
+    diff = " ".join(f"--{k.replace('_', '-')} {v}" for k, v in settings.items()
+                    if k in DEFAULTS and v != DEFAULTS[k] or k == "seed")
+    return f"posekit train ae-solvers {diff}".strip()
+
+
+def solver_loss(model: AESolvers, columns, k: float):
+    """Eq. (1): ``loss(net, z, p, x_target, [z_in])`` = mean squared error of the decoded pose on
+    ``columns`` + ``k`` x the same on the other features (z-scored units)."""
+    F = model.config.n_features
+    on = torch.zeros(F, dtype=torch.bool)
+    on[torch.as_tensor(columns)] = True
+
+    def loss(decoded, x_target):
+        se = (decoded - x_target) ** 2
+        other = se[:, ~on].mean() if (~on).any() else se.new_zeros(())
+        return se[:, on].mean() + k * other
+
+    return loss
+
+
+def train_autoencoder(model: AESolvers, x, x_val, *, epochs: int, lr: float = 1e-4, batch: int = 256, seed: int = 0,
+                      progress: bool = True):
+    """Fit ``model.ae`` on z-scored poses ``x`` (N, F) (validation ``x_val``); returns :class:`~posekit.learn.Curves`."""
+    return fit(model.ae, lambda ae, xb: torch.mean((ae(xb) - xb) ** 2), (x,), (x_val,), epochs=epochs, batch=batch,
+               lr=lr, seed=seed, progress=progress, desc="autoencoder")
+
+
+def _frozen(model: AESolvers):
+    model.ae.eval()
+    model.ae.requires_grad_(False)
+
+
+def train_solver(model: AESolvers, group: str, x, pairs, val_pairs, *, epochs: int, k: float = 0.01, lr: float = 1e-3,
+                 batch: int = 256, seed: int = 0, progress: bool = True):
+    """Train ``model.solvers[group]`` (a new one) with the autoencoder frozen.
+
+    Parameters
+    ----------
+    x : Tensor, shape (M, F)
+        z-scored training poses (rows the pairs index; validation rows appended after them is fine).
+    pairs, val_pairs : (start rows, target rows), each int (P,)
+    """
+    _frozen(model)
+    net = model.solvers[group] = model.new_solver(group, seed)
+    cols = torch.as_tensor(model.columns(group))
+    loss = solver_loss(model, cols, k)
+
+    def step(net, a, b):
+        with torch.no_grad():
+            z = model.ae.encode(x[a])
+        xt = x[b]
+        return loss(model.ae.decode(net(z, xt[:, cols])), xt)
+
+    return fit(net, step, pairs, val_pairs, epochs=epochs, batch=batch, lr=lr, seed=seed, progress=progress,
+               desc=f"solver {group}")
+
+
+def train_chained(model: AESolvers, x, pairs, val_pairs, *, epochs: int, k: float = 0.01, lr: float = 1e-3,
+                  batch: int = 256, seed: int = 0, progress: bool = True, chain=CHAIN) -> dict:
+    """Chaining-aware copies of the solvers after the first of ``chain``, each fine-tuned on the codes
+    the stages before it produce (those stages already chaining-aware); returns {group: Curves}."""
+    _frozen(model)
+    curves = {}
+    for i, g in enumerate(chain[1:], start=1):
+        for net in (*model.solvers.values(), *model.chained.values()):
+            net.requires_grad_(False)
+        net = copy.deepcopy(model.solvers[g]).requires_grad_(True)
+        asked = [c for h in chain[: i + 1] for c in model.columns(h)]
+        loss_fn = solver_loss(model, asked, k)
+        before = chain[:i]
+
+        def step(net, a, b, before=before, g=g, loss_fn=loss_fn):
+            xt = x[b]
+            with torch.no_grad():
+                z = model.ae.encode(x[a])
+                z = model.latent(z, {h: xt[:, model.columns(h)] for h in before}, chain=before)
+            return loss_fn(model.ae.decode(net(z, xt[:, model.columns(g)])), xt)
+
+        curves[g] = fit(net, step, pairs, val_pairs, epochs=epochs, batch=batch, lr=lr, seed=seed + i,
+                        progress=progress, desc=f"chained {g}")
+        model.chained[g] = net.eval()
+    for net in (*model.solvers.values(), *model.chained.values()):
+        net.requires_grad_(True)
+    return curves
+
+
+def train_ae_solvers(motions=None, *, seed: int = 0, out=None, groups=tuple(GROUPS), tied: bool = True,
+                     latent: int = 64, progress: bool = True, data_label: str | None = None, **settings):
+    """Train the autoencoder, the solvers of ``groups`` and the chaining-aware copies; save them.
+
+    Parameters
+    ----------
+    motions : MotionSet, optional
+        With its own ``split`` (train/val/test) or split by clip; default the Bandai mini set.
+    seed : int
+    out : str or Path, optional
+        The checkpoint file to write (default ``data_samples/weights/ae_solvers.pt``); ``False``: none.
+    groups : sequence of str
+    tied, latent : the autoencoder's decoder and code size (:class:`~posekit.models.ae_solvers.AEConfig`)
+    **settings
+        Any of :data:`DEFAULTS` (epochs, learning rates, number of pairs, batch, ``k``).
+
+    Returns
+    -------
+    model : AESolvers
+    report : dict
+        Curves (train/val per epoch), seconds per stage and in all.
+    """
+    from ..data.cases import case_split
+
+    bad = set(settings) - set(DEFAULTS)
+    if bad:
+        raise ValueError(f"train_ae_solvers: unknown setting(s) {sorted(bad)}; valid: {sorted(DEFAULTS)}")
+    st = {**DEFAULTS, **settings}
+    if motions is None:
+        from ..data.bandai_mini import load_bandai_mini
+
+        motions = load_bandai_mini()
+    t0 = time.perf_counter()
+    train, val, _, how = case_split(motions, seed)
+    td = pose_data(motions, train, mirror=True)
+    vd = pose_data(motions, val, mirror=False, norm=td.norm)
+    x = torch.as_tensor(np.concatenate([td.normalized(), vd.normalized()]))
+    xv = x[len(td.x):]
+    cfg = AEConfig(x.shape[1], latent=latent, tied=tied)
+    model = AESolvers.new(motions.skeleton, td.norm, cfg, seed)
+    z = td.normalized()
+    model.x_range = np.stack([z.min(0), z.max(0)])
+    report = {"split": how, "train_poses": int(td.n), "val_poses": int(vd.n), "settings": st, "seconds": {}}
+    ae_c = train_autoencoder(model, x[: len(td.x)], xv, epochs=st["ae_epochs"], lr=st["ae_lr"], batch=st["batch"],
+                             seed=seed, progress=progress)
+    report["autoencoder"] = {"train": ae_c.train, "val": ae_c.val}
+    report["seconds"]["autoencoder"] = ae_c.seconds
+    pairs = tuple(torch.as_tensor(a) for a in training_pairs(motions, td, st["pairs"], seed=seed))
+    va, vb = training_pairs(motions, vd, max(1000, st["pairs"] // 50), seed=seed + 1)
+    val_pairs = (torch.as_tensor(va + len(td.x)), torch.as_tensor(vb + len(td.x)))
+    report["solvers"] = {}
+    for g in groups:
+        c = train_solver(model, g, x, pairs, val_pairs, epochs=st["solver_epochs"], k=st["k"], lr=st["solver_lr"],
+                         batch=st["batch"], seed=seed, progress=progress)
+        report["solvers"][g] = {"train": c.train, "val": c.val}
+        report["seconds"][f"solver {g}"] = c.seconds
+    if all(g in model.solvers for g in CHAIN) and st["chain_epochs"] > 0:
+        for g, c in train_chained(model, x, pairs, val_pairs, epochs=st["chain_epochs"], k=st["k"], lr=st["solver_lr"],
+                                  batch=st["batch"], seed=seed, progress=progress).items():
+            report["solvers"][f"chained {g}"] = {"train": c.train, "val": c.val}
+            report["seconds"][f"chained {g}"] = c.seconds
+    report["seconds"]["total"] = time.perf_counter() - t0
+    if out is not False:
+        label = data_label or motions.source.split(" (")[0]
+        data = (f"{label}: training split ({how}), {td.n} poses + mirrored copies; val {vd.n} poses; "
+                f"{st['pairs']} training pairs at most 1 s apart (seed {seed})")
+        model.save(weights_path() if out is None else out, command=command(seed=seed, **settings), seed=seed,
+                   data=data, licence=LICENCE if "bandai" in label.lower() else "see the data's licence",
+                   extra={"report": report})
+    return model, report
