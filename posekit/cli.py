@@ -22,6 +22,8 @@
     Every trainable model: the files it makes, the lesson that loads them, about how long it takes.
 ``posekit train invrig [--methods M,...] [--samples N] [--epochs E] [--seed S] [--out DIR]``
     Makes the inverse-rig network weights shipped in ``data_samples/weights`` (seeded).
+``posekit train ae-solvers [--seed S] [--out FILE] [--ae-epochs N] ...``
+    Makes lesson 03's autoencoder and latent-space solvers, ``data_samples/weights/ae_solvers.pt``.
 
 Errors in input files print ``file:line: message`` and exit with status 2.
 """
@@ -156,6 +158,11 @@ _TRAINABLE = {
                "inverse-rig networks, one per supersampling method (Holden et al. 2017)",
                "lesson 02 (02_inverse_rig_mapping.ipynb) and posekit bench invrig",
                "about 40 s on 2 idle cores (8 s per method)"),
+    "ae-solvers": ("data_samples/weights/ae_solvers.pt (CC BY-NC 4.0, like the Bandai mini set it is trained on)",
+                   "pose autoencoder + latent-space solvers hands, feet, head, all five, chaining-aware copies "
+                   "(Victor & Meyer 2020)",
+                   "lesson 03 (03_autoencoder_solvers.ipynb), the neural solvers, posekit bench ik",
+                   "about 8 minutes on 2 idle cores"),
 }
 
 
@@ -163,7 +170,7 @@ def _train_list(args) -> int:
     """``posekit train --list`` (and ``posekit train``): every trainable model and what it makes."""
     print("posekit train NAME makes (seeded, reproducible):")
     for name, (files, what, lesson, time) in _TRAINABLE.items():
-        print(f"\n  {name:<8}{what}\n    makes   {files}\n    used by {lesson}\n    takes   {time}")
+        print(f"\n  {name:<12}{what}\n    makes   {files}\n    used by {lesson}\n    takes   {time}")
     print("\nposekit train NAME --help shows its options.")
     return 0
 
@@ -178,6 +185,27 @@ def _train_invrig(args) -> int:
                       out=args.out, progress=sys.stderr.isatty())
     for m, p in paths.items():
         print(f"wrote {p} ({p.stat().st_size / 1e3:.0f} kB)")
+    return 0
+
+
+def _train_ae_solvers(args) -> int:
+    from .data.sources import open_dataset
+    from .models.ae_train import DEFAULTS, train_ae_solvers
+
+    settings = {k: getattr(args, k) for k in DEFAULTS if getattr(args, k) != DEFAULTS[k]}
+    motions = open_dataset(args.data, progress=sys.stderr.isatty())
+    out = Path(args.out) if args.out else None
+    model, report = train_ae_solvers(motions, seed=args.seed, out=out, tied=not args.untied, latent=args.latent,
+                                     progress=sys.stderr.isatty(), **settings)
+    from .models.ae_train import weights_path
+
+    path = out or weights_path()
+    sec = report["seconds"]
+    print(f"trained in {sec['total']:.0f} s (" + ", ".join(f"{k} {v:.0f} s" for k, v in sec.items() if k != "total")
+          + ")")
+    print(f"autoencoder validation MSE {report['autoencoder']['val'][-1]:.5f} (z-scored units); solvers: "
+          + ", ".join(f"{g} {c['val'][-1]:.5f}" for g, c in report["solvers"].items()))
+    print(f"wrote {path} ({path.stat().st_size / 1e3:.0f} kB)")
     return 0
 
 
@@ -232,6 +260,24 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="(default: 0)")
     p.add_argument("--out", default=None, help="folder (default data_samples/weights)")
     p.set_defaults(fn=_train_invrig)
+    from .models.ae_train import DEFAULTS as AE
+
+    p = tsub.add_parser("ae-solvers", help="pose autoencoder + latent-space solvers (lesson 03, Victor & Meyer 2020)")
+    p.add_argument("--data", default="bandai-mini", help="training data: bandai-mini (default, its own split), "
+                   "or any posekit data set name / path (split by clip)")
+    for key, what in (("ae_epochs", "autoencoder epochs"), ("ae_lr", "autoencoder learning rate (Adam)"),
+                      ("solver_epochs", "epochs per solver"), ("solver_lr", "solver learning rate (Adam)"),
+                      ("chain_epochs", "epochs of each chaining-aware fine-tuning"),
+                      ("pairs", "training (start, target) pairs, at most 1 s apart"), ("batch", "mini-batch size"),
+                      ("k", "weight of the non-target joints in the solver loss, Eq. (1)")):
+        p.add_argument("--" + key.replace("_", "-"), dest=key, type=type(AE[key]), default=AE[key],
+                       help=f"{what} (default: {AE[key]})")
+    p.add_argument("--latent", type=int, default=64, help="size d of the latent code (default: 64)")
+    p.add_argument("--untied", action="store_true", help="a decoder with its own weights and biases (default: tied, "
+                   "the transposed encoder weights as in the authors' code)")
+    p.add_argument("--seed", type=int, default=0, help="(default: 0)")
+    p.add_argument("--out", default=None, help="checkpoint file (default data_samples/weights/ae_solvers.pt)")
+    p.set_defaults(fn=_train_ae_solvers)
     return parser
 
 

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import time
 import tracemalloc
+import warnings
 from dataclasses import dataclass
 from typing import Callable
 
@@ -43,13 +44,18 @@ from ..ik.registry import make_solver, solver_info, solver_names
 from .plugin import arg, register_benchmark
 
 __all__ = ["Method", "MethodContext", "register_method", "unregister_method", "method_names", "get_method",
-           "resolve_solvers", "evaluate_solver", "run", "PAPER", "TABLES", "TABLE_LABELS"]
+           "resolve_solvers", "evaluate_solver", "run", "PAPER", "PAPER_KB", "TABLES", "TABLE_LABELS", "default_data"]
 
 PAPER = {
     ("fabrik", "2"): 6.56,  # Victor & Meyer 2020, Table 1: full-body FABRIK runtime, ms
     ("fabrik", "5"): 6.74,
+    ("neural", "2"): 1.47,  # ... and their neural solver (autoencoder + one solver)
+    ("neural", "5"): 3.36,
 }
 """Paper figures shown beside ours (runtime in ms)."""
+
+PAPER_KB = {("neural", "2"): 442, ("neural", "5"): 826}
+"""Victor & Meyer 2020, Table 1: memory of the neural solver, kB."""
 
 
 # ---------------------------------------------------------------------------------------- methods
@@ -168,6 +174,7 @@ def _load_builtin():
     _loading = True
     try:
         from . import ik_methods  # noqa: F401  (registers the baseline, batched FABRIK and ikpy)
+        from . import ik_neural  # noqa: F401  (lesson 03: neural variants and batched neural throughput)
     finally:
         _loading = False
 
@@ -210,8 +217,11 @@ def evaluate_solver(solver, cases: Cases, effectors: str, tolerance: float = 1e-
     tracemalloc.stop()
     rot = np.stack(rots) if all(r is not None for r in rots) else None
     scores = score_poses(cases, np.stack(pos), effs, rot, natural, natural_floor, tolerance).summary()
-    return {"cases": len(cases), "latency_ms_median": float(np.median(lat) * 1e3), **scores,
-            "iterations_median": float(np.median(iters)), "memory_kb": round(peak / 1024, 1)}
+    row = {"cases": len(cases), "latency_ms_median": float(np.median(lat) * 1e3), **scores,
+           "iterations_median": float(np.median(iters)), "memory_kb": round(peak / 1024, 1)}
+    if hasattr(solver, "model_kb"):  # a learned solver: the size of the networks one solve runs
+        row["model_kb"] = round(float(solver.model_kb(EFFECTOR_SETS[effectors])), 1)
+    return row
 
 
 def _starts(start) -> tuple:
@@ -259,6 +269,7 @@ def run(motions, solvers=("fabrik", "ccd", "dls"), effector_sets=("2", "5"), n_c
     """
     from ..learn.threads import single_thread
 
+    every = solvers == "all" or list(solvers) == ["all"]
     solvers = resolve_solvers(solvers)
     effector_sets = tuple(e.strip() for e in (effector_sets.split(",") if isinstance(effector_sets, str)
                                               else effector_sets) if str(e).strip())
@@ -276,7 +287,15 @@ def run(motions, solvers=("fabrik", "ccd", "dls"), effector_sets=("2", "5"), n_c
     if natural:
         nat = NaturalnessIndex(s, motions.global_pos[first.train_frames], seed=seed)
         floor = nat.distance(first.target_pos)  # the targets are the same under every start condition
-    built = {name: make_solver(name, s) for name in solvers}
+    built = {}
+    for name in solvers:
+        try:
+            built[name] = make_solver(name, s)
+        except ValueError as err:
+            if not every:  # asked for by name: its refusal (e.g. weights made for another skeleton) is the answer
+                raise
+            warnings.warn(f"bench ik: skipping solver {name!r} on {first.source!r}: {err}", UserWarning, stacklevel=2)
+    solvers = tuple(built)
     jobs = [(st, name, e) for st in starts for name in solvers for e in effector_sets]
     bar = None
     if progress:
@@ -293,6 +312,8 @@ def run(motions, solvers=("fabrik", "ccd", "dls"), effector_sets=("2", "5"), n_c
                            **evaluate_solver(built[name], cases, e, tolerance, nat, floor)}
                     if (name, e) in PAPER:
                         row["paper_latency_ms"] = PAPER[(name, e)]
+                    if (name, e) in PAPER_KB:
+                        row["paper_kb"] = PAPER_KB[(name, e)]
                     rows.append(row)
                     if bar is not None:
                         bar.update()
@@ -313,7 +334,8 @@ def run(motions, solvers=("fabrik", "ccd", "dls"), effector_sets=("2", "5"), n_c
 # ---------------------------------------------------------------------------------------- the CLI
 TABLES = [
     ("Speed (one solve, one thread; batched: solves/s over all cases at once)",
-     ["method", "effectors", "cases", "latency_ms_median", "paper_latency_ms", "memory_kb", "solves_per_s"]),
+     ["method", "effectors", "cases", "latency_ms_median", "paper_latency_ms", "memory_kb", "model_kb", "paper_kb",
+      "solves_per_s", "us_per_pose"]),
     ("Accuracy (medians over cases; bone error: the worst case)",
      ["method", "effectors", "effector_error_mm_median", "effector_error_deg_median", "converged_fraction",
       "iterations_median", "bone_length_error_mm_max"]),
@@ -325,7 +347,7 @@ TABLES = [
 
 TABLE_LABELS = {
     "effectors": "effectors", "latency_ms_median": "ms", "paper_latency_ms": "paper ms", "memory_kb": "kB",
-    "solves_per_s": "solves/s", "effector_error_mm_median": "effector mm", "effector_error_deg_median": "effector deg",
+    "solves_per_s": "solves/s", "model_kb": "model kB", "paper_kb": "paper kB", "us_per_pose": "us/pose", "effector_error_mm_median": "effector mm", "effector_error_deg_median": "effector deg",
     "converged_fraction": "converged", "iterations_median": "iters", "bone_length_error_mm_max": "bone mm",
     "mpjpe_mm_median": "MPJPE mm", "rotation_error_deg_median": "rotation deg", "natural_mm_median": "natural mm",
     "natural_floor_mm_median": "floor mm",
@@ -344,9 +366,19 @@ def _cli_run(args) -> list[dict]:
     solvers = resolve_solvers(args.solvers)  # refuse bad names before loading data
     _starts(args.start)
     show = not args.json and sys.stderr.isatty()
-    motions = open_dataset(args.data, scale=args.scale, progress=show)
+    motions = open_dataset(default_data(solvers) if args.data is None else args.data, scale=args.scale, progress=show)
     return run(motions, solvers=solvers, effector_sets=args.effectors.split(","), n_cases=args.cases,
                start=args.start, seed=args.seed, peers=not args.no_peers, methods=args.methods, progress=show)
+
+
+def default_data(solvers) -> str:
+    """The data a run uses when ``--data`` is not given: the one data set the run's learned solvers were
+    trained on (:attr:`posekit.ik.registry.SolverInfo.data`), else the DeepMimic ``sample``."""
+    sets = {solver_info(n).data for n in solvers} - {""}
+    if len(sets) > 1:
+        raise ValueError(f"the solvers of this run were trained on different data sets ({', '.join(sorted(sets))}); "
+                         "choose one with --data")
+    return sets.pop() if sets else "sample"
 
 
 def _header(rows, args) -> str:
@@ -376,7 +408,9 @@ register_benchmark(
         arg("--start", default="same-clip",
             help=f"comma-separated start conditions: {_START_HELP}; alias {_ALIAS_HELP}"),
         arg("--cases", type=int, default=1000, help="held-out (start, target) cases per start condition"),
-        arg("--data", default="sample", help="sample, bandai-mini, bandai1, bandai2, or a BVH file/folder or .npz"),
+        arg("--data", default=None,
+            help="sample, bandai-mini, bandai1, bandai2, or a BVH file/folder or .npz (default: the data the learned "
+                 "solvers of the run were trained on, e.g. bandai-mini for neural; else sample)"),
         arg("--scale", type=float, default=None,
             help="file units to metres for a BVH path (default: detected from the skeleton's height)"),
         arg("--seed", type=int, default=0, help="seed of the held-out split and of the case draw"),

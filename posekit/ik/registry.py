@@ -46,6 +46,9 @@ class SolverInfo:
         The notebook that introduces it.
     defaults : dict
         Config passed to the factory unless overridden.
+    data : str
+        For a learned solver, the data set (a :func:`posekit.data.open_dataset` name) its weights were
+        trained on and work with; benchmarks default to it. Empty for the classical solvers.
     """
 
     name: str
@@ -55,6 +58,7 @@ class SolverInfo:
     description: str = ""
     lesson: str = ""
     defaults: dict = field(default_factory=dict)
+    data: str = ""
 
 
 _REGISTRY: dict[str, SolverInfo] = {}
@@ -73,7 +77,7 @@ def _kinds(kinds, what: str) -> tuple:
 
 
 def register(name: str, factory: Callable, *, kinds=None, needs_start: bool | None = None,
-             description: str = "", lesson: str = "", replace: bool = False, **defaults) -> SolverInfo:
+             description: str = "", lesson: str = "", replace: bool = False, data: str = "", **defaults) -> SolverInfo:
     """Make a solver available by name everywhere (benchmark, CLI, viewer, studio).
 
     Parameters
@@ -89,6 +93,8 @@ def register(name: str, factory: Callable, *, kinds=None, needs_start: bool | No
     description, lesson : str
     replace : bool
         Redefine an existing name (e.g. while editing a notebook).
+    data : str
+        A learned solver's data set (:attr:`SolverInfo.data`).
     **defaults
         Config passed to the factory unless overridden (``constraints=True``).
 
@@ -119,7 +125,7 @@ def register(name: str, factory: Callable, *, kinds=None, needs_start: bool | No
         raise ValueError(f"{what} is registered with needs_start={needs_start} but "
                          f"{factory.__name__}.needs_start is {own_start}")
     _check_config(name, factory, defaults)
-    info = SolverInfo(name, factory, kinds, bool(needs_start), description, lesson, dict(defaults))
+    info = SolverInfo(name, factory, kinds, bool(needs_start), description, lesson, dict(defaults), str(data))
     _REGISTRY[name] = info
     return info
 

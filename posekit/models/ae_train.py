@@ -50,18 +50,19 @@ def weights_path(folder=None):
     return Path(folder or samples_dir() / "weights") / WEIGHTS
 
 
-def command(**settings) -> str:
+def command(seed: int = 0, latent: int = 64, tied: bool = True, data: str = "bandai-mini", **settings) -> str:
     """The command line that makes weights with these settings."""
-    diff = " ".join(f"--{k.replace('_', '-')} {v}" for k, v in settings.items()
-                    if k in DEFAULTS and v != DEFAULTS[k] or k == "seed")
-    return f"posekit train ae-solvers {diff}".strip()
+    parts = [f"--seed {seed}"] + [f"--{k.replace('_', '-')} {v}" for k, v in settings.items()
+                                  if k in DEFAULTS and v != DEFAULTS[k]]
+    parts += [f"--latent {latent}"] * (latent != 64) + ["--untied"] * (not tied) + [f"--data {data}"] * (data != "bandai-mini")
+    return "posekit train ae-solvers " + " ".join(parts)
 
 
-def solver_loss(model: AESolvers, columns, k: float):
-    """Eq. (1): ``loss(net, z, p, x_target, [z_in])`` = mean squared error of the decoded pose on
-    ``columns`` + ``k`` x the same on the other features (z-scored units)."""
-    F = model.config.n_features
-    on = torch.zeros(F, dtype=torch.bool)
+def solver_loss(n_features: int, columns, k: float):
+    """Eq. (1) as a function ``loss(decoded (N, F), x_target (N, F)) -> scalar``: the mean squared error
+    on the feature ``columns`` of the target joints + ``k`` x the mean squared error on the other
+    features (z-scored units)."""
+    on = torch.zeros(n_features, dtype=torch.bool)
     on[torch.as_tensor(columns)] = True
 
     def loss(decoded, x_target):
@@ -97,7 +98,7 @@ def train_solver(model: AESolvers, group: str, x, pairs, val_pairs, *, epochs: i
     _frozen(model)
     net = model.solvers[group] = model.new_solver(group, seed)
     cols = torch.as_tensor(model.columns(group))
-    loss = solver_loss(model, cols, k)
+    loss = solver_loss(model.config.n_features, cols, k)
 
     def step(net, a, b):
         with torch.no_grad():
@@ -120,7 +121,7 @@ def train_chained(model: AESolvers, x, pairs, val_pairs, *, epochs: int, k: floa
             net.requires_grad_(False)
         net = copy.deepcopy(model.solvers[g]).requires_grad_(True)
         asked = [c for h in chain[: i + 1] for c in model.columns(h)]
-        loss_fn = solver_loss(model, asked, k)
+        loss_fn = solver_loss(model.config.n_features, asked, k)
         before = chain[:i]
 
         def step(net, a, b, before=before, g=g, loss_fn=loss_fn):
@@ -204,7 +205,8 @@ def train_ae_solvers(motions=None, *, seed: int = 0, out=None, groups=tuple(GROU
         label = data_label or motions.source.split(" (")[0]
         data = (f"{label}: training split ({how}), {td.n} poses + mirrored copies; val {vd.n} poses; "
                 f"{st['pairs']} training pairs at most 1 s apart (seed {seed})")
-        model.save(weights_path() if out is None else out, command=command(seed=seed, **settings), seed=seed,
+        model.save(weights_path() if out is None else out,
+                   command=command(seed=seed, latent=latent, tied=tied, data=label, **settings), seed=seed,
                    data=data, licence=LICENCE if "bandai" in label.lower() else "see the data's licence",
                    extra={"report": report})
     return model, report

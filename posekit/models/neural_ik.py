@@ -289,13 +289,13 @@ def _variant(**fixed):
 
 
 _LESSON = "notebooks/03_autoencoder_solvers.ipynb"
-register("neural", NeuralIKSolver, lesson=_LESSON, replace=True,
+register("neural", NeuralIKSolver, lesson=_LESSON, data="bandai-mini", replace=True,
          description="pose autoencoder + latent solver (Victor & Meyer 2020), bone lengths restored")
-register("neural-raw", _variant(post="none"), lesson=_LESSON, replace=True,
+register("neural-raw", _variant(post="none"), lesson=_LESSON, data="bandai-mini", replace=True,
          description="the neural solver's decoded pose, no post-processing")
-register("neural-chained", _variant(chain=True), lesson=_LESSON, replace=True,
+register("neural-chained", _variant(chain=True), lesson=_LESSON, data="bandai-mini", replace=True,
          description="chained neural solvers hands -> feet -> head (Sec. 3.5), bone lengths restored")
-register("neural-chained-raw", _variant(chain=True, post="none"), lesson=_LESSON, replace=True,
+register("neural-chained-raw", _variant(chain=True, post="none"), lesson=_LESSON, data="bandai-mini", replace=True,
          description="chained neural solvers, no post-processing")
-register("neural-fabrik", _variant(post="fabrik"), lesson=_LESSON, replace=True,
+register("neural-fabrik", _variant(post="fabrik"), lesson=_LESSON, data="bandai-mini", replace=True,
          description="the neural pose as FABRIK's start: learned pose, effectors met by FABRIK")

@@ -1,0 +1,86 @@
+"""Lesson 03's rows of ``posekit bench ik``: the neural solver's variants and its batched throughput.
+
+Introduced in ``notebooks/03_autoencoder_solvers.ipynb``. Registered with
+:func:`posekit.bench.ik.register_method`, they run when ``neural`` is among the run's solvers, on the
+same cases and with the same metric code as every solver (so ``posekit bench ik --solvers fabrik,neural
+--effectors 2,5`` prints Victor & Meyer's Table 1 side by side in one run):
+
+* ``neural-variants`` — ``neural-raw`` (the decoded pose, no post-processing), ``neural-fabrik`` (that
+  pose as FABRIK's start) and, for sets the chain covers with more than one stage (5 effectors),
+  ``neural-chained`` and ``neural-chained-raw`` (hands -> feet -> head, Sec. 3.5);
+* ``neural-batched`` (group ``batched``) — :meth:`posekit.models.neural_ik.NeuralIKSolver.predict` on
+  every case at once (repeated to about :data:`BATCH_SOLVES` problems), one thread: solves per second
+  and microseconds per pose, with and without post-processing.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..ik.api import EFFECTOR_SETS
+from ..ik.registry import make_solver
+from .ik import MethodContext, evaluate_solver, register_method
+
+__all__ = ["variant_rows", "batched_rows", "VARIANTS", "BATCH_SOLVES"]
+
+BATCH_SOLVES = 20_000
+"""About how many problems one batched call solves (the cases, repeated)."""
+
+VARIANTS = ("neural-raw", "neural-fabrik", "neural-chained", "neural-chained-raw")
+"""The registered variants of ``neural`` the plug-in adds (each skipped when already a solver of the run)."""
+
+
+def _chain_stages(solver, e: str) -> int:
+    return len(solver.plan(solver.skeleton.indices(EFFECTOR_SETS[e])))
+
+
+def variant_rows(ctx: MethodContext) -> list[dict]:
+    """The variants of :data:`VARIANTS` on each effector set their solvers cover."""
+    cases, s = ctx.cases, ctx.cases.skeleton
+    rows = []
+    for name in VARIANTS:
+        if name in ctx.solvers:
+            continue
+        solver = make_solver(name, s)
+        for e in ctx.effector_sets:
+            try:
+                stages = _chain_stages(solver, e)
+            except ValueError:  # no solver for this joint set: not a row
+                continue
+            if solver.chain and stages < 2:  # a one-stage chain is the plain solver
+                continue
+            rows.append({"method": name, "effectors": e,
+                         **evaluate_solver(solver, cases, e, ctx.tolerance, ctx.natural, ctx.natural_floor)})
+    return rows
+
+
+def batched_rows(ctx: MethodContext) -> list[dict]:
+    """Batched throughput of the neural solver, without and with post-processing."""
+    cases, s = ctx.cases, ctx.cases.skeleton
+    rows = []
+    for name in ("neural-raw", "neural"):
+        solver = make_solver(name, s)
+        for e in ctx.effector_sets:
+            joints = s.indices(EFFECTOR_SETS[e])
+            try:
+                solver.plan(joints)
+            except ValueError:
+                continue
+            reps = max(1, BATCH_SOLVES // len(cases))
+            start = np.tile(cases.start_pos, (reps, 1, 1))
+            targets = np.tile(cases.target_pos[:, joints], (reps, 1, 1))
+            solver.predict(start[:8], joints, targets[:8])  # warm-up
+            t = time.perf_counter()
+            solver.predict(start, joints, targets)
+            dt = time.perf_counter() - t
+            rows.append({"method": f"{name} batched", "effectors": e, "cases": len(start),
+                         "solves_per_s": round(len(start) / dt), "us_per_pose": round(dt / len(start) * 1e6, 2)})
+    return rows
+
+
+register_method("neural-variants", variant_rows, group="neural", needs=("neural",), replace=True,
+                description="neural without post-processing, chained, and as FABRIK's start (lesson 03)")
+register_method("neural-batched", batched_rows, group="batched", needs=("neural",), replace=True,
+                description="the neural solver on all cases at once: solves/s and us per pose (lesson 03)")
