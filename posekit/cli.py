@@ -163,6 +163,9 @@ _TRAINABLE = {
                    "(Victor & Meyer 2020)",
                    "lesson 03 (03_autoencoder_solvers.ipynb), the neural solvers, posekit bench ik",
                    "about 8 minutes on 2 idle cores"),
+    "ae-studies": ("data_samples/weights/ae_solvers_studies.json",
+                   "lesson 03's measured choices: autoencoder size and decoder, the loss weight k, chaining",
+                   "lesson 03 (03_autoencoder_solvers.ipynb)", "about 8 minutes on 2 idle cores"),
 }
 
 
@@ -195,8 +198,11 @@ def _train_ae_solvers(args) -> int:
     settings = {k: getattr(args, k) for k in DEFAULTS if getattr(args, k) != DEFAULTS[k]}
     motions = open_dataset(args.data, progress=sys.stderr.isatty())
     out = Path(args.out) if args.out else None
-    model, report = train_ae_solvers(motions, seed=args.seed, out=out, tied=not args.untied, latent=args.latent,
-                                     progress=sys.stderr.isatty(), **settings)
+    from .learn.threads import single_thread
+
+    with single_thread():  # these small layers gain little from a second thread, and one thread repeats exactly
+        model, report = train_ae_solvers(motions, seed=args.seed, out=out, tied=args.tied, latent=args.latent,
+                                         progress=sys.stderr.isatty(), **settings)
     from .models.ae_train import weights_path
 
     path = out or weights_path()
@@ -206,6 +212,17 @@ def _train_ae_solvers(args) -> int:
     print(f"autoencoder validation MSE {report['autoencoder']['val'][-1]:.5f} (z-scored units); solvers: "
           + ", ".join(f"{g} {c['val'][-1]:.5f}" for g, c in report["solvers"].items()))
     print(f"wrote {path} ({path.stat().st_size / 1e3:.0f} kB)")
+    return 0
+
+
+def _train_ae_studies(args) -> int:
+    from .models.ae_studies import run_studies, studies_path
+
+    out = Path(args.out) if args.out else studies_path()
+    res = run_studies(seed=args.seed, out=out, progress=sys.stderr.isatty(), ae_epochs=args.ae_epochs)
+    for r in res["autoencoder"]:
+        print(f"autoencoder d={r['latent']:<3} {r['decoder']:<7} held-out reconstruction {r['test_mm']:.1f} mm")
+    print(f"wrote {out} in {res['seconds']:.0f} s")
     return 0
 
 
@@ -273,11 +290,16 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--" + key.replace("_", "-"), dest=key, type=type(AE[key]), default=AE[key],
                        help=f"{what} (default: {AE[key]})")
     p.add_argument("--latent", type=int, default=64, help="size d of the latent code (default: 64)")
-    p.add_argument("--untied", action="store_true", help="a decoder with its own weights and biases (default: tied, "
-                   "the transposed encoder weights as in the authors' code)")
+    p.add_argument("--tied", action="store_true", help="the decoder reuses the transposed encoder weights, no biases, "
+                   "as in the authors' code (default: untied, its own weights and biases: measured better in lesson 03)")
     p.add_argument("--seed", type=int, default=0, help="(default: 0)")
     p.add_argument("--out", default=None, help="checkpoint file (default data_samples/weights/ae_solvers.pt)")
     p.set_defaults(fn=_train_ae_solvers)
+    p = tsub.add_parser("ae-studies", help="lesson 03's studies on the shipped autoencoder (d, tied/untied, k, chaining)")
+    p.add_argument("--ae-epochs", type=int, default=40, help="epochs of each autoencoder of the size study (default: 40)")
+    p.add_argument("--seed", type=int, default=0, help="(default: 0)")
+    p.add_argument("--out", default=None, help="JSON file (default data_samples/weights/ae_solvers_studies.json)")
+    p.set_defaults(fn=_train_ae_studies)
     return parser
 
 

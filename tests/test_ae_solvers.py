@@ -171,3 +171,36 @@ def test_shipped_weights_are_marked_and_beat_fabrik_from_another_clip(mini):
         pf = np.stack([fab.solve(c.pose(i), effs[i]).pose.global_pos for i in range(len(c))])
         pn = np.stack([r.pose.global_pos for r in neu.solve_batch([c.pose(i) for i in range(len(c))], effs)])
         assert np.median(mpjpe(s, pn, c.target_pos)) < np.median(mpjpe(s, pf, c.target_pos))
+
+
+def test_exercise_checkers_accept_right_and_refuse_wrong_answers(capsys):
+    from posekit.exercises import check_pose_vector, check_solver_loss, check_tied_decoder
+    from posekit.transforms import to_root_space
+
+    def right_vector(s, p):
+        return to_root_space(s, p[None])[0][0][1:].reshape(-1)
+
+    def wrong_vector(s, p):  # keeps joint_Root: the trap of the issue
+        return to_root_space(s, p[None])[0][0][:-1].reshape(-1)
+
+    relu = lambda a: np.maximum(a, 0)  # noqa: E731
+    assert check_pose_vector(right_vector) and not check_pose_vector(wrong_vector)
+    assert check_tied_decoder(lambda z, w1, w2, w3: relu(relu(z @ w3) @ w2) @ w1)
+    assert not check_tied_decoder(lambda z, w1, w2, w3: relu(relu(relu(z @ w3) @ w2) @ w1))
+    cols_mse = lambda d, t, c, k: (((d - t)[:, c]) ** 2).mean() + k * (np.delete(d - t, c, axis=1) ** 2).mean()  # noqa
+    assert check_solver_loss(cols_mse) and not check_solver_loss(lambda d, t, c, k: ((d - t) ** 2).mean())
+    out = capsys.readouterr().out
+    assert out.count("✓") == 3 and out.count("✗") == 3
+
+
+def test_solver_panel_shows_a_refusal_and_keeps_the_other_views(mini):
+    from posekit.viz import SolverPanel
+
+    c = build_cases(mini, 3, 0, "other-clip")
+    s = c.skeleton
+    panel = SolverPanel(s, {n: make_solver(n, s) for n in ("fabrik", "neural")}, c.pose(0),
+                        effector_set(s, "5", c.target_pos[0]), truth=c.target_pos[0])
+    assert panel.labels["neural"].value.startswith("<b>")  and not isinstance(panel.results["neural"], Exception)
+    panel.move_target("left_elbow", c.target_pos[0][s.index("left_elbow")] + 0.05)  # no network for this joint set
+    assert isinstance(panel.results["neural"], ValueError) and "cannot solve" in panel.labels["neural"].value
+    assert panel.results["fabrik"].converged and "reached" in panel.labels["fabrik"].value

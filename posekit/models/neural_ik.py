@@ -42,7 +42,7 @@ __all__ = ["NeuralIKSolver", "POSTS", "load_model"]
 POSTS = ("bones", "none", "fabrik")
 """Post-processing choices (see the module docstring)."""
 
-RANGE_MARGIN = 0.0
+RANGE_MARGIN = 0.5
 """How far (z-scored units) a target may lie beyond the training range before it is clamped."""
 
 _CACHE: dict = {}
@@ -124,8 +124,8 @@ class NeuralIKSolver(SolverBase):
         self._chain = np.array(chain, dtype=np.int64)
         self._chain_off = np.array([s.offsets[j] for j in chain], dtype=float).reshape(-1, 3)
         big = np.float32(np.inf)
-        lo = self.lo if self.lo is not None else np.full_like(self.mean, -big)
-        hi = self.hi if self.hi is not None else np.full_like(self.mean, big)
+        lo = self.lo - RANGE_MARGIN if self.lo is not None else np.full_like(self.mean, -big)
+        hi = self.hi + RANGE_MARGIN if self.hi is not None else np.full_like(self.mean, big)
         self._tnorm = {g: (self.mean[c].astype(float), self.std[c].astype(float), lo[c].astype(float),
                            hi[c].astype(float)) for g, c in self._cols.items()}
         self._mean64, self._std64 = self.mean.astype(float), self.std.astype(float)

@@ -6,6 +6,7 @@ solvers. Talks to solvers only through the :class:`~posekit.ik.api.Solver` inter
 
 from __future__ import annotations
 
+import html
 import time
 from dataclasses import replace
 
@@ -57,7 +58,9 @@ class SolverPanel:
     ----------
     widget : ipywidgets.VBox
     results : dict
-        Name -> last :class:`~posekit.ik.api.IKResult`.
+        Name -> last :class:`~posekit.ik.api.IKResult`, or the ``ValueError`` the solver raised (its
+        view then shows the message and keeps its last pose; e.g. a neural solver asked for a joint set
+        it has no network for).
     """
 
     def __init__(self, skeleton, solvers: dict, start: Pose, effectors, truth=None, width: int = 300,
@@ -109,7 +112,12 @@ class SolverPanel:
                    if e.kind in ("position", "look_at")}
         for name, solver in self.solvers.items():
             t = time.perf_counter()
-            res = solver.solve(self.start, effs)
+            try:
+                res = solver.solve(self.start, effs)
+            except ValueError as err:  # a solver that refuses these effectors says why; the others go on
+                self.results[name] = err
+                self.labels[name].value = f"<b>✗ cannot solve</b><br>{html.escape(str(err))}"
+                continue
             ms = (time.perf_counter() - t) * 1e3
             self.results[name] = res
             v = self.viewers[name]
