@@ -218,8 +218,11 @@ def _train_ae_solvers(args) -> int:
 def _train_ae_studies(args) -> int:
     from .models.ae_studies import run_studies, studies_path
 
+    from .learn.threads import single_thread
+
     out = Path(args.out) if args.out else studies_path()
-    res = run_studies(seed=args.seed, out=out, progress=sys.stderr.isatty(), ae_epochs=args.ae_epochs)
+    with single_thread():
+        res = run_studies(seed=args.seed, out=out, progress=sys.stderr.isatty(), ae_epochs=args.ae_epochs)
     for r in res["autoencoder"]:
         print(f"autoencoder d={r['latent']:<3} {r['decoder']:<7} held-out reconstruction {r['test_mm']:.1f} mm")
     print(f"wrote {out} in {res['seconds']:.0f} s")

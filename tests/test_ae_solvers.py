@@ -200,7 +200,39 @@ def test_solver_panel_shows_a_refusal_and_keeps_the_other_views(mini):
     s = c.skeleton
     panel = SolverPanel(s, {n: make_solver(n, s) for n in ("fabrik", "neural")}, c.pose(0),
                         effector_set(s, "5", c.target_pos[0]), truth=c.target_pos[0])
-    assert panel.labels["neural"].value.startswith("<b>")  and not isinstance(panel.results["neural"], Exception)
+    assert panel.labels["neural"].value.startswith("<b>") and not isinstance(panel.results["neural"], Exception)
     panel.move_target("left_elbow", c.target_pos[0][s.index("left_elbow")] + 0.05)  # no network for this joint set
     assert isinstance(panel.results["neural"], ValueError) and "cannot solve" in panel.labels["neural"].value
-    assert panel.results["fabrik"].converged and "reached" in panel.labels["fabrik"].value
+    assert len(panel.results["fabrik"].effector_error) == 6 and "worst effector" in panel.labels["fabrik"].value
+
+
+def test_bench_ik_runs_table_1_side_by_side(mini):
+    from posekit.bench import ik as bench_ik
+
+    rows = bench_ik.run(mini, solvers="fabrik,neural", effector_sets=("2", "5"), n_cases=15, start="rest,other-clip",
+                        peers=False, baseline=False)
+    got = {(r["method"], r["effectors"], r["start"]) for r in rows}
+    for st in ("rest", "other-clip"):
+        for e in ("2", "5"):
+            for name in ("fabrik", "neural", "neural-raw", "neural-fabrik", "neural batched", "neural-raw batched"):
+                assert (name, e, st) in got, (name, e, st)
+        assert ("neural-chained", "5", st) in got and ("neural-chained", "2", st) not in got  # one stage: no chain
+    by = {(r["method"], r["effectors"], r["start"]): r for r in rows}
+    n2 = by[("neural", "2", "rest")]
+    assert n2["paper_latency_ms"] == 1.47 and n2["paper_kb"] == 442 and 100 < n2["solver_kb"] <= 500 < n2["model_kb"]
+    assert by[("neural batched", "5", "rest")]["us_per_pose"] > 0
+    assert by[("neural", "2", "rest")]["bone_length_error_mm_max"] < 1e-6 < by[("neural-raw", "2", "rest")][
+        "bone_length_error_mm_max"]
+
+
+def test_cli_bench_defaults_to_the_data_the_weights_were_made_for(capsys):
+    import json
+
+    from posekit.cli import main
+
+    assert main(["bench", "ik", "--solvers", "fabrik,neural", "--effectors", "2,5", "--cases", "10", "--json",
+                 "--methods", "none"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert {r["method"] for r in rows} == {"fabrik", "neural"} and all(r["data"].startswith("bandai-mini") for r in rows)
+    assert main(["bench", "ik", "--solvers", "neural", "--data", "sample", "--cases", "5"]) == 2
+    assert "trained for skeleton joints" in capsys.readouterr().err

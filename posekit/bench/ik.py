@@ -24,7 +24,9 @@ case), ``mpjpe_mm_median`` (body joints, pelvis-relative), ``bone_length_error_m
 ``rotation_error_deg_median`` (solvers that return rotations), ``natural_mm_median`` (distance to the
 nearest training pose) and ``natural_floor_mm_median`` (the true pose's own), ``converged_fraction``
 (every effector within 1 mm), ``iterations_median``, ``memory_kb`` (peak Python allocation of one
-solve, tracemalloc), ``solves_per_s`` (batched), ``paper_latency_ms`` (Victor & Meyer 2020), ``start``.
+solve, tracemalloc), ``model_kb`` / ``solver_kb`` (a learned solver's networks in float32: all that
+one solve runs / the solver networks alone), ``solves_per_s`` and ``us_per_pose`` (batched),
+``paper_latency_ms`` and ``paper_kb`` (Victor & Meyer 2020, Table 1), ``start``.
 """
 
 from __future__ import annotations
@@ -219,8 +221,8 @@ def evaluate_solver(solver, cases: Cases, effectors: str, tolerance: float = 1e-
     scores = score_poses(cases, np.stack(pos), effs, rot, natural, natural_floor, tolerance).summary()
     row = {"cases": len(cases), "latency_ms_median": float(np.median(lat) * 1e3), **scores,
            "iterations_median": float(np.median(iters)), "memory_kb": round(peak / 1024, 1)}
-    if hasattr(solver, "model_kb"):  # a learned solver: the size of the networks one solve runs
-        row["model_kb"] = round(float(solver.model_kb(EFFECTOR_SETS[effectors])), 1)
+    if hasattr(solver, "sizes_kb"):  # a learned solver: the size of the networks one solve runs
+        row.update(solver.sizes_kb(EFFECTOR_SETS[effectors]))
     return row
 
 
@@ -334,8 +336,8 @@ def run(motions, solvers=("fabrik", "ccd", "dls"), effector_sets=("2", "5"), n_c
 # ---------------------------------------------------------------------------------------- the CLI
 TABLES = [
     ("Speed (one solve, one thread; batched: solves/s over all cases at once)",
-     ["method", "effectors", "cases", "latency_ms_median", "paper_latency_ms", "memory_kb", "model_kb", "paper_kb",
-      "solves_per_s", "us_per_pose"]),
+     ["method", "effectors", "cases", "latency_ms_median", "paper_latency_ms", "memory_kb", "model_kb", "solver_kb",
+      "paper_kb", "solves_per_s", "us_per_pose"]),
     ("Accuracy (medians over cases; bone error: the worst case)",
      ["method", "effectors", "effector_error_mm_median", "effector_error_deg_median", "converged_fraction",
       "iterations_median", "bone_length_error_mm_max"]),
@@ -347,7 +349,8 @@ TABLES = [
 
 TABLE_LABELS = {
     "effectors": "effectors", "latency_ms_median": "ms", "paper_latency_ms": "paper ms", "memory_kb": "kB",
-    "solves_per_s": "solves/s", "model_kb": "model kB", "paper_kb": "paper kB", "us_per_pose": "us/pose", "effector_error_mm_median": "effector mm", "effector_error_deg_median": "effector deg",
+    "solves_per_s": "solves/s", "model_kb": "model kB", "solver_kb": "solver kB", "paper_kb": "paper kB",
+    "us_per_pose": "us/pose", "effector_error_mm_median": "effector mm", "effector_error_deg_median": "effector deg",
     "converged_fraction": "converged", "iterations_median": "iters", "bone_length_error_mm_max": "bone mm",
     "mpjpe_mm_median": "MPJPE mm", "rotation_error_deg_median": "rotation deg", "natural_mm_median": "natural mm",
     "natural_floor_mm_median": "floor mm",

@@ -31,7 +31,7 @@ __all__ = ["Arg", "arg", "Benchmark", "register_benchmark", "unregister_benchmar
 WIDTH = 100
 """Text output stays within this many columns."""
 
-_BUILTIN = ("fk", "ik", "invrig")
+_BUILTIN = ("fk", "ik", "invrig", "ae_scale")
 
 
 @dataclass(frozen=True)

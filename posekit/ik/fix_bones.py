@@ -6,6 +6,8 @@ solvers (Victor & Meyer 2020, Sec. 3.4). Units: :mod:`posekit.conventions` (metr
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 from .._jit import njit
@@ -48,6 +50,16 @@ def _fix_kernel(pos, parents, lengths, child_start, child_idx, backward):
             p[j, 0], p[j, 1], p[j, 2] = tmp[0, 0], tmp[0, 1], tmp[0, 2]
 
 
+@lru_cache(maxsize=32)
+def _children(parents: tuple):
+    """Parents as an array and every joint's children in CSR form (start offsets (J + 1,), indices)."""
+    p = np.asarray(parents, dtype=np.int64)
+    kids = [np.nonzero(p == j)[0] for j in range(len(p))]
+    start = np.concatenate([[0], np.cumsum([len(k) for k in kids])]).astype(np.int64)
+    idx = np.concatenate(kids).astype(np.int64) if len(p) > 1 else np.zeros(0, np.int64)
+    return p, start, idx
+
+
 def fix_bone_lengths(skeleton: Skeleton, global_pos, lengths=None, keep: str = "leaves") -> np.ndarray:
     """Restore bone lengths of predicted joint positions with one FABRIK pass.
 
@@ -76,10 +88,7 @@ def fix_bone_lengths(skeleton: Skeleton, global_pos, lengths=None, keep: str = "
     if keep not in ("leaves", "root"):
         raise ValueError(f"keep must be 'leaves' or 'root', got {keep!r}")
     L = skeleton.bone_lengths() if lengths is None else np.asarray(lengths, dtype=float)
-    parents = np.asarray(skeleton.parents, dtype=np.int64)
-    kids = [np.nonzero(parents == j)[0] for j in range(J)]
-    child_start = np.concatenate([[0], np.cumsum([len(k) for k in kids])]).astype(np.int64)
-    child_idx = np.concatenate(kids).astype(np.int64) if J > 1 else np.zeros(0, np.int64)
+    parents, child_start, child_idx = _children(tuple(int(p) for p in skeleton.parents))
     shape = pos.shape
     out = np.ascontiguousarray(pos.reshape(-1, J, 3))
     _fix_kernel(out, parents, np.ascontiguousarray(L, dtype=float), child_start, child_idx, keep == "leaves")

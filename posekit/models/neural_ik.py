@@ -167,9 +167,12 @@ class NeuralIKSolver(SolverBase):
         snapped[list(joints)] = targets
         return fix_bone_lengths(self.skeleton, snapped), raw, clamped
 
-    def model_kb(self, joints) -> float:
-        """Size of the networks a solve for ``joints`` runs (autoencoder + solver(s)), float32, kB."""
-        return 4 * self.model.n_parameters([g for g, _ in self.plan(self.skeleton.indices(joints))]) / 1024
+    def sizes_kb(self, joints) -> dict:
+        """Float32 size of what a solve for ``joints`` runs, kB: ``model_kb`` (autoencoder + solver(s),
+        the paper's figure) and ``solver_kb`` (the solver network(s) alone)."""
+        groups = [g for g, _ in self.plan(self.skeleton.indices(joints))]
+        total, ae = self.model.n_parameters(groups), self.model.n_parameters()
+        return {"model_kb": round(4 * total / 1024, 1), "solver_kb": round(4 * (total - ae) / 1024, 1)}
 
     # ------------------------------------------------------------------------------------ plans
     def plan(self, joints) -> list:
