@@ -7,7 +7,7 @@ import torch
 from posekit.data import load_bandai_mini, load_sample
 from posekit.data.cases import build_cases, case_split
 from posekit.data.metrics import body_joints, bone_length_error, mpjpe
-from posekit.ik import EFFECTOR_SETS, Effector, Pose, effector_set, make_solver
+from posekit.ik import EFFECTOR_SETS, Effector, effector_set, make_solver
 from posekit.models.ae_data import (STD_FLOOR, feature_columns, pose_data, pose_vectors, poses_from_vectors,
                                     training_pairs)
 from posekit.models.ae_solvers import CHAIN, GROUPS, AESolvers, PoseAutoencoder

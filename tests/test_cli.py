@@ -135,8 +135,10 @@ def test_bench_ik_table_fits_100_columns_and_help_gives_defaults(capsys):
     with pytest.raises(SystemExit):
         main(["bench", "ik", "--help"])
     h = " ".join(capsys.readouterr().out.split())
-    for arg, default in (("--cases", "1000"), ("--start", "same-clip"), ("--seed", "0"), ("--data", "sample")):
+    for arg, default in (("--cases", "1000"), ("--start", "same-clip"), ("--seed", "0")):
         assert arg in h and f"(default: {default})" in h
+    assert "(default: the data the learned solvers of the run were trained on, e.g. bandai-mini for neural; " \
+           "else sample)" in h
 
 
 def test_missing_shared_data_names_only_real_options(monkeypatch, capsys):
