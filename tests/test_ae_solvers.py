@@ -214,7 +214,8 @@ def test_bench_ik_runs_table_1_side_by_side(mini):
     got = {(r["method"], r["effectors"], r["start"]) for r in rows}
     for st in ("rest", "other-clip"):
         for e in ("2", "5"):
-            for name in ("fabrik", "neural", "neural-raw", "neural-fabrik", "neural batched", "neural-raw batched"):
+            for name in ("fabrik", "neural", "neural-raw", "neural-fabrik", "neural batched", "neural-raw batched",
+                         "neural networks only"):
                 assert (name, e, st) in got, (name, e, st)
         assert ("neural-chained", "5", st) in got and ("neural-chained", "2", st) not in got  # one stage: no chain
     by = {(r["method"], r["effectors"], r["start"]): r for r in rows}

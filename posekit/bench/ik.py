@@ -336,8 +336,10 @@ def run(motions, solvers=("fabrik", "ccd", "dls"), effector_sets=("2", "5"), n_c
 # ---------------------------------------------------------------------------------------- the CLI
 TABLES = [
     ("Speed (one solve, one thread; batched: solves/s over all cases at once)",
-     ["method", "effectors", "cases", "latency_ms_median", "paper_latency_ms", "memory_kb", "model_kb", "solver_kb",
-      "paper_kb", "solves_per_s", "us_per_pose"]),
+     ["method", "effectors", "cases", "latency_ms_median", "paper_latency_ms", "memory_kb", "solves_per_s",
+      "us_per_pose"]),
+    ("Size of the learned solvers (float32 networks one solve runs; solver: without the autoencoder)",
+     ["method", "effectors", "model_kb", "solver_kb", "paper_kb"]),
     ("Accuracy (medians over cases; bone error: the worst case)",
      ["method", "effectors", "effector_error_mm_median", "effector_error_deg_median", "converged_fraction",
       "iterations_median", "bone_length_error_mm_max"]),

@@ -10,7 +10,9 @@ same cases and with the same metric code as every solver (so ``posekit bench ik 
   ``neural-chained`` and ``neural-chained-raw`` (hands -> feet -> head, Sec. 3.5);
 * ``neural-batched`` (group ``batched``) — :meth:`posekit.models.neural_ik.NeuralIKSolver.predict` on
   every case at once (repeated to about :data:`BATCH_SOLVES` problems), one thread: solves per second
-  and microseconds per pose, with and without post-processing.
+  and microseconds per pose, with and without post-processing; and ``neural networks only``, one
+  pose at a time through root frame, encoder, solver and decoder (the compiled single-pose path,
+  without the Solver API's checks: the part the paper's 1.47 / 3.36 ms time).
 """
 
 from __future__ import annotations
@@ -57,9 +59,27 @@ def variant_rows(ctx: MethodContext) -> list[dict]:
 
 
 def batched_rows(ctx: MethodContext) -> list[dict]:
-    """Batched throughput of the neural solver, without and with post-processing."""
+    """Batched throughput of the neural solver, without and with post-processing; and one pose at a time
+    through the networks only (root frame, encode, solve, decode: what the paper times), without the
+    Solver API's effector checks and result."""
     cases, s = ctx.cases, ctx.cases.skeleton
     rows = []
+    raw = make_solver("neural-raw", s)
+    for e in ctx.effector_sets:
+        joints = s.indices(EFFECTOR_SETS[e])
+        try:
+            raw.plan(joints)
+        except ValueError:
+            continue
+        raw._predict_one(cases.start_pos[0], joints, cases.target_pos[0, joints])  # warm-up (JIT)
+        lat = []
+        for i in range(len(cases)):
+            start, target = cases.start_pos[i], cases.target_pos[i, joints]
+            t = time.perf_counter()
+            raw._predict_one(start, joints, target)
+            lat.append(time.perf_counter() - t)
+        rows.append({"method": "neural networks only", "effectors": e, "cases": len(cases),
+                     "latency_ms_median": float(np.median(lat) * 1e3)})
     for name in ("neural-raw", "neural"):
         solver = make_solver(name, s)
         for e in ctx.effector_sets:
