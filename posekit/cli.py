@@ -162,10 +162,10 @@ _TRAINABLE = {
                    "pose autoencoder + latent-space solvers hands, feet, head, all five, chaining-aware copies "
                    "(Victor & Meyer 2020)",
                    "lesson 03 (03_autoencoder_solvers.ipynb), the neural solvers, posekit bench ik",
-                   "about 8 minutes on 2 idle cores"),
+                   "about 7 minutes on one core (it trains on one thread: 7 min 13 s measured)"),
     "ae-studies": ("data_samples/weights/ae_solvers_studies.json",
                    "lesson 03's measured choices: autoencoder size and decoder, the loss weight k, chaining",
-                   "lesson 03 (03_autoencoder_solvers.ipynb)", "about 8 minutes on 2 idle cores"),
+                   "lesson 03 (03_autoencoder_solvers.ipynb)", "about 9 minutes on one core (9 min 22 s measured)"),
 }
 
 

@@ -140,6 +140,10 @@ class SolverBase:
     name: str = "solver"
     kinds: tuple = ("position",)
     needs_start: bool = True
+    keeps_bone_lengths: bool = True
+    """Every bone of a result keeps the skeleton's length (False: a learned solver's raw prediction)."""
+    batch_atol: float = 1e-9
+    """How closely ``solve_batch`` reproduces ``solve``, metres (float32 networks: about 1e-5)."""
     skeleton: Skeleton
 
     def resolve(self, effectors) -> ResolvedEffectors:

@@ -88,6 +88,7 @@ class NeuralIKSolver(SolverBase):
     name = "neural"
     kinds = ("position",)
     needs_start = True
+    batch_atol = 1e-5  # float32 networks: the batched numpy path and the compiled single path round differently
 
     def __init__(self, skeleton, weights=None, post: str = "bones", chain: bool = False, chain_aware: bool = True,
                  model: AESolvers | None = None):
@@ -100,6 +101,7 @@ class NeuralIKSolver(SolverBase):
                              f"({skeleton.n_joints} joints); load weights made for this skeleton")
         self.skeleton = skeleton
         self.post, self.chain, self.chain_aware = post, bool(chain), bool(chain_aware)
+        self.keeps_bone_lengths = post != "none"
         self.net = self.model.compile()
         self.mean = self.model.norm.mean.astype(np.float32)
         self.std = self.model.norm.std.astype(np.float32)
