@@ -237,3 +237,11 @@ def test_cli_bench_defaults_to_the_data_the_weights_were_made_for(capsys):
     assert {r["method"] for r in rows} == {"fabrik", "neural"} and all(r["data"].startswith("bandai-mini") for r in rows)
     assert main(["bench", "ik", "--solvers", "neural", "--data", "sample", "--cases", "5"]) == 2
     assert "trained for skeleton joints" in capsys.readouterr().err
+
+
+def test_bench_all_skips_learned_solvers_made_for_another_skeleton():
+    from posekit.bench import ik as bench_ik
+
+    with pytest.warns(UserWarning, match="skipping solver 'neural'"):
+        rows = bench_ik.run(load_sample(), solvers="all", effector_sets=("2",), n_cases=5, methods="none")
+    assert {r["method"] for r in rows} >= {"fabrik", "dls"} and not any(r["method"].startswith("neural") for r in rows)

@@ -26,6 +26,7 @@ pytestmark = pytest.mark.browser
 ROOT = Path(__file__).resolve().parent.parent
 NOTEBOOK = "00_skeletons_and_poses.ipynb"
 PANEL_NOTEBOOK = "01_fabrik.ipynb"
+NEURAL_NOTEBOOK = "03_autoencoder_solvers.ipynb"
 CHROMIUM = os.environ.get("POSEKIT_CHROMIUM", "/usr/bin/chromium")
 FLAGS = ["--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader", "--disable-background-networking",
          "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-quic"]
@@ -45,7 +46,7 @@ def lab(tmp_path_factory):
     if not Path(CHROMIUM).exists():
         pytest.fail(f"{CHROMIUM} not found: install Debian's chromium and chromium-driver (make test does)")
     work = tmp_path_factory.mktemp("lab")
-    for nb in (NOTEBOOK, PANEL_NOTEBOOK):  # copies: never let autosave touch the repo's notebooks
+    for nb in (NOTEBOOK, PANEL_NOTEBOOK, NEURAL_NOTEBOOK):  # copies: never let autosave touch the repo's notebooks
         shutil.copy(ROOT / "notebooks" / nb, work / nb)
     port, token = _free_port(), "posekit-test"
     cmd = [sys.executable, "-m", "jupyter", "lab", "--no-browser", f"--port={port}", "--ip=127.0.0.1",
@@ -180,19 +181,21 @@ def test_viewer_renders_and_slider_moves_joint(lab, chromium):
         page.close()
 
 
-def test_three_solvers_solve_live_side_by_side(lab, chromium):
-    """Notebook 01's SolverPanel: three canvases show skeletons; moving the target slider re-solves
-    with FABRIK, CCD and DLS (their status lines change) and the views move."""
+@pytest.mark.parametrize("notebook, views", [(PANEL_NOTEBOOK, 3), (NEURAL_NOTEBOOK, 2)])
+def test_solvers_solve_live_side_by_side(lab, chromium, notebook, views):
+    """A lesson's SolverPanel: every canvas shows a skeleton; moving the target slider re-solves with
+    every solver (their status lines change) and every view moves. Notebook 01: FABRIK, CCD and DLS;
+    notebook 03: the neural solver and FABRIK."""
     url, token, work = lab
     page = chromium.new_page(viewport={"width": 1500, "height": 1100})
     try:
-        _open_and_run_all(page, url, token, PANEL_NOTEBOOK)
+        _open_and_run_all(page, url, token, notebook)
         labels = page.locator(".widget-html-content", has_text="worst effector")
         labels.first.wait_for(timeout=240_000)
         cell = page.locator(".jp-CodeCell", has=labels.first)
         cell.scroll_into_view_if_needed()
         canvases = cell.locator("canvas")
-        assert canvases.count() == 3 and labels.count() == 3
+        assert canvases.count() == views and labels.count() == views
         before = [_wait_for(lambda c=c: (lambda im: im if _foreground(im).mean() > 0.002 else None)(_pixels(c)),
                             60, "a skeleton on every canvas") for c in canvases.all()]
         texts = [l.inner_text() for l in labels.all()]
@@ -200,10 +203,10 @@ def test_three_solvers_solve_live_side_by_side(lab, chromium):
         handle = cell.locator(".widget-slider", has_text="target y").locator(".noUi-handle").first
         _drag(page, handle, 60)
         _wait_for(lambda: all(l.inner_text() != t for l, t in zip(labels.all(), texts)), 60,
-                  "all three solvers to re-solve")
+                  "every solver to re-solve")
         for c, im in zip(canvases.all(), before):
             _wait_for(lambda c=c, im=im: (np.abs(_pixels(c) - im).sum(-1) > 60).mean() > 0.0005 or None, 30,
                       "every view to move")
-        page.screenshot(path=str(work / "panel.png"))
+        page.screenshot(path=str(work / f"panel_{notebook[:2]}.png"))
     finally:
         page.close()
