@@ -12,7 +12,7 @@ benchmark without editing the CLI::
                        help="my benchmark", args=[arg("--n", type=int, default=3, help="repeats")],
                        tables=[("My table", ["method", "ms"])])
 
-The built-in benchmarks (``fk``, ``ik``, ``invrig``) register themselves when their modules are
+The built-in benchmarks (``fk``, ``ik``, ``invrig``, ``ae-scale``) register themselves when their modules are
 imported; :func:`benchmark_names` imports them.
 """
 
@@ -31,7 +31,7 @@ __all__ = ["Arg", "arg", "Benchmark", "register_benchmark", "unregister_benchmar
 WIDTH = 100
 """Text output stays within this many columns."""
 
-_BUILTIN = ("fk", "ik", "invrig", "ae_scale")
+_BUILTIN = ("fk", "ik", "invrig", "ae-scale")
 
 
 @dataclass(frozen=True)
@@ -208,6 +208,6 @@ def _load_builtin():
         return
     _loading = True
     try:
-        from . import fk, ik, invrig  # noqa: F401
+        from . import ae_scale, fk, ik, invrig  # noqa: F401
     finally:
         _loading = False
