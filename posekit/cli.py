@@ -252,7 +252,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="deepmimic (default): the DeepMimic sample; bandai: the Bandai mini set")
     p.add_argument("--pybullet-data", default=None, help="pybullet_data folder (default: the installed wheel's)")
     p.add_argument("--data-dir", default=None,
-                   help="bandai: folder holding bandai-namco-1/ and bandai-namco-2-every4th/ (default $POSEKIT_DATA_DIR)")
+                   help="bandai: folder holding bandai-namco-1/ and bandai-namco-2-every4th/ "
+                        "(default $POSEKIT_DATA_DIR)")
     p.add_argument("--workers", type=int, default=None, help="bandai: processes reading BVH (default: all CPUs)")
     p.add_argument("--out", default=None)
     p.set_defaults(fn=_build_sample)
@@ -294,12 +295,15 @@ def build_parser() -> argparse.ArgumentParser:
                        help=f"{what} (default: {AE[key]})")
     p.add_argument("--latent", type=int, default=64, help="size d of the latent code (default: 64)")
     p.add_argument("--tied", action="store_true", help="the decoder reuses the transposed encoder weights, no biases, "
-                   "as in the authors' code (default: untied, its own weights and biases: measured better in lesson 03)")
+                   "as in the authors' code (default: untied, its own weights and biases: measured better in "
+                   "lesson 03)")
     p.add_argument("--seed", type=int, default=0, help="(default: 0)")
     p.add_argument("--out", default=None, help="checkpoint file (default data_samples/weights/ae_solvers.pt)")
     p.set_defaults(fn=_train_ae_solvers)
-    p = tsub.add_parser("ae-studies", help="lesson 03's studies on the shipped autoencoder (d, tied/untied, k, chaining)")
-    p.add_argument("--ae-epochs", type=int, default=40, help="epochs of each autoencoder of the size study (default: 40)")
+    p = tsub.add_parser("ae-studies",
+                        help="lesson 03's studies on the shipped autoencoder (d, tied/untied, k, chaining)")
+    p.add_argument("--ae-epochs", type=int, default=40,
+                   help="epochs of each autoencoder of the size study (default: 40)")
     p.add_argument("--seed", type=int, default=0, help="(default: 0)")
     p.add_argument("--out", default=None, help="JSON file (default data_samples/weights/ae_solvers_studies.json)")
     p.set_defaults(fn=_train_ae_studies)

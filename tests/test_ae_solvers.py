@@ -121,7 +121,7 @@ def test_compiled_single_pose_path_equals_the_batched_one(tiny, cases, post, cha
         j = s.indices(EFFECTOR_SETS[e])
         batch, _, _ = solver.predict(cases.start_pos[:10], j, cases.target_pos[:10][:, j])
         for i in range(10):
-            one, _, _ = solver._predict_one(cases.start_pos[i], j, cases.target_pos[i][j])
+            one, _, _ = solver.predict_one(cases.start_pos[i], j, cases.target_pos[i][j])
             assert np.allclose(one, batch[i], atol=1e-5)
 
 
@@ -234,7 +234,8 @@ def test_cli_bench_defaults_to_the_data_the_weights_were_made_for(capsys):
     assert main(["bench", "ik", "--solvers", "fabrik,neural", "--effectors", "2,5", "--cases", "10", "--json",
                  "--methods", "none"]) == 0
     rows = json.loads(capsys.readouterr().out)
-    assert {r["method"] for r in rows} == {"fabrik", "neural"} and all(r["data"].startswith("bandai-mini") for r in rows)
+    assert {r["method"] for r in rows} == {"fabrik", "neural"}
+    assert all(r["data"].startswith("bandai-mini") for r in rows)
     assert main(["bench", "ik", "--solvers", "neural", "--data", "sample", "--cases", "5"]) == 2
     assert "trained for skeleton joints" in capsys.readouterr().err
 

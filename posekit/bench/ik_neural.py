@@ -34,8 +34,15 @@ VARIANTS = ("neural-raw", "neural-fabrik", "neural-chained", "neural-chained-raw
 """The registered variants of ``neural`` the plug-in adds (each skipped when already a solver of the run)."""
 
 
-def _chain_stages(solver, e: str) -> int:
-    return len(solver.plan(solver.skeleton.indices(EFFECTOR_SETS[e])))
+def _covered(solver, ctx: MethodContext):
+    """``(set name, joints)`` of the run's effector sets the solver has networks for."""
+    for e in ctx.effector_sets:
+        joints = solver.skeleton.indices(EFFECTOR_SETS[e])
+        try:
+            solver.plan(joints)
+        except ValueError:  # no network for this joint set: no row
+            continue
+        yield e, joints
 
 
 def variant_rows(ctx: MethodContext) -> list[dict]:
@@ -46,12 +53,8 @@ def variant_rows(ctx: MethodContext) -> list[dict]:
         if name in ctx.solvers:
             continue
         solver = make_solver(name, s)
-        for e in ctx.effector_sets:
-            try:
-                stages = _chain_stages(solver, e)
-            except ValueError:  # no solver for this joint set: not a row
-                continue
-            if solver.chain and stages < 2:  # a one-stage chain is the plain solver
+        for e, joints in _covered(solver, ctx):
+            if solver.chain and len(solver.plan(joints)) < 2:  # a one-stage chain is the plain solver
                 continue
             rows.append({"method": name, "effectors": e,
                          **evaluate_solver(solver, cases, e, ctx.tolerance, ctx.natural, ctx.natural_floor)})
@@ -65,29 +68,19 @@ def batched_rows(ctx: MethodContext) -> list[dict]:
     cases, s = ctx.cases, ctx.cases.skeleton
     rows = []
     raw = make_solver("neural-raw", s)
-    for e in ctx.effector_sets:
-        joints = s.indices(EFFECTOR_SETS[e])
-        try:
-            raw.plan(joints)
-        except ValueError:
-            continue
-        raw._predict_one(cases.start_pos[0], joints, cases.target_pos[0, joints])  # warm-up (JIT)
+    for e, joints in _covered(raw, ctx):
+        raw.predict_one(cases.start_pos[0], joints, cases.target_pos[0, joints])  # warm-up (JIT)
         lat = []
         for i in range(len(cases)):
             start, target = cases.start_pos[i], cases.target_pos[i, joints]
             t = time.perf_counter()
-            raw._predict_one(start, joints, target)
+            raw.predict_one(start, joints, target)
             lat.append(time.perf_counter() - t)
         rows.append({"method": "neural networks only", "effectors": e, "cases": len(cases),
                      "latency_ms_median": float(np.median(lat) * 1e3)})
     for name in ("neural-raw", "neural"):
         solver = make_solver(name, s)
-        for e in ctx.effector_sets:
-            joints = s.indices(EFFECTOR_SETS[e])
-            try:
-                solver.plan(joints)
-            except ValueError:
-                continue
+        for e, joints in _covered(solver, ctx):
             reps = max(1, BATCH_SOLVES // len(cases))
             start = np.tile(cases.start_pos, (reps, 1, 1))
             targets = np.tile(cases.target_pos[:, joints], (reps, 1, 1))

@@ -43,7 +43,8 @@ def check_tied_decoder(my_decode) -> bool:
         z = torch.randn(6, d)
         with torch.no_grad():
             expected = ae.decode(z).numpy().astype(float)
-        args = (z.numpy().astype(float), *(m.weight.detach().numpy().astype(float) for m in (ae.enc1, ae.enc2, ae.enc3)))
+        weights = (m.weight.detach().numpy().astype(float) for m in (ae.enc1, ae.enc2, ae.enc3))
+        args = (z.numpy().astype(float), *weights)
         cases.append((args, expected, describe))
     return report("check_tied_decoder", my_decode, cases, atol=1e-5)
 
@@ -60,7 +61,8 @@ def check_solver_loss(my_loss) -> bool:
     cases = []
 
     def describe(got, expected):
-        return f"got {float(np.ravel(got)[0]):.6g}, expected {float(expected):.6g}; a mean per group, k on the others only?"
+        return (f"got {float(np.ravel(got)[0]):.6g}, expected {float(expected):.6g}; a mean per group, k on the "
+                "others only?")
     for N, F, cols, k in ((4, 9, [0, 1, 2], 0.01), (10, 63, list(range(27, 33)), 0.1), (3, 6, [3, 4, 5], 1.0)):
         d, t = rng.normal(size=(N, F)), rng.normal(size=(N, F))
         expected = float(solver_loss(F, cols, k)(torch.as_tensor(d), torch.as_tensor(t)))

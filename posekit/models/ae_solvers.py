@@ -87,9 +87,11 @@ class PoseAutoencoder(nn.Module):
     def __init__(self, n_features: int, hidden: int = 200, latent: int = 64, tied: bool = True):
         super().__init__()
         self.tied = bool(tied)
-        self.enc1, self.enc2, self.enc3 = nn.Linear(n_features, hidden), nn.Linear(hidden, hidden), nn.Linear(hidden, latent)
+        self.enc1, self.enc2 = nn.Linear(n_features, hidden), nn.Linear(hidden, hidden)
+        self.enc3 = nn.Linear(hidden, latent)
         if not self.tied:
-            self.dec1, self.dec2, self.dec3 = nn.Linear(latent, hidden), nn.Linear(hidden, hidden), nn.Linear(hidden, n_features)
+            self.dec1, self.dec2 = nn.Linear(latent, hidden), nn.Linear(hidden, hidden)
+            self.dec3 = nn.Linear(hidden, n_features)
 
     def encode(self, x):
         """z = W3 relu(W2 relu(W1 x + b1) + b2) + b3."""
@@ -164,7 +166,8 @@ class AESolvers:
     def new_solver(self, group: str, seed: int = 0) -> LatentSolver:
         """An untrained solver for a :data:`GROUPS` entry (seeded initial weights)."""
         torch.manual_seed(seed)
-        return LatentSolver(self.config.latent, len(GROUPS[group]), self.config.solver_hidden, self.config.solver_layers)
+        c = self.config
+        return LatentSolver(c.latent, len(GROUPS[group]), c.solver_hidden, c.solver_layers)
 
     def columns(self, group: str) -> np.ndarray:
         """Feature columns of a group's joints, shape (3K,)."""

@@ -132,7 +132,8 @@ def run_studies(motions=None, model: AESolvers | None = None, out=None, seed: in
     model = load_model(skeleton=motions.skeleton) if model is None else model
     t0 = time.perf_counter()
     result = {"data": motions.source.split(" (")[0], "seed": seed,
-              "command": f"posekit train ae-studies --seed {seed}" + (f" --ae-epochs {ae_epochs}" if ae_epochs != 40 else ""),
+              "command": f"posekit train ae-studies --seed {seed}"
+                         + (f" --ae-epochs {ae_epochs}" if ae_epochs != 40 else ""),
               "autoencoder": autoencoder_study(motions, epochs=ae_epochs, seed=seed, progress=progress),
               "k": k_study(model, motions, seed=seed, progress=progress),
               "chain": chain_study(model, motions, seed=seed)}

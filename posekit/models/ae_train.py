@@ -77,7 +77,8 @@ def solver_loss(n_features: int, columns, k: float):
 
 def train_autoencoder(model: AESolvers, x, x_val, *, epochs: int, lr: float = 1e-4, batch: int = 256, seed: int = 0,
                       progress: bool = True):
-    """Fit ``model.ae`` on z-scored poses ``x`` (N, F) (validation ``x_val``); returns :class:`~posekit.learn.Curves`."""
+    """Fit ``model.ae`` on z-scored poses ``x`` (N, F), validation ``x_val``; returns
+    :class:`~posekit.learn.Curves`."""
     return fit(model.ae, lambda ae, xb: torch.mean((ae(xb) - xb) ** 2), (x,), (x_val,), epochs=epochs, batch=batch,
                lr=lr, seed=seed, progress=progress, desc="autoencoder")
 

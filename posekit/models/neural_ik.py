@@ -143,8 +143,10 @@ class NeuralIKSolver(SolverBase):
         self._solv = {g: typed(v) for g, v in n.solvers.items()}
         self._chnd = {g: typed(v) for g, v in n.chained.items()}
 
-    def _predict_one(self, start_pos, joints, targets):
-        """:meth:`predict` of one problem (start (J, 3), targets (K, 3)) by the compiled kernels."""
+    def predict_one(self, start_pos, joints, targets):
+        """:meth:`predict` of one problem — start (J, 3), joints (K,), targets (K, 3), metres — by the compiled
+        kernels of :mod:`posekit.models.ae_kernel` (what ``solve`` runs for a single problem); returns
+        ``(pos (J, 3), raw (J, 3), clamped (K,))``."""
         start_pos = np.ascontiguousarray(start_pos, dtype=float)
         targets = np.ascontiguousarray(targets, dtype=float)
         plan = self.plan(joints)
@@ -266,7 +268,7 @@ class NeuralIKSolver(SolverBase):
             groups.setdefault(tuple(int(j) for j in r.joints), []).append(i)
         for joints, idx in groups.items():
             if len(idx) == 1:
-                pos, raw, clamped = (a[None] for a in self._predict_one(starts[idx[0]].global_pos, joints,
+                pos, raw, clamped = (a[None] for a in self.predict_one(starts[idx[0]].global_pos, joints,
                                                                          resolved[idx[0]].position))
             else:
                 start = np.stack([np.asarray(starts[i].global_pos, dtype=float) for i in idx])
