@@ -289,14 +289,18 @@ def run(motions, solvers=("fabrik", "ccd", "dls"), effector_sets=("2", "5"), n_c
     if natural:
         nat = NaturalnessIndex(s, motions.global_pos[first.train_frames], seed=seed)
         floor = nat.distance(first.target_pos)  # the targets are the same under every start condition
-    built = {}
+    built, skipped = {}, {}
     for name in solvers:
         try:
             built[name] = make_solver(name, s)
         except ValueError as err:
             if not every:  # asked for by name: its refusal (e.g. weights made for another skeleton) is the answer
                 raise
-            warnings.warn(f"bench ik: skipping solver {name!r} on {first.source!r}: {err}", UserWarning, stacklevel=2)
+            skipped[name] = str(err)
+    if skipped:
+        first_reason = next(iter(skipped.values()))
+        warnings.warn(f"bench ik: skipping solver(s) {', '.join(map(repr, skipped))} on {first.source!r} "
+                      f"({first_reason[:200]}{'...' if len(first_reason) > 200 else ''})", UserWarning, stacklevel=2)
     solvers = tuple(built)
     jobs = [(st, name, e) for st in starts for name in solvers for e in effector_sets]
     bar = None
