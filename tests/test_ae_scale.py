@@ -129,3 +129,11 @@ def test_benchmark_registered_and_skipped_start(shared_data, monkeypatch, tmp_pa
     text = b.render(rows, args)
     assert "Start: rest" in text and "neural-fabrik" in text and "other-clip skipped" in text
     assert max(len(line) for line in text.splitlines()) <= 100
+
+
+def test_out_argument_writes_the_default_file_unless_told_not_to():
+    from posekit.bench.ae_scale import out_argument
+
+    assert out_argument(None) is None  # run_scale: the default data_samples/results file
+    assert out_argument("none") is False and out_argument("False") is False and out_argument("-") is False
+    assert out_argument("x.json") == "x.json"

@@ -308,11 +308,19 @@ TABLES = [
 """The tables ``posekit bench ae-scale`` prints per start condition: (title, JSON keys)."""
 
 
+def out_argument(value):
+    """``--out`` as :func:`run_scale` takes it: None (not given) -> the default file; ``none``, ``false`` or
+    ``-`` -> False (write nothing); anything else -> that path."""
+    if value is not None and str(value).lower() in ("false", "none", "-"):
+        return False
+    return value
+
+
 def _cli_run(args) -> list[dict]:
     import sys
 
     show = not args.json and sys.stderr.isatty()
-    out = False if str(args.out).lower() in ("false", "none", "-") else args.out
+    out = out_argument(args.out)
     result = run_scale(args.protocol, n_cases=args.cases, seed=args.seed, out=out, progress=show, limit=args.limit,
                        step=args.step)
     return result["rows"]
