@@ -69,13 +69,13 @@ from __future__ import annotations
 
 import json
 import time
-from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 
 from ..data.bandai_full import CROSS_VAL_FRACTION, PROTOCOLS, describe_motions, scale_motions
 from ..data.cases import START_CONDITIONS, build_cases
+from ..ik.api import EFFECTOR_SETS
 from ..paths import samples_dir
 from .ik import TABLE_LABELS
 from .ik import run as ik_run
@@ -103,21 +103,6 @@ DEFAULT_STARTS = ("rest", "same-clip", "other-clip")
 
 
 # ------------------------------------------------------------------------------------------------ run
-@contextmanager
-def _torch_threads(n):
-    import torch
-
-    if n is None:
-        yield
-        return
-    before = torch.get_num_threads()
-    torch.set_num_threads(int(n))
-    try:
-        yield
-    finally:
-        torch.set_num_threads(before)
-
-
 def _register(model) -> dict:
     """Register the in-memory model under temporary names; returns {temporary name: row name}."""
     from ..ik.registry import register
@@ -212,6 +197,8 @@ def run_scale(protocol: str = "full", n_cases: int = 1000, seed: int = 0, out=No
     ValueError
         Bad arguments (see :func:`scale_motions`), or every start condition refused.
     """
+    from ..learn.threads import limit_threads
+    from ..models.ae_solvers import chain_groups
     from ..models.ae_train import DEFAULTS, train_ae_solvers
 
     bad = set(train_settings) - set(DEFAULTS)
@@ -233,7 +220,7 @@ def run_scale(protocol: str = "full", n_cases: int = 1000, seed: int = 0, out=No
         raise ValueError(f"every start condition was refused on {motions.source!r}: {skipped}")
 
     t1 = time.perf_counter()
-    with _torch_threads(threads):
+    with limit_threads(threads):
         model, report = train_ae_solvers(motions, seed=seed, out=False, progress=progress,
                                          data_label=f"bandai-{protocol}", **train_settings)
     t_train = time.perf_counter() - t1
@@ -245,7 +232,8 @@ def run_scale(protocol: str = "full", n_cases: int = 1000, seed: int = 0, out=No
     kept = []
     for r in rows:
         r["method"] = names.get(r["method"], r["method"])
-        if VARIANTS.get(r["method"], {}).get("chain") and _chain_stages(r["effectors"]) < 2:
+        one_stage = len(chain_groups(EFFECTOR_SETS[r["effectors"]])) < 2
+        if VARIANTS.get(r["method"], {}).get("chain") and one_stage:
             continue  # a one-stage chain is the plain solver: not a row (as in posekit bench ik)
         r["protocol"] = protocol
         kept.append(r)
@@ -284,15 +272,6 @@ def run_scale(protocol: str = "full", n_cases: int = 1000, seed: int = 0, out=No
         result["out"] = str(path)
         path.write_text(json.dumps(result, indent=1, allow_nan=True) + "\n")
     return result
-
-
-def _chain_stages(effectors: str) -> int:
-    """How many stages of the chain (hands -> feet -> head) an effector set needs."""
-    from ..ik.api import EFFECTOR_SETS
-    from ..models.ae_solvers import CHAIN, GROUPS
-
-    have = set(EFFECTOR_SETS[effectors])
-    return sum(set(GROUPS[g]) <= have for g in CHAIN)
 
 
 # ------------------------------------------------------------------------------------------------ the CLI

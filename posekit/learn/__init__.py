@@ -6,7 +6,7 @@ solvers of lessons 03-05 reuse it. ``posekit train --list`` names every model tr
 """
 
 from .checkpoint import FORMAT, FORMAT_VERSION, load_checkpoint, save_checkpoint
-from .threads import single_thread
+from .threads import limit_threads, single_thread
 from .train import Curves, fit
 
-__all__ = ["save_checkpoint", "load_checkpoint", "FORMAT", "FORMAT_VERSION", "fit", "Curves", "single_thread"]
+__all__ = ["save_checkpoint", "load_checkpoint", "FORMAT", "FORMAT_VERSION", "fit", "Curves", "single_thread", "limit_threads"]

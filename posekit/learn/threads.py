@@ -9,26 +9,35 @@ from __future__ import annotations
 
 from contextlib import contextmanager
 
-__all__ = ["single_thread"]
+__all__ = ["single_thread", "limit_threads"]
 
 
 @contextmanager
+def limit_threads(n: int | None):
+    """Run the ``with`` block on at most ``n`` threads: BLAS/OpenMP pools (``threadpoolctl``) and torch's
+    intra-op pool (``torch.set_num_threads``); both are restored afterwards, also on error. ``None``
+    changes nothing."""
+    if n is None:
+        yield
+        return
+    import torch
+    from threadpoolctl import threadpool_limits
+
+    threads = torch.get_num_threads()
+    torch.set_num_threads(int(n))
+    try:
+        with threadpool_limits(int(n)):
+            yield
+    finally:
+        torch.set_num_threads(threads)
+
+
 def single_thread():
-    """Run the ``with`` block on one thread: BLAS/OpenMP pools (``threadpoolctl``) and torch's
-    intra-op pool (``torch.set_num_threads(1)``); both are restored afterwards, also on error.
+    """Run the ``with`` block on one thread (:func:`limit_threads` with 1).
 
     Examples
     --------
     >>> with single_thread():
     ...     y = net.predict(X)            # doctest: +SKIP
     """
-    import torch
-    from threadpoolctl import threadpool_limits
-
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
-    try:
-        with threadpool_limits(1):
-            yield
-    finally:
-        torch.set_num_threads(threads)
+    return limit_threads(1)

@@ -36,7 +36,7 @@ from ..data.dataset import NormStats
 from ..learn import load_checkpoint, save_checkpoint
 from .ae_data import feature_columns
 
-__all__ = ["KIND", "GROUPS", "CHAIN", "AEConfig", "PoseAutoencoder", "LatentSolver", "AESolvers", "NumpyAESolvers"]
+__all__ = ["KIND", "GROUPS", "CHAIN", "chain_groups", "stages", "AEConfig", "PoseAutoencoder", "LatentSolver", "AESolvers", "NumpyAESolvers"]
 
 KIND = "ae_solvers"
 
@@ -50,6 +50,24 @@ GROUPS = {
 
 CHAIN = ("hands", "feet", "head")
 """The order in which chained solvers run (Sec. 3.5)."""
+
+
+def chain_groups(joints, available=tuple(GROUPS)) -> list:
+    """The groups of :data:`CHAIN` (those in ``available``) that the joint set ``joints`` (roles) covers,
+    in chain order: the stages of a chained solve (Sec. 3.5)."""
+    have = set(joints)
+    return [g for g in CHAIN if g in available and set(GROUPS[g]) <= have]
+
+
+def stages(groups, chain=None, chain_aware: bool = True, chained=()) -> list:
+    """The stages of a solve: ``[(group, use its chaining-aware copy)]``.
+
+    ``groups`` are the joint sets with targets. One group and no ``chain``: its own solver. Otherwise the
+    chain of Sec. 3.5 in ``chain`` (default :data:`CHAIN`) order; with ``chain_aware`` every stage after
+    the first runs its chaining-aware copy when there is one (``chained``)."""
+    groups = list(groups)
+    order = [g for g in (chain or CHAIN) if g in groups] if len(groups) > 1 or chain else groups
+    return [(g, bool(chain_aware and i > 0 and g in chained)) for i, g in enumerate(order)]
 
 
 @dataclass
@@ -179,10 +197,8 @@ class AESolvers:
         One group: ``S_t(z, p_t)``. Several, or ``chain``: the chain of Sec. 3.5 in :data:`CHAIN` order,
         with the chaining-aware copies for every stage after the first when ``chain_aware``.
         """
-        order = [g for g in (chain or CHAIN) if g in targets] if len(targets) > 1 or chain else list(targets)
-        for i, g in enumerate(order):
-            net = self.chained[g] if chain_aware and i > 0 and g in self.chained else self.solvers[g]
-            z = net(z, targets[g])
+        for g, aware in stages(targets, chain, chain_aware, self.chained):
+            z = (self.chained if aware else self.solvers)[g](z, targets[g])
         return z
 
     def n_parameters(self, groups=()) -> int:
@@ -290,8 +306,7 @@ class NumpyAESolvers:
 
     def latent(self, z, targets: dict, chain=None, chain_aware: bool = True):
         """:meth:`AESolvers.latent` in numpy."""
-        order = [g for g in (chain or CHAIN) if g in targets] if len(targets) > 1 or chain else list(targets)
-        for i, g in enumerate(order):
-            net = self.chained[g] if chain_aware and i > 0 and g in self.chained else self.solvers[g]
-            z = self._mlp(net, np.concatenate([z, np.asarray(targets[g], dtype=np.float32)], axis=-1))
+        for g, aware in stages(targets, chain, chain_aware, self.chained):
+            z = self._mlp((self.chained if aware else self.solvers)[g],
+                          np.concatenate([z, np.asarray(targets[g], dtype=np.float32)], axis=-1))
         return z

@@ -34,7 +34,7 @@ from ..ik.fix_bones import fix_bone_lengths
 from ..ik.registry import make_solver, register
 from . import ae_kernel as K
 from .ae_data import feature_columns, pose_vectors, poses_from_vectors, targets_in_root_frame
-from .ae_solvers import CHAIN, GROUPS, AESolvers
+from .ae_solvers import GROUPS, AESolvers, chain_groups, stages
 from .ae_train import weights_path
 
 __all__ = ["NeuralIKSolver", "POSTS", "load_model"]
@@ -155,21 +155,30 @@ class NeuralIKSolver(SolverBase):
         K.features(start_pos, self._body, ox, oz, c, sn, self._mean64, self._std64, x)
         z = K.mlp(x, *self._enc, False)
         clamped = np.zeros(len(joints), dtype=np.bool_)
-        for i, (g, order) in enumerate(plan):
-            v = np.empty(3 * len(order), np.float32)
-            cl = np.zeros(len(order), dtype=np.bool_)
-            K.targets(targets[order], ox, oz, c, sn, *self._tnorm[g], v, cl)
-            clamped[order] |= cl
-            chained = (self.chain or len(plan) > 1) and self.chain_aware and i > 0 and g in self._chnd
-            z = K.mlp(np.concatenate((z, v)), *(self._chnd[g] if chained else self._solv[g]), False)
+        order = dict(plan)
+        for g, aware in self._stages(plan):
+            v = np.empty(3 * len(order[g]), np.float32)
+            cl = np.zeros(len(order[g]), dtype=np.bool_)
+            K.targets(targets[order[g]], ox, oz, c, sn, *self._tnorm[g], v, cl)
+            clamped[order[g]] |= cl
+            z = K.mlp(np.concatenate((z, v)), *(self._chnd if aware else self._solv)[g], False)
         xo = K.mlp(z, *self._dec, False)
         raw = K.pose_from_features(xo, self._body, self._chain, self._chain_off, self.skeleton.n_joints, ox, oz, c, sn,
                                    self._mean64, self._std64)
+        return self._post(raw, joints, targets), raw, clamped
+
+    def _stages(self, plan) -> list:
+        """``[(group, use its chaining-aware copy)]`` of a plan (:func:`posekit.models.ae_solvers.stages`)."""
+        return stages([g for g, _ in plan], chain=[g for g, _ in plan] if self.chain else None,
+                      chain_aware=self.chain_aware, chained=self.model.chained)
+
+    def _post(self, raw, joints, targets):
+        """Post-processing (module docstring) of decoded poses (..., J, 3) for targets (..., K, 3)."""
         if self.post == "none":
-            return raw, raw, clamped
+            return raw
         snapped = raw.copy()
-        snapped[list(joints)] = targets
-        return fix_bone_lengths(self.skeleton, snapped), raw, clamped
+        snapped[..., list(joints), :] = targets
+        return fix_bone_lengths(self.skeleton, snapped)
 
     def sizes_kb(self, joints) -> dict:
         """Float32 size of what a solve for ``joints`` runs, kB: ``model_kb`` (autoencoder + solver(s),
@@ -187,23 +196,20 @@ class NeuralIKSolver(SolverBase):
         s, have = self.skeleton, set(key)
         if len(have) != len(key):
             raise ValueError("neural solver: two effectors on one joint")
-        stages = []
+        found = []
         if not self.chain and frozenset(key) in self._groups:
-            stages = [self._groups[frozenset(key)]]
+            found = [self._groups[frozenset(key)]]
         elif self.chain:
-            for g in CHAIN:
-                js = set(s.indices(GROUPS[g]).tolist())
-                if g in self.model.solvers and js <= have:
-                    stages.append(g)
-                    have -= js
-            if have:
-                stages = []
-        if not stages:
+            roles = {r for r in s.roles if s.index(r) in have}
+            groups = chain_groups(roles, self.model.solvers)
+            covered = {int(j) for g in groups for j in s.indices(GROUPS[g])}
+            found = groups if covered == have else []
+        if not found:
             sets = "; ".join(f"{g}: {', '.join(GROUPS[g])}" for g in self.model.solvers)
             how = "a union of hands, feet and head (chain)" if self.chain else "exactly one of them"
             raise ValueError(f"neural solver {self.name!r} has solvers for these joint sets — {sets}; the effectors "
                              f"are on {', '.join(s.names[j] for j in key)}, which is not {how}")
-        order = [(g, [key.index(int(j)) for j in s.indices(GROUPS[g])]) for g in stages]
+        order = [(g, [key.index(int(j)) for j in s.indices(GROUPS[g])]) for g in found]
         self._plans[key] = order
         return order
 
@@ -246,17 +252,10 @@ class NeuralIKSolver(SolverBase):
                     clamped[:, order] |= out.reshape(B, -1, 3).any(-1)
                     v = np.clip(v, lo, hi)
             p[g] = v
-        if len(plan) == 1 and not self.chain:
-            z = self.net.latent(z, p)
-        else:
-            z = self.net.latent(z, p, chain=[g for g, _ in plan], chain_aware=self.chain_aware)
+        z = self.net.latent(z, p, chain=[g for g, _ in plan] if self.chain else None, chain_aware=self.chain_aware)
         xo = self.net.decode(z) * self.std + self.mean
         raw = poses_from_vectors(s, xo, origin, angle)
-        if self.post == "none":
-            return raw, raw, clamped
-        snapped = raw.copy()
-        snapped[:, list(joints)] = targets
-        return fix_bone_lengths(s, snapped), raw, clamped
+        return self._post(raw, joints, targets), raw, clamped
 
     def _solve(self, start, resolved):
         return self._solve_many([start], [resolved])[0]
@@ -274,8 +273,9 @@ class NeuralIKSolver(SolverBase):
                 start = np.stack([np.asarray(starts[i].global_pos, dtype=float) for i in idx])
                 targets = np.stack([resolved[i].position for i in idx])
                 pos, raw, clamped = self.predict(start, joints, targets)
+            names = [g for g, _ in self.plan(joints)]
             for row, i in enumerate(idx):
-                info = {"stages": [g for g, _ in self.plan(joints)], "post": self.post}
+                info = {"stages": list(names), "post": self.post}
                 if clamped[row].any():
                     info["out_of_range"] = [self.skeleton.names[j] for j, c in zip(joints, clamped[row]) if c]
                 iters = 1
