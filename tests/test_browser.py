@@ -9,6 +9,7 @@ pointed at ``/usr/bin/chromium`` (it cannot download its own browser here).
 from __future__ import annotations
 
 import io
+import json
 import os
 import shutil
 import socket
@@ -112,13 +113,67 @@ def _wait_for(pred, timeout, what):
     pytest.fail(f"timed out after {timeout} s waiting for {what}")
 
 
-def _open_and_run_all(page, url, token, notebook):
+# a prompt "[*]:": cells still queued or running
+_RUNNING = """() => [...document.querySelectorAll('.jp-Notebook:not(.lm-mod-hidden) .jp-InputPrompt')]
+    .some(p => p.textContent.includes('[*]'))"""
+
+
+def _diagnose(page, url, token, work, what):
+    """Everything that says why a run stalled: the stderr/error outputs in the page, the kernel's state
+    on the server, the server log's tail; a screenshot lands in the test's work folder."""
+    try:
+        page.screenshot(path=str(work / "stalled.png"), full_page=True)
+    except Exception:  # noqa: BLE001 - diagnostics must not hide the failure
+        pass
+    try:
+        errors = page.locator(".jp-OutputArea-output[data-mime-type='application/vnd.jupyter.stderr']")
+        texts = [t[-600:] for t in errors.all_inner_texts()][-3:]
+    except Exception as exc:  # noqa: BLE001
+        texts = [f"(could not read outputs: {exc})"]
+    try:
+        with urllib.request.urlopen(f"{url}/api/sessions?token={token}", timeout=5) as r:
+            sessions = [(s["path"], s["kernel"]["execution_state"]) for s in json.load(r)]
+    except Exception as exc:  # noqa: BLE001
+        sessions = f"(could not read sessions: {exc})"
+    log = (work / "lab.log").read_text(errors="replace")[-1500:] if (work / "lab.log").exists() else ""
+    return (f"{what}\nkernel sessions: {sessions}\nstderr/error outputs (last 3): {texts}\n"
+            f"lab.log tail:\n{log}\nscreenshot: {work / 'stalled.png'}")
+
+
+def _open_and_run_all(page, url, token, work, notebook):
     page.goto(f"{url}/lab/tree/{notebook}?reset&token={token}", timeout=120_000)
     page.wait_for_selector(".jp-Notebook:visible .jp-Cell", timeout=120_000)
     page.wait_for_selector(".jp-Notebook-ExecutionIndicator[data-status='idle'], "
                            "#jp-main-statusbar :text('Idle')", timeout=120_000)
-    page.locator(".lm-MenuBar-itemLabel", has_text="Run").first.click()
-    page.locator(".lm-Menu-itemLabel", has_text="Run All Cells").first.click()
+    # Run All, then check that the kernel took the cells (a "[*]" prompt: the saved outputs already
+    # carry numbers); a click lost while the page settles is repeated, not waited on for minutes
+    for _ in range(3):
+        page.locator(".lm-MenuBar-itemLabel", has_text="Run").first.click()
+        page.locator(".lm-Menu-itemLabel", has_text="Run All Cells").first.click()
+        try:
+            page.wait_for_function(_RUNNING, timeout=60_000, polling="raf")
+            return
+        except Exception:  # noqa: BLE001 - playwright's TimeoutError; try the menu again
+            page.keyboard.press("Escape")
+    pytest.fail(_diagnose(page, url, token, work, f"{notebook}: Run All Cells never started the kernel"))
+
+
+def _wait_visible(page, locator, timeout, url, token, work, what):
+    """Wait for a notebook's output to appear while its cells run; fail at once, with the reason, if the
+    run stops (an error in an earlier cell) or the time runs out."""
+    t0 = time.time()
+    idle_since = None
+    while time.time() - t0 < timeout:
+        if locator.count() and locator.first.is_visible():
+            return
+        if page.evaluate(_RUNNING):
+            idle_since = None
+        else:  # nothing queued: give the front end a moment to render the last outputs
+            idle_since = idle_since or time.time()
+            if time.time() - idle_since > 20:
+                pytest.fail(_diagnose(page, url, token, work, f"the cells stopped running without {what}"))
+        time.sleep(1)
+    pytest.fail(_diagnose(page, url, token, work, f"timed out after {timeout} s waiting for {what}"))
 
 
 def _drag(page, handle, dx):
@@ -133,11 +188,11 @@ def test_viewer_renders_and_slider_moves_joint(lab, chromium):
     url, token, work = lab
     page = chromium.new_page(viewport={"width": 1400, "height": 1000})
     try:
-        _open_and_run_all(page, url, token, NOTEBOOK)
+        _open_and_run_all(page, url, token, work, NOTEBOOK)
 
         # the cell with the elbow slider: its viewer, slider and readout
         slider_label = page.get_by_text("left_elbow bend", exact=True)
-        slider_label.wait_for(timeout=180_000)
+        _wait_visible(page, slider_label, 300, url, token, work, "the elbow slider")
         cell = page.locator(".jp-CodeCell", has=slider_label)
         canvas = cell.locator("canvas").first
         canvas.scroll_into_view_if_needed()
@@ -189,9 +244,9 @@ def test_solvers_solve_live_side_by_side(lab, chromium, notebook, views):
     url, token, work = lab
     page = chromium.new_page(viewport={"width": 1500, "height": 1100})
     try:
-        _open_and_run_all(page, url, token, notebook)
+        _open_and_run_all(page, url, token, work, notebook)
         labels = page.locator(".widget-html-content", has_text="worst effector")
-        labels.first.wait_for(timeout=240_000)
+        _wait_visible(page, labels, 300, url, token, work, "the solver panel")
         cell = page.locator(".jp-CodeCell", has=labels.first)
         cell.scroll_into_view_if_needed()
         canvases = cell.locator("canvas")
