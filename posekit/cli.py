@@ -24,6 +24,8 @@
     Makes the inverse-rig network weights shipped in ``data_samples/weights`` (seeded).
 ``posekit train ae-solvers [--seed S] [--out FILE] [--ae-epochs N] ...``
     Makes lesson 03's autoencoder and latent-space solvers, ``data_samples/weights/ae_solvers.pt``.
+``posekit train aegan [--seed S] [--out FILE] [--steps N] [--dense] ...``
+    Makes lesson 04's AE-GAN (encoder, generator, two discriminators), ``data_samples/weights/aegan.pt``.
 
 Errors in input files print ``file:line: message`` and exit with status 2.
 """
@@ -166,6 +168,10 @@ _TRAINABLE = {
     "ae-studies": ("data_samples/weights/ae_solvers_studies.json",
                    "lesson 03's measured choices: autoencoder size and decoder, the loss weight k, chaining",
                    "lesson 03 (03_autoencoder_solvers.ipynb)", "about 9 minutes on one core (9 min 22 s measured)"),
+    "aegan": ("data_samples/weights/aegan.pt (CC BY-NC 4.0, like the Bandai mini set it is trained on)",
+              "AE-GAN pose latent space with structured prediction layers (Victor & Meyer, JFIG 2020)",
+              "lesson 04 (04_aegan_latent_space.ipynb), the latent-opt solvers, posekit bench ik",
+              "AEGAN_TIME"),
 }
 
 
@@ -226,6 +232,28 @@ def _train_ae_studies(args) -> int:
     for r in res["autoencoder"]:
         print(f"autoencoder d={r['latent']:<3} {r['decoder']:<7} held-out reconstruction {r['test_mm']:.1f} mm")
     print(f"wrote {out} in {res['seconds']:.0f} s")
+    return 0
+
+
+def _train_aegan(args) -> int:
+    from .data.sources import open_dataset
+    from .models.aegan import AEGANConfig
+    from .models.aegan_train import DEFAULTS, train_aegan, weights_path
+
+    settings = {k: getattr(args, k) for k in DEFAULTS if getattr(args, k) != DEFAULTS[k]}
+    motions = open_dataset(args.data, progress=sys.stderr.isatty())
+    out = Path(args.out) if args.out else None
+    from .data.metrics import body_joints
+
+    config = AEGANConfig(len(body_joints(motions.skeleton)), structured=not args.dense)
+    model, report = train_aegan(motions, seed=args.seed, out=out, config=config, progress=sys.stderr.isatty(),
+                                **settings)
+    path = out or weights_path()
+    c = report["curves"]
+    print(f"trained {report['steps']} steps in {report['seconds']:.0f} s; held-out reconstruction "
+          f"{report['val_rec_mm']:.1f} mm; last interval: pose discriminator accuracy {c['acc_x'][-1]:.2f}, "
+          f"latent discriminator accuracy {c['acc_z'][-1]:.2f}")
+    print(f"wrote {path} ({path.stat().st_size / 1e3:.0f} kB)")
     return 0
 
 
@@ -307,6 +335,23 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="(default: 0)")
     p.add_argument("--out", default=None, help="JSON file (default data_samples/weights/ae_solvers_studies.json)")
     p.set_defaults(fn=_train_ae_studies)
+    from .models.aegan_train import DEFAULTS as GAN
+
+    p = tsub.add_parser("aegan", help="AE-GAN pose latent space with SPL layers (lesson 04, Victor & Meyer, JFIG 2020)")
+    p.add_argument("--data", default="bandai-mini", help="training data: bandai-mini (default, its own split), "
+                   "or any posekit data set name / path (split by clip)")
+    for key, what in (("steps", "training steps"), ("batch", "pose discriminator samples per step (encoder/"
+                      "generator see 2x, the latent discriminator 3x)"),
+                      ("lr_dx", "pose discriminator learning rate (Adam)"), ("lr", "the other networks' learning rate"),
+                      ("w_x", "weight of the pose reconstruction loss"), ("w_z", "weight of the code reconstruction "
+                      "loss"), ("smooth", "label of real samples (one-sided label smoothing)"),
+                      ("beta1", "Adam beta1"), ("log_every", "steps per point of the loss curves")):
+        p.add_argument("--" + key.replace("_", "-"), dest=key, type=type(GAN[key]), default=GAN[key],
+                       help=f"{what} (default: {GAN[key]})")
+    p.add_argument("--dense", action="store_true", help="dense layers of equal width instead of SPLs (a comparison)")
+    p.add_argument("--seed", type=int, default=0, help="(default: 0)")
+    p.add_argument("--out", default=None, help="checkpoint file (default data_samples/weights/aegan.pt)")
+    p.set_defaults(fn=_train_aegan)
     return parser
 
 

@@ -177,6 +177,7 @@ def _load_builtin():
     try:
         from . import ik_methods  # noqa: F401  (registers the baseline, batched FABRIK and ikpy)
         from . import ik_neural  # noqa: F401  (lesson 03: neural variants and batched neural throughput)
+        from . import ik_latent  # noqa: F401  (lesson 04: latent optimisation's variants and batched throughput)
     finally:
         _loading = False
 
