@@ -203,3 +203,55 @@ def test_bench_ik_runs_latent_rows(mini):
     row = next(r for r in rows if r["method"] == "latent-opt")
     assert row["model_kb"] > 0 and row["solver_kb"] == 0
     assert all(r["solves_per_s"] > 0 for r in rows if "batched" in r["method"])
+
+
+def test_compiled_path_matches_numpy(mini, shipped):
+    """The numba kernels of one problem compute what the batched numpy path computes: Eq. (6) and its
+    gradient to float32 rounding; the optimisers' iterations and results agree in distribution (an
+    iterative solve amplifies rounding, so a rare problem may settle in another local minimum)."""
+    from posekit.models import latent_kernel as LK
+
+    solver = LatentOptSolver(mini.skeleton, model=shipped, post="none")
+    cases = build_cases(mini, 40, 0, "other-clip")
+    joints = mini.skeleton.indices(EFFECTOR_SETS["5"])
+    prob = _problem(solver, cases, joints)
+    gen, work = LK.flatten_generator(solver.net), LK.workspace(LK.flatten_generator(solver.net))
+    z = np.random.default_rng(0).uniform(-1, 1, (5, 32)).astype(np.float32)
+    f_np, err_np, g_np = prob.loss(solver.net, z, np.arange(5))
+    for i in range(5):
+        err, g = np.zeros(len(joints)), np.zeros(32, np.float32)
+        f = LK.loss_grad(z[i], prob.columns, prob.target[i], prob.scale, *gen, work, err, g)
+        assert np.isclose(f, f_np[i], rtol=1e-4) and np.allclose(err, err_np[i], atol=1e-6)
+        assert np.allclose(g, g_np[i], rtol=1e-3, atol=1e-5 * np.abs(g_np[i]).max())
+    pos_b, _, it_b, _ = solver.predict(cases.start_pos, joints, cases.target_pos[:, joints])
+    one = [solver.predict_one(cases.start_pos[i], joints, cases.target_pos[i, joints]) for i in range(len(cases))]
+    pos_s, it_s = np.stack([o[0] for o in one]), np.array([o[2] for o in one])
+    eff = lambda p: np.median(np.linalg.norm(p[:, joints] - cases.target_pos[:, joints], axis=-1).max(-1))  # noqa: E731
+    assert abs(eff(pos_s) - eff(pos_b)) < 2e-3 and abs(np.median(it_s) - np.median(it_b)) <= 3
+    assert np.median(np.abs(pos_s - pos_b).max((1, 2))) < 0.01
+
+
+def test_checkers_accept_a_right_answer_and_reject_a_wrong_one(capsys):
+    from posekit.exercises import check_generator_loss, check_latent_loss, check_tree_depths
+
+    def depths(parents):
+        out = []
+        for j in range(len(parents)):
+            k, n = parents[j], 0
+            while k >= 0:
+                k, n = parents[k], n + 1
+            out.append(n)
+        return np.array(out)
+
+    def loss(x, t, cols, sc):
+        diff = (x[cols] - t) * sc
+        g = np.zeros_like(x)
+        g[cols] = 2 * diff * sc
+        return (diff ** 2).sum(), g
+
+    assert check_tree_depths(depths) and check_latent_loss(loss)
+    assert check_generator_loss(lambda lg: np.mean(np.logaddexp(0.0, -lg)))
+    assert not check_tree_depths(lambda p: np.zeros(len(p)))
+    assert not check_latent_loss(lambda x, t, c, s: (np.sum(((x[c] - t)) ** 2), np.zeros_like(x)))  # forgot metres
+    assert not check_generator_loss(lambda lg: np.mean(np.log1p(-1 / (1 + np.exp(-lg)))))  # the saturating form
+    assert "not log(1 - D(fake))" in capsys.readouterr().out

@@ -28,12 +28,24 @@ ROOT = Path(__file__).resolve().parent.parent
 NOTEBOOK = "00_skeletons_and_poses.ipynb"
 PANEL_NOTEBOOK = "01_fabrik.ipynb"
 NEURAL_NOTEBOOK = "03_autoencoder_solvers.ipynb"
+LATENT_NOTEBOOK = "04_aegan_latent_space.ipynb"
+LATENT_CELLS = ("motions = load_bandai_mini()", "cases = build_cases(", "SolverPanel(")
+"""Lesson 04's cells the browser test runs: set-up, the cases, the panel (its benchmark takes minutes)."""
 CHROMIUM = os.environ.get("POSEKIT_CHROMIUM", "/usr/bin/chromium")
 FLAGS = ["--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader", "--disable-background-networking",
          "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-quic"]
 SAMPLE_JOINTS = {"root", "chest", "neck", "head"} | {f"{s}_{j}" for s in ("left", "right") for j in (
     "shoulder", "elbow", "wrist", "hip", "knee", "ankle", "toe")}
 BACKGROUND = np.array([0xF7, 0xF7, 0xF2])
+
+
+def _trimmed(src, dst, keep):
+    """A copy of a notebook with only the code cells that contain one of ``keep`` (in order)."""
+    nb = json.loads(Path(src).read_text())
+    nb["cells"] = [c for c in nb["cells"] if c["cell_type"] == "code" and any(k in "".join(c["source"]) for k in keep)]
+    if len(nb["cells"]) != len(keep):
+        pytest.fail(f"{Path(src).name}: expected one code cell for each of {keep}, found {len(nb['cells'])}")
+    Path(dst).write_text(json.dumps(nb))
 
 
 def _free_port():
@@ -49,6 +61,7 @@ def lab(tmp_path_factory):
     work = tmp_path_factory.mktemp("lab")
     for nb in (NOTEBOOK, PANEL_NOTEBOOK, NEURAL_NOTEBOOK):  # copies: never let autosave touch the repo's notebooks
         shutil.copy(ROOT / "notebooks" / nb, work / nb)
+    _trimmed(ROOT / "notebooks" / LATENT_NOTEBOOK, work / LATENT_NOTEBOOK, LATENT_CELLS)
     port, token = _free_port(), "posekit-test"
     cmd = [sys.executable, "-m", "jupyter", "lab", "--no-browser", f"--port={port}", "--ip=127.0.0.1",
            f"--ServerApp.token={token}", f"--ServerApp.root_dir={work}", "--ServerApp.open_browser=False",
@@ -236,11 +249,11 @@ def test_viewer_renders_and_slider_moves_joint(lab, chromium):
         page.close()
 
 
-@pytest.mark.parametrize("notebook, views", [(PANEL_NOTEBOOK, 3), (NEURAL_NOTEBOOK, 2)])
+@pytest.mark.parametrize("notebook, views", [(PANEL_NOTEBOOK, 3), (NEURAL_NOTEBOOK, 2), (LATENT_NOTEBOOK, 2)])
 def test_solvers_solve_live_side_by_side(lab, chromium, notebook, views):
     """A lesson's SolverPanel: every canvas shows a skeleton; moving the target slider re-solves with
     every solver (their status lines change) and every view moves. Notebook 01: FABRIK, CCD and DLS;
-    notebook 03: the neural solver and FABRIK."""
+    notebook 03: the neural solver and FABRIK; notebook 04: latent optimisation and FABRIK."""
     url, token, work = lab
     page = chromium.new_page(viewport={"width": 1500, "height": 1100})
     try:

@@ -28,6 +28,7 @@ from ..ik.registry import register
 from .ae_data import feature_columns, pose_vectors, poses_from_vectors, targets_in_root_frame
 from .aegan import AEGAN
 from .aegan_train import weights_path
+from . import latent_kernel as LK
 from .latent_opt import OPTIMIZERS, Problem, optimize
 
 __all__ = ["LatentOptSolver", "load_aegan", "RANGE_MARGIN", "SETTINGS"]
@@ -96,6 +97,8 @@ class LatentOptSolver(SolverBase):
         self.net = self.model.compile()
         self.mean = self.model.norm.mean.astype(np.float32)
         self.std = self.model.norm.std.astype(np.float32)
+        self._gen = LK.flatten_generator(self.net) if self.model.config.ancestors == "parent" else None
+        self._work = LK.workspace(self._gen) if self._gen is not None else None
         xr = self.model.x_range
         self.lo, self.hi = (None, None) if xr is None else (np.asarray(xr[0], np.float32) - RANGE_MARGIN,
                                                             np.asarray(xr[1], np.float32) + RANGE_MARGIN)
@@ -149,17 +152,49 @@ class LatentOptSolver(SolverBase):
         snapped[:, joints] = targets
         return fix_bone_lengths(s, snapped), raw, iters, out
 
-    def _solve(self, start, resolved):
-        pos, _, iters, oor = self.predict(np.asarray(start.global_pos, dtype=float)[None], resolved.joints,
-                                          resolved.position[None], resolved.tolerance[None])
-        info = {"optimizer": self.optimizer, "post": self.post}
-        if oor[0].any():
-            info["out_of_range"] = [self.skeleton.names[j] for j, o in zip(resolved.joints, oor[0]) if o]
-        return self.result(Pose(pos[0]), resolved, int(iters[0]), info)
+    def predict_one(self, start_pos, joints, targets, tol=1e-3):
+        """:meth:`predict` of one problem — start (J, 3), joints (K,), targets (K, 3), tolerances (K,) —
+        with the optimiser compiled (:mod:`posekit.models.latent_kernel`): what ``solve`` runs. Returns
+        ``(pos (J, 3), raw (J, 3), iterations, out_of_range (K,))``."""
+        if self._gen is None:  # an all-ancestors SPL: the numpy path
+            pos, raw, it, oor = self.predict(np.asarray(start_pos)[None], joints, np.asarray(targets)[None],
+                                             np.asarray(tol, float)[None] if np.ndim(tol) else tol)
+            return pos[0], raw[0], int(it[0]), oor[0]
+        s = self.skeleton
+        joints = [int(j) for j in joints]
+        cols = feature_columns(s, joints)
+        x, origin, angle = pose_vectors(s, np.asarray(start_pos, dtype=float)[None])
+        z0 = self.net.encode((x.astype(np.float32) - self.mean) / self.std)[0]
+        t = ((targets_in_root_frame(np.asarray(targets, float)[None], origin, angle).reshape(-1).astype(np.float32)
+              - self.mean[cols]) / self.std[cols])
+        oor = np.zeros(len(joints), dtype=bool)
+        if self.lo is not None:
+            oor = ((t < self.lo[cols]) | (t > self.hi[cols])).reshape(-1, 3).any(-1)
+        tol = np.broadcast_to(np.asarray(tol, float), (len(joints),)).copy()
+        o = self.options
+        args = (z0, cols, t, np.ascontiguousarray(self.std[cols]), tol, *self._gen, self._work)
+        if self.optimizer == "lbfgs":
+            z, it, _ = LK.lbfgs_one(*args, o["max_iter"], o["memory"], o["patience"], o["stall"], 1e-4, 8)
+        else:
+            z, it, _ = LK.adam_one(*args, o["max_iter"], o["lr"], o["patience"], o["stall"], 0.9, 0.999)
+        xo = self.net.forward(z[None])[0] * self.std + self.mean
+        raw = poses_from_vectors(s, xo, origin, angle)[0]
+        if self.post == "none":
+            return raw, raw, int(it), oor
+        snapped = raw.copy()
+        snapped[joints] = targets
+        return fix_bone_lengths(s, snapped), raw, int(it), oor
 
-    # solve_batch solves one problem at a time, so that its results are solve's exactly: in float32 an
-    # optimisation run on a batch sums in another order and ends about 0.1 mm away. predict() is the
-    # batched path (what the benchmark's throughput rows time).
+    def _solve(self, start, resolved):
+        pos, _, iters, oor = self.predict_one(start.global_pos, resolved.joints, resolved.position, resolved.tolerance)
+        info = {"optimizer": self.optimizer, "post": self.post}
+        if oor.any():
+            info["out_of_range"] = [self.skeleton.names[j] for j, o in zip(resolved.joints, oor) if o]
+        return self.result(Pose(pos), resolved, iters, info)
+
+    # solve_batch solves one problem at a time (the compiled path), so that its results are solve's
+    # exactly: in float32 an optimisation run on a batch sums in another order and ends a little away
+    # (tested within 2 mm). predict() is the batched path (what the benchmark's throughput rows time).
 
 
 def _variant(**fixed):

@@ -8,7 +8,9 @@ set against lesson 03's plain autoencoder (Victor & Meyer 2020) with the same co
 * **"Every point is a pose"** — poses decoded from prior samples and from the midpoints of encoded
   pose pairs, scored by bone-length error (the largest change of a bone's length, mm), the naturalness
   proxy (distance to the nearest training pose, :class:`posekit.data.metrics.NaturalnessIndex`, mm) and
-  the AE-GAN's pose discriminator (the probability that the pose is real: one judge for both spaces).
+  the AE-GAN's pose discriminator (the probability that the pose is real: one judge for both spaces);
+  and their **spread** (the mean per-joint distance between two of them, mm: a space that decodes
+  every code to a few safe poses scores well on naturalness and badly here).
 
 A space is anything with ``encode(x)``, ``decode(z)`` (z-scored pose vectors, numpy) and
 ``sample(n, rng)``. The AE-GAN samples its prior (uniform on ``[-1, 1]^32``); the plain autoencoder has
@@ -24,7 +26,7 @@ import numpy as np
 from ..data.metrics import bone_length_error
 from .ae_data import poses_from_vectors
 
-__all__ = ["AEGANSpace", "AutoencoderSpace", "invertibility", "decoded_scores", "compare_spaces"]
+__all__ = ["AEGANSpace", "AutoencoderSpace", "invertibility", "decoded_scores", "spread_mm", "compare_spaces"]
 
 
 class AEGANSpace:
@@ -94,6 +96,7 @@ class DecodedScores:
     bone_mm: float
     natural_mm: float
     real: float
+    spread_mm: float
 
     def as_dict(self) -> dict:
         return dict(self.__dict__)
@@ -113,7 +116,18 @@ def decoded_scores(x_decoded, skeleton, norm, natural, reference_pos, judge=None
     pos = poses_from_vectors(skeleton, np.asarray(x_decoded, float) * norm.std + norm.mean)
     bone = bone_length_error(skeleton, pos, np.asarray(reference_pos)[None])
     real = float(np.median(judge(x_decoded))) if judge is not None else float("nan")
-    return DecodedScores(float(np.median(bone) * 1000), float(np.median(natural.distance(pos)) * 1000), real)
+    return DecodedScores(float(np.median(bone) * 1000), float(np.median(natural.distance(pos)) * 1000), real,
+                         spread_mm(skeleton, pos))
+
+
+def spread_mm(skeleton, global_pos) -> float:
+    """Mean per-joint distance between consecutive poses of ``global_pos`` (N, J, 3), each in its own root
+    frame and pelvis-relative (:func:`posekit.data.metrics.pose_features`), median over pairs, mm."""
+    from ..data.metrics import pose_features
+
+    f = pose_features(skeleton, global_pos)
+    d = (f[1:] - f[:-1]).reshape(len(f) - 1, -1, 3)
+    return float(np.median(np.linalg.norm(d, axis=-1).mean(-1)) * 1000)
 
 
 def compare_spaces(spaces, x_test, skeleton, norm, natural, reference_pos, judge=None, n: int = 1000,
