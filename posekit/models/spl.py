@@ -116,7 +116,8 @@ class StructuredPrediction(nn.Module):
 def dense_twin(in_features: int, n_joints: int, out: int, hidden: int = 16) -> nn.Sequential:
     """The dense layer an SPL replaces, of equal width: ``Linear(in, J hidden) -> ReLU -> Linear(J hidden, J out)``
     (every output sees every hidden unit; the lesson compares parameters and reconstruction error)."""
-    return nn.Sequential(nn.Linear(in_features, n_joints * hidden), nn.ReLU(), nn.Linear(n_joints * hidden, n_joints * out))
+    width = n_joints * hidden
+    return nn.Sequential(nn.Linear(in_features, width), nn.ReLU(), nn.Linear(width, n_joints * out))
 
 
 class NumpySPL:
