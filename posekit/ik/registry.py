@@ -199,4 +199,5 @@ def _load_builtin():
     # their module is (lesson 03's neural solvers: posekit.models.neural_ik; lesson 04's latent
     # optimisation: posekit.models.latent_ik)
     from . import ccd, dls, fabrik  # noqa: F401
-    from ..models import latent_ik, neural_ik  # noqa: F401
+    from ..models import neural_ik  # noqa: F401  (lesson order: 03 before 04)
+    from ..models import latent_ik  # noqa: F401

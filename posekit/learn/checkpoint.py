@@ -278,3 +278,20 @@ def _same(a, b) -> bool:
     if isinstance(b, tuple):
         b = list(b)
     return a == b
+
+
+_LOADED: dict = {}
+
+
+def load_cached(load, path, skeleton=None):
+    """``load(path)`` once per (loader, file) in a process — a learned solver's weights, shared by every
+    solver built from them — then checked against ``skeleton``: a model made for another skeleton is
+    loaded again with ``load(path, skeleton=skeleton)``, which raises with a sentence naming the joint,
+    parent or offset that differs."""
+    key = (getattr(load, "__qualname__", repr(load)), str(path))
+    if key not in _LOADED:
+        _LOADED[key] = load(path)
+    m = _LOADED[key]
+    if skeleton is not None and not m.skeleton.same_as(skeleton):
+        load(path, skeleton=skeleton)
+    return m

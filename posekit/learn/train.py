@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import torch
 
-__all__ = ["Curves", "fit"]
+__all__ = ["Curves", "fit", "merge_settings"]
 
 
 @dataclass
@@ -57,6 +57,15 @@ class Curves:
     def epochs(self) -> int:
         """Epochs run."""
         return len(self.train)
+
+
+def merge_settings(name: str, settings: dict, defaults: dict) -> dict:
+    """``defaults`` overridden by ``settings``; an unknown key raises a ``ValueError`` listing the valid ones
+    (a trainer's ``**settings``)."""
+    bad = set(settings) - set(defaults)
+    if bad:
+        raise ValueError(f"{name}: unknown setting(s) {sorted(bad)}; valid: {sorted(defaults)}")
+    return {**defaults, **settings}
 
 
 def _tensors(data, name: str) -> tuple:

@@ -28,7 +28,7 @@ from ..data.motion import MotionSet
 from ..transforms import from_root_space, mirror_positions, rotate_y_positions, to_root_space
 
 __all__ = ["STD_FLOOR", "PAIR_MAX_S", "pose_vectors", "poses_from_vectors", "targets_in_root_frame",
-           "feature_columns", "PoseData", "pose_data", "training_pairs"]
+           "feature_columns", "PoseData", "pose_data", "split_pose_data", "training_pairs"]
 
 STD_FLOOR = 0.01
 """Smallest standard deviation of a feature in the z-score, metres (the pelvis x/z are exactly 0)."""
@@ -150,6 +150,29 @@ def pose_data(motions: MotionSet, frames, mirror: bool = True, norm: NormStats |
     if norm is None:
         norm = NormStats.fit(x, eps=STD_FLOOR)
     return PoseData(x.astype(np.float32), frames, bool(mirror), norm)
+
+
+def split_pose_data(motions: MotionSet | None = None, seed: int = 0):
+    """What the learned lessons train on: the training split's poses (mirrored) and the val split's
+    (not mirrored, the training normalisation) of ``motions`` (default the Bandai mini set, its own split;
+    another set is split by clip with ``seed``, :func:`posekit.data.cases.case_split`).
+
+    Returns
+    -------
+    motions : MotionSet
+    train, val : PoseData
+    how : str
+        How the split was made.
+    """
+    from ..data.cases import case_split
+
+    if motions is None:
+        from ..data.bandai_mini import load_bandai_mini
+
+        motions = load_bandai_mini()
+    train, val, _, how = case_split(motions, seed)
+    td = pose_data(motions, train, mirror=True)
+    return motions, td, pose_data(motions, val, mirror=False, norm=td.norm), how
 
 
 def training_pairs(motions: MotionSet, data: PoseData, n: int, seed: int = 0, max_s: float = PAIR_MAX_S):

@@ -24,8 +24,8 @@ import time
 import numpy as np
 import torch
 
-from ..learn import fit
-from .ae_data import pose_data, training_pairs
+from ..learn import fit, merge_settings
+from .ae_data import split_pose_data, training_pairs
 from .ae_solvers import CHAIN, GROUPS, AEConfig, AESolvers
 
 __all__ = ["LICENCE", "WEIGHTS", "DEFAULTS", "solver_loss", "train_autoencoder", "train_solver", "train_chained",
@@ -166,20 +166,9 @@ def train_ae_solvers(motions=None, *, seed: int = 0, out=None, groups=tuple(GROU
     report : dict
         Curves (train/val per epoch), seconds per stage and in all.
     """
-    from ..data.cases import case_split
-
-    bad = set(settings) - set(DEFAULTS)
-    if bad:
-        raise ValueError(f"train_ae_solvers: unknown setting(s) {sorted(bad)}; valid: {sorted(DEFAULTS)}")
-    st = {**DEFAULTS, **settings}
-    if motions is None:
-        from ..data.bandai_mini import load_bandai_mini
-
-        motions = load_bandai_mini()
+    st = merge_settings("train_ae_solvers", settings, DEFAULTS)
     t0 = time.perf_counter()
-    train, val, _, how = case_split(motions, seed)
-    td = pose_data(motions, train, mirror=True)
-    vd = pose_data(motions, val, mirror=False, norm=td.norm)
+    motions, td, vd, how = split_pose_data(motions, seed)
     x = torch.as_tensor(np.concatenate([td.normalized(), vd.normalized()]))
     xv = x[len(td.x):]
     cfg = AEConfig(x.shape[1], latent=latent, tied=tied)

@@ -34,8 +34,8 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from ..learn import limit_threads
-from .ae_data import pose_data
+from ..learn import limit_threads, merge_settings
+from .ae_data import split_pose_data
 from .ae_train import LICENCE
 from .aegan import AEGAN, AEGANConfig, sample_prior
 
@@ -85,6 +85,16 @@ def _acc(real_logit, fake_logit) -> float:
     return 0.5 * ((real_logit > 0).float().mean().item() + (fake_logit < 0).float().mean().item())
 
 
+def _discriminator_step(opt, logit, real, fake, smooth: float):
+    """One step of Eq. (3) or (4): real samples labelled ``smooth``, fake ones 0; returns (loss, accuracy)."""
+    lr_, lf = logit(real), logit(fake)
+    loss = _bce(lr_, smooth) + _bce(lf, 0.0)
+    opt.zero_grad()
+    loss.backward()
+    opt.step()
+    return loss.item(), _acc(lr_, lf)
+
+
 def train_aegan(motions=None, *, seed: int = 0, out=None, progress: bool = True, config: AEGANConfig | None = None,
                 seconds: float | None = None, data_label: str | None = None, **settings):
     """Train the AE-GAN on the training poses (mirrored) of ``motions``; save it.
@@ -110,20 +120,9 @@ def train_aegan(motions=None, *, seed: int = 0, out=None, progress: bool = True,
         ``curves`` ({loss: [mean per log interval]} for :data:`LOSSES`, ``step``, ``val_rec_mm``), settings,
         seconds, steps done.
     """
-    from ..data.cases import case_split
-
-    bad = set(settings) - set(DEFAULTS)
-    if bad:
-        raise ValueError(f"train_aegan: unknown setting(s) {sorted(bad)}; valid: {sorted(DEFAULTS)}")
-    st = {**DEFAULTS, **settings}
-    if motions is None:
-        from ..data.bandai_mini import load_bandai_mini
-
-        motions = load_bandai_mini()
+    st = merge_settings("train_aegan", settings, DEFAULTS)
     t0 = time.perf_counter()
-    train, val, _, how = case_split(motions, seed)
-    td = pose_data(motions, train, mirror=True)
-    vd = pose_data(motions, val, mirror=False, norm=td.norm)
+    motions, td, vd, how = split_pose_data(motions, seed)
     x = torch.as_tensor(td.normalized())
     xv = vd.normalized()[:2000]
     model = AEGAN.new(motions.skeleton, td.norm, config, seed)
@@ -155,24 +154,16 @@ def train_aegan(motions=None, *, seed: int = 0, out=None, progress: bool = True,
             with torch.no_grad():
                 ze = E(xb)
             zp = sample_prior(3 * b, d, gen)
-            lr_, lf = Dz.logit(zp), Dz.logit(ze)
-            l_dz = _bce(lr_, s) + _bce(lf, 0.0)
-            opt_dz.zero_grad()
-            l_dz.backward()
-            opt_dz.step()
-            acc["d_z"] += l_dz.item()
-            acc["acc_z"] += _acc(lr_, lf)
+            loss_, acc_ = _discriminator_step(opt_dz, Dz.logit, zp, ze, s)
+            acc["d_z"] += loss_
+            acc["acc_z"] += acc_
             # pose discriminator: b samples; training poses real, generated poses fake (3)
             xr = x[torch.randint(0, len(x), (b,), generator=gen)]
             with torch.no_grad():
                 xg = G(sample_prior(b, d, gen))
-            pr, pf = Dx.logit(xr), Dx.logit(xg)
-            l_dx = _bce(pr, s) + _bce(pf, 0.0)
-            opt_dx.zero_grad()
-            l_dx.backward()
-            opt_dx.step()
-            acc["d_x"] += l_dx.item()
-            acc["acc_x"] += _acc(pr, pf)
+            loss_, acc_ = _discriminator_step(opt_dx, Dx.logit, xr, xg, s)
+            acc["d_x"] += loss_
+            acc["acc_x"] += acc_
             # encoder and generator: 2 b samples (5)
             xb = x[torch.randint(0, len(x), (2 * b,), generator=gen)]
             zp = sample_prior(2 * b, d, gen)

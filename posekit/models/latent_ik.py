@@ -25,10 +25,11 @@ import numpy as np
 from ..ik.api import Pose, SolverBase
 from ..ik.fix_bones import fix_bone_lengths
 from ..ik.registry import register
+from ..learn import load_cached
+from . import latent_kernel as LK
 from .ae_data import feature_columns, pose_vectors, poses_from_vectors, targets_in_root_frame
 from .aegan import AEGAN
 from .aegan_train import weights_path
-from . import latent_kernel as LK
 from .latent_opt import OPTIMIZERS, Problem, optimize
 
 __all__ = ["LatentOptSolver", "load_aegan", "RANGE_MARGIN", "SETTINGS"]
@@ -40,19 +41,10 @@ SETTINGS = {"adam": dict(max_iter=50, lr=0.05, patience=10, stall=1e-3),
             "lbfgs": dict(max_iter=50, memory=8, patience=10, stall=1e-3)}
 """Each optimiser's defaults (iteration budget, Adam's step, the stall rule)."""
 
-_CACHE: dict = {}
-
 
 def load_aegan(weights=None, skeleton=None) -> AEGAN:
     """The shipped (or given) :class:`AEGAN`, checked against ``skeleton``; cached per file."""
-    path = weights_path() if weights is None else weights
-    key = str(path)
-    if key not in _CACHE:
-        _CACHE[key] = AEGAN.load(path)
-    m = _CACHE[key]
-    if skeleton is not None and not m.skeleton.same_as(skeleton):
-        AEGAN.load(path, skeleton=skeleton)  # raises with a sentence naming the difference
-    return m
+    return load_cached(AEGAN.load, weights_path() if weights is None else weights, skeleton)
 
 
 class LatentOptSolver(SolverBase):

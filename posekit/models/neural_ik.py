@@ -32,6 +32,7 @@ from ..data.metrics import body_joints
 from ..ik.api import Pose, SolverBase
 from ..ik.fix_bones import fix_bone_lengths
 from ..ik.registry import make_solver, register
+from ..learn import load_cached
 from . import ae_kernel as K
 from .ae_data import feature_columns, pose_vectors, poses_from_vectors, targets_in_root_frame
 from .ae_solvers import GROUPS, AESolvers, chain_groups, stages
@@ -45,8 +46,6 @@ POSTS = ("bones", "none", "fabrik")
 RANGE_MARGIN = 0.5
 """How far (z-scored units) a target may lie beyond the training range before it is clamped."""
 
-_CACHE: dict = {}
-
 try:
     from numba.typed import List as _List
 except ImportError:  # pragma: no cover - numba is a dependency
@@ -55,14 +54,7 @@ except ImportError:  # pragma: no cover - numba is a dependency
 
 def load_model(weights=None, skeleton=None) -> AESolvers:
     """The shipped (or given) :class:`AESolvers`, checked against ``skeleton``; cached per file."""
-    path = weights_path() if weights is None else weights
-    key = str(path)
-    if key not in _CACHE:
-        _CACHE[key] = AESolvers.load(path)
-    m = _CACHE[key]
-    if skeleton is not None and not m.skeleton.same_as(skeleton):
-        AESolvers.load(path, skeleton=skeleton)  # raises with a sentence naming the difference
-    return m
+    return load_cached(AESolvers.load, weights_path() if weights is None else weights, skeleton)
 
 
 class NeuralIKSolver(SolverBase):
