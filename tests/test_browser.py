@@ -164,7 +164,7 @@ def _open_and_run_all(page, url, token, work, notebook):
         page.locator(".lm-MenuBar-itemLabel", has_text="Run").first.click()
         page.locator(".lm-Menu-itemLabel", has_text="Run All Cells").first.click()
         try:
-            page.wait_for_function(_RUNNING, timeout=60_000, polling="raf")
+            page.wait_for_function(_RUNNING, timeout=60_000, polling=100)
             return
         except Exception:  # noqa: BLE001 - playwright's TimeoutError; try the menu again
             page.keyboard.press("Escape")
