@@ -8,12 +8,12 @@ import torch
 from posekit.data import load_bandai_mini, load_sample
 from posekit.data.cases import build_cases, case_split
 from posekit.data.metrics import body_joints, bone_length_error
-from posekit.ik import EFFECTOR_SETS, Effector, effector_set, make_solver
+from posekit.ik import EFFECTOR_SETS, Effector, make_solver
 from posekit.models.ae_data import pose_data
-from posekit.models.aegan import AEGAN, AEGANConfig, body_parents
+from posekit.models.aegan import AEGAN, body_parents
 from posekit.models.aegan_train import LOSSES, train_aegan, weights_path
 from posekit.models.latent_ik import LatentOptSolver
-from posekit.models.latent_opt import Problem, adam, lbfgs
+from posekit.models.latent_opt import adam, lbfgs
 from posekit.models.spl import NumpySPL, StructuredPrediction, dense_twin, tree_levels
 
 
@@ -134,15 +134,7 @@ def test_shipped_space_is_invertible_and_its_prior_decodes_to_poses(mini, shippe
 
 
 def _problem(solver, cases, joints):
-    from posekit.models.ae_data import feature_columns, pose_vectors, targets_in_root_frame
-
-    s = solver.skeleton
-    x, o, a = pose_vectors(s, cases.start_pos)
-    z0 = solver.net.encode((x.astype(np.float32) - solver.mean) / solver.std)
-    cols = feature_columns(s, joints)
-    t = (targets_in_root_frame(cases.target_pos[:, joints], o, a).reshape(len(x), -1) - solver.mean[cols]) \
-        / solver.std[cols]
-    return Problem(z0, cols, t.astype(np.float32), solver.std[cols], np.full((len(x), len(joints)), 1e-3))
+    return solver.problem(cases.start_pos, joints, cases.target_pos[:, joints])[0]
 
 
 @pytest.mark.parametrize("optimizer", [adam, lbfgs])

@@ -5,9 +5,9 @@ Introduced in ``notebooks/02_inverse_rig_mapping.ipynb`` (the inverse-rig networ
 solvers of lessons 03-05 reuse it. ``posekit train --list`` names every model trained with it.
 """
 
-from .checkpoint import FORMAT, FORMAT_VERSION, load_cached, load_checkpoint, save_checkpoint
+from .checkpoint import FORMAT, FORMAT_VERSION, load_cached, load_checkpoint, require_skeleton, save_checkpoint
 from .threads import limit_threads, single_thread
 from .train import Curves, fit, merge_settings
 
-__all__ = ["save_checkpoint", "load_checkpoint", "load_cached", "FORMAT", "FORMAT_VERSION", "fit", "Curves",
+__all__ = ["save_checkpoint", "load_checkpoint", "load_cached", "require_skeleton", "FORMAT", "FORMAT_VERSION", "fit", "Curves",
            "merge_settings", "single_thread", "limit_threads"]

@@ -295,3 +295,11 @@ def load_cached(load, path, skeleton=None):
     if skeleton is not None and not m.skeleton.same_as(skeleton):
         load(path, skeleton=skeleton)
     return m
+
+
+def require_skeleton(what: str, trained, skeleton) -> None:
+    """Refuse a model in memory made for another skeleton: ``ValueError`` "<what> was trained for skeleton
+    ... , not ..." (a file is checked joint by joint by :func:`load_checkpoint`)."""
+    if not trained.same_as(skeleton):
+        raise ValueError(f"{what} was trained for skeleton {trained.name!r} ({trained.n_joints} joints), not "
+                         f"{skeleton.name!r} ({skeleton.n_joints} joints); load weights made for this skeleton")

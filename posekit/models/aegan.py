@@ -27,7 +27,7 @@ from torch import nn
 from ..data.dataset import NormStats
 from ..data.metrics import body_joints
 from ..learn import load_checkpoint, save_checkpoint
-from .spl import NumpySPL, StructuredPrediction
+from .spl import NumpySPL, StructuredPrediction, dense_twin
 
 __all__ = ["KIND", "AEGANConfig", "body_parents", "Encoder", "Generator", "PoseDiscriminator", "LatentDiscriminator",
            "AEGAN", "NumpyAEGAN", "sample_prior"]
@@ -86,8 +86,6 @@ class AEGANConfig:
 def _spl(cfg: AEGANConfig, parents, n_in: int, out: int):
     if cfg.structured:
         return StructuredPrediction(n_in, parents, out, cfg.spl_hidden, cfg.ancestors)
-    from .spl import dense_twin
-
     return dense_twin(n_in, cfg.n_joints, out, cfg.spl_hidden)
 
 

@@ -25,7 +25,7 @@ import numpy as np
 from ..ik.api import Pose, SolverBase
 from ..ik.fix_bones import fix_bone_lengths
 from ..ik.registry import register
-from ..learn import load_cached
+from ..learn import load_cached, require_skeleton
 from . import latent_kernel as LK
 from .ae_data import feature_columns, pose_vectors, poses_from_vectors, targets_in_root_frame
 from .aegan import AEGAN
@@ -78,10 +78,7 @@ class LatentOptSolver(SolverBase):
         if bad:
             raise ValueError(f"unknown option(s) {sorted(bad)} for {optimizer}; valid: {sorted(SETTINGS[optimizer])}")
         self.model = model if model is not None else load_aegan(weights, skeleton)
-        if not self.model.skeleton.same_as(skeleton):
-            raise ValueError(f"latent-opt solver: the AE-GAN was trained for skeleton {self.model.skeleton.name!r} "
-                             f"({self.model.skeleton.n_joints} joints), not {skeleton.name!r} "
-                             f"({skeleton.n_joints} joints); load weights made for this skeleton")
+        require_skeleton("latent-opt solver: the AE-GAN", self.model.skeleton, skeleton)
         self.skeleton = skeleton
         self.optimizer, self.post = optimizer, post
         self.options = {**SETTINGS[optimizer], **options}
@@ -121,61 +118,56 @@ class LatentOptSolver(SolverBase):
         iterations : ndarray of int, shape (B,)
         out_of_range : ndarray of bool, shape (B, K)
         """
+        prob, origin, angle, out = self.problem(start_pos, joints, targets, tol)
+        z, iters, _ = optimize(self.net, prob, self.optimizer, **self.options)
+        return (*self._poses(z, origin, angle, joints, targets), iters, out)
+
+    def predict_one(self, start_pos, joints, targets, tol=1e-3):
+        """:meth:`predict` of one problem — start (J, 3), joints (K,), targets (K, 3), tolerances (K,) —
+        with the optimiser compiled (:mod:`posekit.models.latent_kernel`): what ``solve`` runs. Returns
+        ``(pos (J, 3), raw (J, 3), iterations, out_of_range (K,))``."""
+        tol = np.asarray(tol, float)[None] if np.ndim(tol) else tol
+        if self._gen is None:  # an all-ancestors SPL: the numpy path
+            pos, raw, it, oor = self.predict(np.asarray(start_pos)[None], joints, np.asarray(targets)[None], tol)
+            return pos[0], raw[0], int(it[0]), oor[0]
+        prob, origin, angle, oor = self.problem(np.asarray(start_pos)[None], joints, np.asarray(targets)[None], tol)
+        o = self.options
+        args = (prob.z0[0], prob.columns, prob.target[0], np.ascontiguousarray(prob.scale), prob.tol[0], *self._gen,
+                self._work)
+        if self.optimizer == "lbfgs":
+            z, it, _ = LK.lbfgs_one(*args, o["max_iter"], o["memory"], o["patience"], o["stall"], 1e-4, 8)
+        else:
+            z, it, _ = LK.adam_one(*args, o["max_iter"], o["lr"], o["patience"], o["stall"], 0.9, 0.999)
+        pos, raw = self._poses(z[None], origin, angle, joints, np.asarray(targets)[None])
+        return pos[0], raw[0], int(it), oor[0]
+
+    def problem(self, start_pos, joints, targets, tol=1e-3):
+        """Eq. (6)'s problems for B starts (B, J, 3) and targets (B, K, 3) on body ``joints`` (steps 1-2 of the
+        module docstring): ``(Problem, origin (B, 3), angle (B,), out_of_range (B, K))``."""
         s = self.skeleton
         joints = [int(j) for j in joints]
-        start_pos = np.asarray(start_pos, dtype=float)
         targets = np.asarray(targets, dtype=float)
         B, K = targets.shape[:2]
         cols = feature_columns(s, joints)
-        x, origin, angle = pose_vectors(s, start_pos)
+        x, origin, angle = pose_vectors(s, np.asarray(start_pos, dtype=float))
         z0 = self.net.encode((x.astype(np.float32) - self.mean) / self.std)
         t = (targets_in_root_frame(targets, origin, angle).reshape(B, -1).astype(np.float32) - self.mean[cols]) \
             / self.std[cols]
         out = np.zeros((B, K), dtype=bool)
         if self.lo is not None:
             out = ((t < self.lo[cols]) | (t > self.hi[cols])).reshape(B, K, 3).any(-1)
-        prob = Problem(z0, cols, t, self.std[cols], np.broadcast_to(np.asarray(tol, float), (B, K)).copy())
-        z, iters, _ = optimize(self.net, prob, self.optimizer, **self.options)
-        xo = self.net.forward(z)[0] * self.std + self.mean
-        raw = poses_from_vectors(s, xo, origin, angle)
-        if self.post == "none":
-            return raw, raw, iters, out
-        snapped = raw.copy()
-        snapped[:, joints] = targets
-        return fix_bone_lengths(s, snapped), raw, iters, out
+        tol = np.broadcast_to(np.asarray(tol, float), (B, K)).copy()
+        return Problem(z0, cols, t, self.std[cols], tol), origin, angle, out
 
-    def predict_one(self, start_pos, joints, targets, tol=1e-3):
-        """:meth:`predict` of one problem — start (J, 3), joints (K,), targets (K, 3), tolerances (K,) —
-        with the optimiser compiled (:mod:`posekit.models.latent_kernel`): what ``solve`` runs. Returns
-        ``(pos (J, 3), raw (J, 3), iterations, out_of_range (K,))``."""
-        if self._gen is None:  # an all-ancestors SPL: the numpy path
-            pos, raw, it, oor = self.predict(np.asarray(start_pos)[None], joints, np.asarray(targets)[None],
-                                             np.asarray(tol, float)[None] if np.ndim(tol) else tol)
-            return pos[0], raw[0], int(it[0]), oor[0]
+    def _poses(self, z, origin, angle, joints, targets):
+        """Steps 4-5: codes (B, d) -> (post-processed poses, the generator's poses), each (B, J, 3)."""
         s = self.skeleton
-        joints = [int(j) for j in joints]
-        cols = feature_columns(s, joints)
-        x, origin, angle = pose_vectors(s, np.asarray(start_pos, dtype=float)[None])
-        z0 = self.net.encode((x.astype(np.float32) - self.mean) / self.std)[0]
-        t = ((targets_in_root_frame(np.asarray(targets, float)[None], origin, angle).reshape(-1).astype(np.float32)
-              - self.mean[cols]) / self.std[cols])
-        oor = np.zeros(len(joints), dtype=bool)
-        if self.lo is not None:
-            oor = ((t < self.lo[cols]) | (t > self.hi[cols])).reshape(-1, 3).any(-1)
-        tol = np.broadcast_to(np.asarray(tol, float), (len(joints),)).copy()
-        o = self.options
-        args = (z0, cols, t, np.ascontiguousarray(self.std[cols]), tol, *self._gen, self._work)
-        if self.optimizer == "lbfgs":
-            z, it, _ = LK.lbfgs_one(*args, o["max_iter"], o["memory"], o["patience"], o["stall"], 1e-4, 8)
-        else:
-            z, it, _ = LK.adam_one(*args, o["max_iter"], o["lr"], o["patience"], o["stall"], 0.9, 0.999)
-        xo = self.net.forward(z[None])[0] * self.std + self.mean
-        raw = poses_from_vectors(s, xo, origin, angle)[0]
+        raw = poses_from_vectors(s, self.net.forward(z)[0] * self.std + self.mean, origin, angle)
         if self.post == "none":
-            return raw, raw, int(it), oor
+            return raw, raw
         snapped = raw.copy()
-        snapped[joints] = targets
-        return fix_bone_lengths(s, snapped), raw, int(it), oor
+        snapped[:, [int(j) for j in joints]] = targets
+        return fix_bone_lengths(s, snapped), raw
 
     def _solve(self, start, resolved):
         pos, _, iters, oor = self.predict_one(start.global_pos, resolved.joints, resolved.position, resolved.tolerance)

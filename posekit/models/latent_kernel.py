@@ -106,10 +106,10 @@ def _backward(gx, W, U, order, par, A, V, hin, r, go, ga, gz):
 @njit
 def loss_grad(z, cols, target, scale, W, b, U, c, order, par, A, V, bo, work, err, gz):
     """Eq. (6) of one code ``z`` (d,): returns the loss (m^2); fills ``err`` (K,) metres and ``gz`` (d,)."""
-    hin, a, r, o, go, ga = work
+    hin, a, r, o, go, ga, gx = work
     _forward(z, W, b, U, c, order, par, A, V, bo, hin, a, r, o)
     J, no = o.shape
-    gx = np.zeros(J * no, np.float32)
+    gx[:] = 0.0
     x = o.reshape(J * no)
     f = 0.0
     for k in range(len(err)):
@@ -131,7 +131,7 @@ def workspace(gen) -> tuple:
     J, h, o = V.shape
     f = np.float32
     return (np.zeros(W.shape[1], f), np.zeros(U.shape[1], f), np.zeros((J, h), f), np.zeros((J, o), f),
-            np.zeros((J, o), f), np.zeros(U.shape[1], f))
+            np.zeros((J, o), f), np.zeros(U.shape[1], f), np.zeros(J * o, f))
 
 
 @njit

@@ -22,6 +22,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import torch
 
 from ..data.metrics import bone_length_error
 from .ae_data import poses_from_vectors
@@ -50,23 +51,16 @@ class AutoencoderSpace:
     Gaussian of the codes of ``x_train`` (z-scored training poses)."""
 
     def __init__(self, ae_solvers, x_train):
-        import torch
-
         self.ae, self.name = ae_solvers.ae, "autoencoder (lesson 03)"
         z = self.encode(x_train)
         self.mean, self.cov = z.mean(0), np.cov(z, rowvar=False)
         self.latent = z.shape[1]
-        self._torch = torch
 
     def encode(self, x):
-        import torch
-
         with torch.no_grad():
             return self.ae.encode(torch.as_tensor(np.asarray(x, np.float32))).numpy()
 
     def decode(self, z):
-        import torch
-
         with torch.no_grad():
             return self.ae.decode(torch.as_tensor(np.asarray(z, np.float32))).numpy()
 

@@ -32,7 +32,7 @@ from ..data.metrics import body_joints
 from ..ik.api import Pose, SolverBase
 from ..ik.fix_bones import fix_bone_lengths
 from ..ik.registry import make_solver, register
-from ..learn import load_cached
+from ..learn import load_cached, require_skeleton
 from . import ae_kernel as K
 from .ae_data import feature_columns, pose_vectors, poses_from_vectors, targets_in_root_frame
 from .ae_solvers import GROUPS, AESolvers, chain_groups, stages
@@ -87,10 +87,7 @@ class NeuralIKSolver(SolverBase):
         if post not in POSTS:
             raise ValueError(f"post must be one of {', '.join(POSTS)}, got {post!r}")
         self.model = model if model is not None else load_model(weights, skeleton)
-        if not self.model.skeleton.same_as(skeleton):
-            raise ValueError(f"neural solver: the model was trained for skeleton {self.model.skeleton.name!r} "
-                             f"({self.model.skeleton.n_joints} joints), not {skeleton.name!r} "
-                             f"({skeleton.n_joints} joints); load weights made for this skeleton")
+        require_skeleton("neural solver: the model", self.model.skeleton, skeleton)
         self.skeleton = skeleton
         self.post, self.chain, self.chain_aware = post, bool(chain), bool(chain_aware)
         self.keeps_bone_lengths = post != "none"
