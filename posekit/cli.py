@@ -26,6 +26,8 @@
     Makes lesson 03's autoencoder and latent-space solvers, ``data_samples/weights/ae_solvers.pt``.
 ``posekit train aegan [--seed S] [--out FILE] [--steps N] [--dense] ...``
     Makes lesson 04's AE-GAN (encoder, generator, two discriminators), ``data_samples/weights/aegan.pt``.
+``posekit train protores [--arch protores|masked-fcr|transformer] [--no-gpd] [--fixed-weights] ...``
+    Makes lesson 05's ProtoRes (or a baseline), ``data_samples/weights/protores*.pt``.
 
 Errors in input files print ``file:line: message`` and exit with status 2.
 """
@@ -173,6 +175,11 @@ _TRAINABLE = {
               "lesson 04 (04_aegan_latent_space.ipynb), the latent-opt solvers, posekit bench ik",
               "about 9-11 minutes on one core (it trains on one thread: 8 min 35 s measured idle, 11 min "
               "beside another training)"),
+    "protores": ("data_samples/weights/protores.pt, protores_masked_fcr.pt, protores_transformer.pt (CC BY-NC 4.0, "
+                 "like the Bandai mini set they are trained on); one per --arch",
+                 "ProtoRes and its Masked-FCR and Transformer baselines (Oreshkin et al. 2021)",
+                 "lesson 05 (05_protores.ipynb), the protores solvers, posekit bench protores",
+                 "about 11-12 minutes each on one core (it trains on one thread)"),
 }
 
 
@@ -254,6 +261,29 @@ def _train_aegan(args) -> int:
     print(f"trained {report['steps']} steps in {report['seconds']:.0f} s; held-out reconstruction "
           f"{report['val_rec_mm']:.1f} mm; last interval: pose discriminator accuracy {c['acc_x'][-1]:.2f}, "
           f"latent discriminator accuracy {c['acc_z'][-1]:.2f}")
+    print(f"wrote {path} ({path.stat().st_size / 1e3:.0f} kB)")
+    return 0
+
+
+def _train_protores(args) -> int:
+    from .data.metrics import body_joints
+    from .data.bandai_mini import load_bandai_mini
+    from .models.protores import ProtoResConfig
+    from .models.protores_train import DEFAULTS, train_protores, weights_path
+
+    settings = {k: getattr(args, k) for k in DEFAULTS if hasattr(args, k) and getattr(args, k) != DEFAULTS[k]}
+    if args.fixed_weights:
+        settings["weighted"] = False
+    motions = load_bandai_mini()
+    config = ProtoResConfig(len(body_joints(motions.skeleton)), arch=args.arch, width=args.width, gpd=not args.no_gpd)
+    out = Path(args.out) if args.out else None
+    net, report = train_protores(motions, arch=args.arch, seed=args.seed, out=out, config=config,
+                                 progress=sys.stderr.isatty(), **settings)
+    v = report["val"]
+    print(f"trained {args.arch} ({report['parameters']} parameters) {report['steps']} steps in "
+          f"{report['seconds']:.0f} s ({report['seconds_per_step'] * 1000:.0f} ms/step); validation: L_ikd-L2 "
+          f"{v['ikd_l2'] * 1000:.2f}e-3 m^2, L_loc-geo {v['loc_geo']:.3f} rad, MPJPE {v['mpjpe_mm']:.1f} mm")
+    path = out or weights_path(args.arch)
     print(f"wrote {path} ({path.stat().st_size / 1e3:.0f} kB)")
     return 0
 
@@ -353,6 +383,27 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="(default: 0)")
     p.add_argument("--out", default=None, help="checkpoint file (default data_samples/weights/aegan.pt)")
     p.set_defaults(fn=_train_aegan)
+    from .models.protores import ARCHS
+    from .models.protores_train import DEFAULTS as PR, STEPS
+
+    p = tsub.add_parser("protores", help="ProtoRes or one of its baselines: effectors -> pose (lesson 05, Oreshkin "
+                        "et al. 2021)")
+    p.add_argument("--arch", choices=ARCHS, default="protores",
+                   help="encoder: protores (default), masked-fcr or transformer (the paper's baselines)")
+    p.add_argument("--steps", type=int, default=None,
+                   help="training steps (default: " + ", ".join(f"{k} {v}" for k, v in STEPS.items()) + ")")
+    for key, what in (("batch", "poses per step"), ("lr", "learning rate (Adam)"),
+                      ("w_pos", "W_pos, weight of the two position losses"), ("w_max", "W_M, largest effector weight"),
+                      ("log_every", "steps per point of the curves")):
+        p.add_argument("--" + key.replace("_", "-"), dest=key, type=type(PR[key]), default=PR[key],
+                       help=f"{what} (default: {PR[key]})")
+    p.add_argument("--width", type=int, default=128, help="units per layer (default: 128; the paper: 1024)")
+    p.add_argument("--no-gpd", action="store_true", help="no global position decoder (Table 2's ablation)")
+    p.add_argument("--fixed-weights", action="store_true",
+                   help="every joint weighted 1 instead of the randomized min(W_M, 1/sigma) (Table 2's ablation)")
+    p.add_argument("--seed", type=int, default=0, help="(default: 0)")
+    p.add_argument("--out", default=None, help="checkpoint file (default data_samples/weights/protores*.pt)")
+    p.set_defaults(fn=_train_protores)
     return parser
 
 

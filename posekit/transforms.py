@@ -19,6 +19,8 @@ from .skeleton import Skeleton
 __all__ = [
     "mirror_positions",
     "mirror_rotations",
+    "mirror_frame_signs",
+    "mirror_rotation_matrices",
     "rotate_y_positions",
     "rotate_y_rotations",
     "facing_angle",
@@ -77,6 +79,82 @@ def mirror_rotations(skeleton: Skeleton, local_rot, root_pos):
         raise ValueError(f"local_rot: expected shape (..., {skeleton.n_joints}, 4), got {local_rot.shape}")
     q = local_rot[..., skeleton.mirror_indices(), :] * np.array([1.0, -1.0, -1.0, 1.0])
     return q, np.asarray(root_pos, dtype=float) * _FLIP_X
+
+
+_REFLECTIONS = np.array([[-1.0, 1, 1], [1, -1, 1], [1, 1, -1], [-1, -1, -1]])
+"""The diagonal reflections (det -1) a joint's frame may need when a pose is mirrored."""
+
+
+def mirror_frame_signs(skeleton: Skeleton, local_rot=None) -> np.ndarray:
+    """Per-joint frame reflections that mirror a skeleton whose local frames are not mirror images.
+
+    :func:`mirror_rotations` needs a symmetric skeleton (offsets that are mirror images in every
+    joint's frame). Many capture skeletons (the Bandai Namco one: every bone along its joint's local
+    +x, left and right frames not reflected) are not. Mirroring a pose then maps joint ``j``'s world
+    rotation to ``R'_{m(j)} = M R_j D_j`` with ``M = diag(-1, 1, 1)`` and ``D_j`` a diagonal reflection,
+    chosen so that the mirrored bones keep their lengths: ``D_j o_{m(c)} = o_c`` for every child ``c``
+    of ``j`` (``o`` the rest offsets). Where several reflections satisfy that (a joint with one child on
+    its x axis, a leaf), the one whose mirrored local rotations look most like the other side's
+    (the mean rotation matrix over ``local_rot``) is taken.
+
+    Parameters
+    ----------
+    skeleton : Skeleton
+    local_rot : ndarray, shape (F, J, 3, 3), optional
+        Sample poses for the tie-break (default: the tie is broken towards the parent's choice).
+
+    Returns
+    -------
+    signs : ndarray, shape (J, 3)
+        The diagonal of ``D_j``; ``prod(signs[j]) == -1``.
+    """
+    J, m, off, par = skeleton.n_joints, skeleton.mirror_indices(), np.asarray(skeleton.offsets), skeleton.parents
+    mean = None if local_rot is None else np.asarray(local_rot, dtype=float).mean(axis=0)
+    signs = np.zeros((J, 3))
+    for j in range(J):  # parents come first
+        kids = np.nonzero(par == j)[0]
+        err = np.array([sum(np.abs(d * off[m[c]] - off[c]).sum() for c in kids) for d in _REFLECTIONS])
+        ok = np.nonzero(err <= err.min() + 2e-3)[0]
+        dp = _FLIP_X if par[j] < 0 else signs[par[j]]
+        if len(ok) == 1:
+            signs[j] = _REFLECTIONS[ok[0]]
+        elif mean is None:
+            same = [i for i in ok if np.array_equal(_REFLECTIONS[i], dp)]
+            signs[j] = _REFLECTIONS[same[0] if same else ok[0]]
+        else:
+            cost = [np.abs(dp[:, None] * mean[j] * _REFLECTIONS[i][None, :] - mean[m[j]]).sum() for i in ok]
+            signs[j] = _REFLECTIONS[ok[int(np.argmin(cost))]]
+    return signs
+
+
+def mirror_rotation_matrices(skeleton: Skeleton, local_rot, root_pos, signs=None):
+    """Mirror poses given as local rotation matrices, for any skeleton (see :func:`mirror_frame_signs`).
+
+    ``R'_{m(j)} = D_{p(j)} R_j D_j`` (local rotations; ``D_{p(root)} = M``) and ``root' = M root``.
+    FK of the result equals :func:`mirror_positions` of FK of the input up to the skeleton's own
+    asymmetry (on the Bandai skeleton: under 0.5 mm).
+
+    Parameters
+    ----------
+    local_rot : ndarray, shape (..., J, 3, 3)
+    root_pos : ndarray, shape (..., 3), metres
+    signs : ndarray, shape (J, 3), optional
+        :func:`mirror_frame_signs` (default: computed without sample poses).
+
+    Returns
+    -------
+    local_rot : ndarray, shape (..., J, 3, 3)
+    root_pos : ndarray, shape (..., 3)
+    """
+    R = np.asarray(local_rot, dtype=float)
+    if R.shape[-3:] != (skeleton.n_joints, 3, 3):
+        raise ValueError(f"local_rot: expected shape (..., {skeleton.n_joints}, 3, 3), got {R.shape}")
+    d = mirror_frame_signs(skeleton) if signs is None else np.asarray(signs, dtype=float)
+    par = skeleton.parents
+    dp = np.stack([_FLIP_X if p < 0 else d[p] for p in par])
+    out = np.empty_like(R)
+    out[..., skeleton.mirror_indices(), :, :] = dp[:, :, None] * R * d[:, None, :]
+    return out, np.asarray(root_pos, dtype=float) * _FLIP_X
 
 
 def _yaw_quat(angle):
