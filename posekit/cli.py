@@ -26,6 +26,8 @@
     Makes lesson 03's autoencoder and latent-space solvers, ``data_samples/weights/ae_solvers.pt``.
 ``posekit train aegan [--seed S] [--out FILE] [--steps N] [--dense] ...``
     Makes lesson 04's AE-GAN (encoder, generator, two discriminators), ``data_samples/weights/aegan.pt``.
+``posekit data build-benchmark protores [--cases N] [--seed S]``
+    Rebuilds lesson 05's 5-point and random effector benchmarks in ``data_samples/benchmarks/``.
 ``posekit train protores [--arch protores|masked-fcr|transformer] [--no-gpd] [--fixed-weights] ...``
     Makes lesson 05's ProtoRes (or a baseline), ``data_samples/weights/protores*.pt``.
 
@@ -109,6 +111,17 @@ def _convert(args) -> int:
     return 0
 
 
+def _build_benchmark(args) -> int:
+    from .models.protores_benchmarks import BENCHMARKS, build_benchmark, save_benchmark
+
+    for name in BENCHMARKS:
+        b = build_benchmark(name, n_cases=args.cases, seed=args.seed)
+        path = save_benchmark(b, seed=args.seed)
+        print(f"wrote {path}: {len(b)} cases, {b.n.min()}-{b.n.max()} effectors ({', '.join(b.kinds_present())}), "
+              f"{path.stat().st_size / 1e3:.0f} kB")
+    return 0
+
+
 def _build_sample(args) -> int:
     from .io.deepmimic import build_arrays
     from .paths import samples_dir
@@ -180,14 +193,19 @@ _TRAINABLE = {
                  "ProtoRes and its Masked-FCR and Transformer baselines (Oreshkin et al. 2021)",
                  "lesson 05 (05_protores.ipynb), the protores solvers, posekit bench protores",
                  "about 11-12 minutes each on one core (it trains on one thread)"),
+    "protores-studies": ("data_samples/results/protores_ablation.json",
+                         "lesson 05's Table 2 ablations (no GPD, fixed weights) and the width study",
+                         "lesson 05 (05_protores.ipynb), posekit bench protores",
+                         "about 20 minutes on 2 cores (five runs, two side by side)"),
 }
 
 
 def _train_list(args) -> int:
     """``posekit train --list`` (and ``posekit train``): every trainable model and what it makes."""
     print("posekit train NAME makes (seeded, reproducible):")
+    w = max(12, max(map(len, _TRAINABLE)) + 2)
     for name, (files, what, lesson, time) in _TRAINABLE.items():
-        print(f"\n  {name:<12}{what}\n    makes   {files}\n    used by {lesson}\n    takes   {time}")
+        print(f"\n  {name:<{w}}{what}\n    makes   {files}\n    used by {lesson}\n    takes   {time}")
     print("\nposekit train NAME --help shows its options.")
     return 0
 
@@ -288,6 +306,18 @@ def _train_protores(args) -> int:
     return 0
 
 
+def _train_protores_studies(args) -> int:
+    from .models.protores_studies import run_studies, studies_path
+
+    out = Path(args.out) if args.out else studies_path()
+    res = run_studies(seed=args.seed, out=out, workers=args.workers, progress=sys.stderr.isatty())
+    for r in res["rows"] + res["width"]:
+        print(f"{r['method']:<28} random L_ikd-L2 {r['random_ikd_l2_e3']:.3f}e-3 m^2, L_loc-geo {r['random_loc_geo']:.3f}; "
+              f"5-point {r['5point_ikd_l2_e3']:.3f}e-3, {r['5point_loc_geo']:.3f}; {r['train_min']} min")
+    print(f"wrote {out} in {res['seconds']} s")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="posekit", description="posekit: data tools and benchmarks")
     sub = parser.add_subparsers(dest="group", required=True)
@@ -316,6 +346,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--workers", type=int, default=None, help="bandai: processes reading BVH (default: all CPUs)")
     p.add_argument("--out", default=None)
     p.set_defaults(fn=_build_sample)
+    p = dsub.add_parser("build-benchmark", help="rebuild lesson 05's effector benchmarks (5-point and random) "
+                        "in data_samples/benchmarks/ from the Bandai mini set's test clips")
+    p.add_argument("which", choices=("protores",), help="protores: the 5-point and random benchmarks")
+    p.add_argument("--cases", type=int, default=1000, help="cases per benchmark (default: 1000)")
+    p.add_argument("--seed", type=int, default=0, help="(default: 0)")
+    p.set_defaults(fn=_build_benchmark)
 
     from .bench.plugin import HelpFormatter, add_arguments, benchmark_names, get_benchmark
 
@@ -392,7 +428,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="encoder: protores (default), masked-fcr or transformer (the paper's baselines)")
     p.add_argument("--steps", type=int, default=None,
                    help="training steps (default: " + ", ".join(f"{k} {v}" for k, v in STEPS.items()) + ")")
-    for key, what in (("batch", "poses per step"), ("lr", "learning rate (Adam)"),
+    for key, what in (("batch", "poses per step"), ("lr", "learning rate (Adam)"), ("warmup", "warm-up steps"),
                       ("w_pos", "W_pos, weight of the two position losses"), ("w_max", "W_M, largest effector weight"),
                       ("log_every", "steps per point of the curves")):
         p.add_argument("--" + key.replace("_", "-"), dest=key, type=type(PR[key]), default=PR[key],
@@ -404,6 +440,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="(default: 0)")
     p.add_argument("--out", default=None, help="checkpoint file (default data_samples/weights/protores*.pt)")
     p.set_defaults(fn=_train_protores)
+    p = tsub.add_parser("protores-studies", help="lesson 05's ablations (no GPD, fixed weights) and width study")
+    p.add_argument("--workers", type=int, default=2, help="runs side by side, one thread each (default: 2)")
+    p.add_argument("--seed", type=int, default=0, help="(default: 0)")
+    p.add_argument("--out", default=None, help="JSON file (default data_samples/results/protores_ablation.json)")
+    p.set_defaults(fn=_train_protores_studies)
     return parser
 
 

@@ -31,7 +31,7 @@ __all__ = ["Arg", "arg", "Benchmark", "register_benchmark", "unregister_benchmar
 WIDTH = 100
 """Text output stays within this many columns."""
 
-_BUILTIN = ("fk", "ik", "invrig", "ae-scale")
+_BUILTIN = ("fk", "ik", "invrig", "ae-scale", "protores")
 
 
 @dataclass(frozen=True)
@@ -208,6 +208,6 @@ def _load_builtin():
         return
     _loading = True
     try:
-        from . import ae_scale, fk, ik, invrig  # noqa: F401
+        from . import ae_scale, fk, ik, invrig, protores  # noqa: F401
     finally:
         _loading = False

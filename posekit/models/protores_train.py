@@ -21,7 +21,8 @@ the authors' configs use 100 for all three, as here), ``W_M = 1000``, ``sigma_M 
 ``angle(A, B) = arccos(clamp((tr(A^T B) - 1) / 2, -1 + 1e-6, 1 - 1e-6))``: the clamp keeps the gradient
 of ``arccos`` finite when a prediction is exactly right (or exactly opposite).
 
-Schedule: Adam (lr 5e-4 here, 2e-4 in the paper with batches of 2048 on a GPU), one thread
+Schedule: Adam (lr 5e-4 here, 2e-4 in the paper with batches of 2048 on a GPU; 200 warm-up steps, then
+a cosine decay to a tenth, :func:`_lr_factor`), one thread
 (:func:`posekit.learn.limit_threads`), fixed step counts per encoder (:data:`STEPS`) so that every run
 repeats exactly; each is sized to about 12 minutes of one core.
 """
@@ -41,7 +42,7 @@ from .protores_data import PoseBank, draw_batch
 __all__ = ["DEFAULTS", "STEPS", "WEIGHTS", "LOSSES", "geodesic", "losses", "train_protores", "weights_path",
            "validation_batches", "evaluate_batches", "command"]
 
-DEFAULTS = dict(steps=None, batch=256, lr=5e-4, w_pos=100.0, w_max=1000.0, n_min=3, n_max=16, min_position=3,
+DEFAULTS = dict(steps=None, batch=256, lr=5e-4, warmup=200, w_pos=100.0, w_max=1000.0, n_min=3, n_max=16, min_position=3,
                 weighted=True, log_every=250, val_batches=8)
 """Training settings of the shipped weights (``steps=None``: :data:`STEPS` of the encoder)."""
 
@@ -95,8 +96,10 @@ def losses(out: dict, b, body, w_pos: float = 100.0, w_max: float = 1000.0, weig
     bi = torch.arange(Bn)[:, None]
     ew = torch.minimum(torch.full_like(b.sigma, w_max), 1.0 / b.sigma.clamp_min(1.0 / w_max))
     if weighted:
+        # one position effector per joint at most: w_j = 1 + (weight - 1) on those joints (accumulated, so
+        # that another kind's effector on the same joint cannot overwrite it)
         w = torch.ones(Bn, nb).index_put((bi.expand_as(b.joint), b.joint),
-                                         torch.where(b.kind == 0, ew, torch.ones_like(ew)))
+                                         torch.where(b.kind == 0, ew - 1.0, torch.zeros_like(ew)), accumulate=True)
         u = torch.zeros(Bn, nb).index_put((bi.expand_as(b.joint), b.joint),
                                           torch.where(b.kind == 1, ew, torch.zeros_like(ew)), accumulate=True)
     else:
@@ -144,6 +147,15 @@ def evaluate_batches(net: PosingNet, batches) -> dict:
         acc["loc_geo"] += float(geodesic(out["local_rot"][:, body], b.local_rot[:, body]).mean())
         acc["mpjpe_mm"] += float((out["global_pos"][:, body] - P).norm(dim=-1).mean() * 1000)
     return {k: v / len(batches) for k, v in acc.items()}
+
+
+def _lr_factor(step: int, steps: int, warmup: int) -> float:
+    """Linear warm-up over ``warmup`` steps, then a cosine from 1 to 0.1 (ours: the paper keeps the rate
+    constant over a far longer run; a short CPU budget ends better with a decay)."""
+    if step < warmup:
+        return (step + 1) / warmup
+    t = (step - warmup) / max(1, steps - warmup)
+    return 0.1 + 0.45 * (1 + np.cos(np.pi * min(t, 1.0)))
 
 
 def train_protores(motions=None, *, arch: str = "protores", seed: int = 0, out=None, progress: bool = True,
@@ -194,6 +206,7 @@ def train_protores(motions=None, *, arch: str = "protores", seed: int = 0, out=N
     cfg = ProtoResConfig(**{**cfg.to_dict(), "arch": arch})
     net = PosingNet(motions.skeleton, cfg)
     opt = torch.optim.Adam(net.parameters(), lr=float(st["lr"]))
+    sched = torch.optim.lr_scheduler.LambdaLR(opt, lambda i: _lr_factor(i, steps, int(st["warmup"])))
     gen = torch.Generator().manual_seed(seed)
     curves = {k: [] for k in (*LOSSES, "step", "seconds", "val_ikd_l2", "val_gpd_l2", "val_loc_geo", "val_mpjpe_mm")}
     acc = {k: 0.0 for k in LOSSES}
@@ -215,6 +228,7 @@ def train_protores(motions=None, *, arch: str = "protores", seed: int = 0, out=N
             opt.zero_grad()
             terms["total"].backward()
             opt.step()
+            sched.step()
             train_seconds += time.perf_counter() - ts
             for k in LOSSES:
                 acc[k] += float(terms[k].detach())

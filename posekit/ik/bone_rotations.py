@@ -1,0 +1,110 @@
+"""Joint rotations for a pose known only by its positions: turn each bone from its old direction to its new one.
+
+Introduced in ``notebooks/05_protores.ipynb``, where FABRIK (which moves positions only) is compared with
+models that predict rotations: its result needs local rotations before a rotation error can be measured.
+Conventions: :mod:`posekit.conventions` (column vectors, metres).
+
+Parent first, each joint's world rotation is its parent's new rotation times its old local rotation,
+then corrected by the rotation ``Q`` that best turns the joint's bones (to its children) onto the new
+positions:
+
+* one child: the shortest rotation taking the old bone direction onto the new one (no twist added);
+* several children (a pelvis, a chest): the least-squares rotation of the children's offsets onto
+  their new positions (Kabsch: ``Q = U diag(1, 1, det(U V^T)) V^T`` from the SVD of the 3 x 3 covariance);
+* a leaf: no correction (it keeps its old local rotation).
+
+Where positions came from a pose with these bone lengths, the rotations reproduce them by FK (to the
+fit of the multi-child joints, whose children FABRIK may move slightly off their rigid layout).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..kinematics import fk
+from ..skeleton import Skeleton
+
+__all__ = ["rotations_from_positions", "shortest_rotation", "check_roundtrip"]
+
+
+def shortest_rotation(a, b) -> np.ndarray:
+    """The smallest rotations taking directions ``a`` onto ``b``, both (..., 3): matrices (..., 3, 3).
+    Opposite directions turn by pi about an axis perpendicular to ``a``."""
+    a = a / np.maximum(np.linalg.norm(a, axis=-1, keepdims=True), 1e-12)
+    b = b / np.maximum(np.linalg.norm(b, axis=-1, keepdims=True), 1e-12)
+    v = np.cross(a, b)
+    c = np.sum(a * b, axis=-1)
+    K = np.zeros(a.shape[:-1] + (3, 3))
+    K[..., 0, 1], K[..., 0, 2], K[..., 1, 2] = -v[..., 2], v[..., 1], -v[..., 0]
+    K = K - np.swapaxes(K, -1, -2)
+    R = np.eye(3) + K + (K @ K) / np.maximum(1.0 + c, 1e-12)[..., None, None]
+    opposite = c < -1.0 + 1e-9
+    if np.any(opposite):  # pi about any axis perpendicular to a
+        ao = a[opposite]
+        helper = np.where(np.abs(ao[:, :1]) < 0.9, np.array([1.0, 0, 0]), np.array([0, 1.0, 0]))
+        axis = np.cross(ao, helper)
+        axis /= np.linalg.norm(axis, axis=-1, keepdims=True)
+        R[opposite] = 2 * axis[:, :, None] * axis[:, None, :] - np.eye(3)
+    return R
+
+
+def _kabsch(src, dst) -> np.ndarray:
+    """Rotations (B, 3, 3) best taking point sets src (B, n, 3) onto dst (B, n, 3), both about the origin."""
+    H = np.swapaxes(src, -1, -2) @ dst
+    U, _, Vt = np.linalg.svd(H)
+    d = np.sign(np.linalg.det(np.swapaxes(Vt, -1, -2) @ np.swapaxes(U, -1, -2)))
+    D = np.zeros_like(H)
+    D[:, 0, 0], D[:, 1, 1], D[:, 2, 2] = 1.0, 1.0, d
+    return np.swapaxes(Vt, -1, -2) @ D @ np.swapaxes(U, -1, -2)
+
+
+def rotations_from_positions(skeleton: Skeleton, local_rot, root_pos, global_pos):
+    """Local rotations that move a pose's bones onto new joint positions (see the module docstring).
+
+    Parameters
+    ----------
+    skeleton : Skeleton
+    local_rot : ndarray, shape (B, J, 3, 3)
+        The old pose's local rotations (where the positions came from: FABRIK's start pose).
+    root_pos : ndarray, shape (B, 3), metres
+        Unused except for its shape; the new root position is ``global_pos[:, 0]``.
+    global_pos : ndarray, shape (B, J, 3), metres
+        The new positions.
+
+    Returns
+    -------
+    local_rot : ndarray, shape (B, J, 3, 3)
+    root_pos : ndarray, shape (B, 3)
+    """
+    L0 = np.asarray(local_rot, dtype=float)
+    P = np.asarray(global_pos, dtype=float)
+    J = skeleton.n_joints
+    if L0.ndim != 4 or L0.shape[1:] != (J, 3, 3) or P.shape != L0.shape[:2] + (3,):
+        raise ValueError(f"expected local_rot (B, {J}, 3, 3) and global_pos (B, {J}, 3); got {L0.shape}, {P.shape}")
+    off = np.asarray(skeleton.offsets, dtype=float)
+    par = skeleton.parents
+    G = np.empty_like(L0)
+    L = np.empty_like(L0)
+    for j in range(J):
+        R = L0[:, j] if par[j] < 0 else G[:, par[j]] @ L0[:, j]
+        kids = skeleton.children(j)
+        kids = [c for c in kids if np.linalg.norm(off[c]) > 1e-9]
+        if len(kids) == 1:
+            c = kids[0]
+            Q = shortest_rotation(R @ off[c], P[:, c] - P[:, j])
+            R = Q @ R
+        elif len(kids) > 1:
+            src = np.stack([R @ off[c] for c in kids], axis=1)
+            dst = np.stack([P[:, c] - P[:, j] for c in kids], axis=1)
+            R = _kabsch(src, dst) @ R
+        G[:, j] = R
+        L[:, j] = R if par[j] < 0 else np.swapaxes(G[:, par[j]], -1, -2) @ R
+    return L, P[:, 0].copy()
+
+
+def check_roundtrip(skeleton, local_rot, root_pos) -> float:
+    """Largest FK position change (metres) of :func:`rotations_from_positions` applied to a pose's own
+    positions: 0 to rounding (a self-check used by the tests)."""
+    P = fk(skeleton, local_rot, root_pos)[0]
+    L, r = rotations_from_positions(skeleton, local_rot, root_pos, P)
+    return float(np.abs(fk(skeleton, L, r)[0] - P).max())
