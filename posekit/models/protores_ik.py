@@ -31,9 +31,14 @@ from ..ik.registry import register
 from ..learn import load_cached, require_skeleton
 from ..rotations import matrix_to_quat, matrix_to_sixd
 from .protores import ARCHS, KIND_IDS, SIGMA_M, PosingNet, centroid, sigma_to_tolerance
+from .protores_numpy import NumpyPosingNet
 from .protores_train import weights_path
 
 __all__ = ["ProtoResSolver", "load_protores", "skeleton_span", "MAX_EFFECTORS"]
+
+NUMPY_BATCH = 8
+"""Up to this many requests go through :class:`~posekit.models.protores_numpy.NumpyPosingNet` (no torch
+overhead); larger batches through torch."""
 
 MAX_EFFECTORS = 64
 """Most effectors one prediction takes (a valid set has at most two per body joint; training drew 3-16)."""
@@ -90,7 +95,10 @@ class ProtoResSolver(SolverBase):
         self.name = "protores" if self.arch == "protores" else f"protores-{self.arch}"
         self.body = np.asarray(body_joints(skeleton), dtype=np.int64)
         self._body_index = {int(j): i for i, j in enumerate(self.body)}
+        self._body_lookup = np.full(skeleton.n_joints, -1, dtype=np.int64)
+        self._body_lookup[self.body] = np.arange(len(self.body))
         self.span = skeleton_span(skeleton)
+        self._numpy = NumpyPosingNet(self.net) if self.arch != "transformer" else None
 
     # ------------------------------------------------------------------------------ arrays
     def predict(self, joint, kind, value, tol):
@@ -146,19 +154,21 @@ class ProtoResSolver(SolverBase):
         if (tol < 0).any() or (tol > 1).any():
             raise ValueError(f"{self.name}: tolerance Lambda must lie in [0, 1] (0 exact, 1 loosest: "
                              f"{SIGMA_M} m or rad of noise), got {float(tol[(tol < 0) | (tol > 1)][0])!r}")
-        bj = np.vectorize(self._body_index.__getitem__, otypes=[np.int64])(joint)
-        with torch.no_grad():
-            t = [torch.as_tensor(bj), torch.as_tensor(kind, dtype=torch.int64),
-                 torch.as_tensor(value, dtype=torch.float32), torch.as_tensor(tol, dtype=torch.float32)]
-            out = self.net(*t)
-            c = centroid(t[1], t[2], t[3]).numpy()
+        bj = self._body_lookup[joint]
+        if self._numpy is not None and len(bj) <= NUMPY_BATCH:  # few requests: the numpy pass is faster
+            out = self._numpy.forward(bj, kind, value, tol)
+            c = self._numpy._centroid(kind, value.astype(np.float32), tol.astype(np.float32))
+        else:
+            with torch.no_grad():
+                t = [torch.as_tensor(bj), torch.as_tensor(kind, dtype=torch.int64),
+                     torch.as_tensor(value, dtype=torch.float32), torch.as_tensor(tol, dtype=torch.float32)]
+                out = {k: None if v is None else v.numpy() for k, v in self.net(*t).items()}
+                c = centroid(t[1], t[2], t[3]).numpy()
         far = (kind == KIND_IDS["position"]) & (np.linalg.norm(value[..., :3] - c[:, None], axis=-1) > self.span)
-        res = {"global_pos": out["global_pos"].numpy().astype(np.float64),
-               "global_rot": out["global_rot"].numpy().astype(np.float64),
-               "local_rot": matrix_to_quat(out["local_rot"].numpy().astype(np.float64)),
-               "root_pos": out["root_pos"].numpy().astype(np.float64),
-               "gpd_pos": None if out["gpd_pos"] is None else out["gpd_pos"].numpy().astype(np.float64),
-               "out_of_range": far}
+        f64 = lambda a: None if a is None else a.astype(np.float64)  # noqa: E731
+        res = {"global_pos": f64(out["global_pos"]), "global_rot": f64(out["global_rot"]),
+               "local_rot": matrix_to_quat(torch.from_numpy(f64(out["local_rot"]))).numpy(),
+               "root_pos": f64(out["root_pos"]), "gpd_pos": f64(out["gpd_pos"]), "out_of_range": far}
         if one:
             res = {k: None if v is None else v[0] for k, v in res.items()}
         return res

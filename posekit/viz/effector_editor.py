@@ -1,0 +1,247 @@
+"""An effector editor: add and remove effectors of every kind, set each one's tolerance, watch solvers re-pose.
+
+Introduced in ``notebooks/05_protores.ipynb`` (ProtoRes beside DLS). Talks to solvers only through the
+:class:`~posekit.ik.api.Solver` interface; it knows nothing of a particular model (a model's meaning of
+a tolerance comes in as ``tolerance_of``).
+
+* **Add** — a joint, a kind (position, rotation, look-at) and the *add* button. A new position effector
+  sits on the joint where the first solver put it; a rotation effector holds that joint's current world
+  rotation; a look-at effector points the direction the character faces (in the joint's own frame) at a
+  target 1 m ahead.
+* **Each effector's row** — its tolerance slider (``Lambda`` in [0, 1]: 0 exact, 1 loose), for a rotation
+  effector yaw / pitch / roll sliders (degrees, applied in the world frame on top of the rotation it was
+  added with), and *remove*.
+* **Move a target** — pick the effector's joint in the first view (double-click or the joint list) and
+  drag the X/Y/Z sliders: a position target moves, or the point a look-at effector faces.
+"""
+
+from __future__ import annotations
+
+import html
+import time
+
+import numpy as np
+
+from ..conventions import FORWARD
+from ..ik.api import Effector, Pose
+from ..kinematics import fk
+from ..rotations import euler_to_quat, quat_to_matrix
+from ..transforms import facing_angle
+from .compare import status_line
+from .viewer import SkeletonViewer
+
+__all__ = ["EffectorEditor"]
+
+KIND_CHOICES = ("position", "rotation", "look_at")
+
+
+class EffectorEditor:
+    """Side-by-side solvers driven by an editable list of effectors (see the module docstring).
+
+    Parameters
+    ----------
+    skeleton : Skeleton
+    solvers : dict
+        Name -> solver; each solves from ``start`` (a solver with ``needs_start = False`` ignores it).
+    start : Pose
+        Start pose of the solvers that need one (rotation solvers need its rotations).
+    effectors : list of Effector, optional
+        Initial effectors.
+    tolerance_of : callable, optional
+        ``tolerance_of(lam, kind) -> float``: the Effector tolerance (metres or radians) of slider value
+        ``lam``; default ``max(0.1 lam, 1e-4)``.
+    truth : ndarray, shape (J, 3), optional
+        Drawn as the ghost.
+
+    Attributes
+    ----------
+    effectors : list of Effector
+        What the solvers get (rebuilt from the rows on every change).
+    results : dict
+        Name -> last IKResult, or the ValueError a solver raised.
+    widget : ipywidgets.VBox
+    """
+
+    def __init__(self, skeleton, solvers: dict, start: Pose, effectors=(), tolerance_of=None, truth=None,
+                 width: int = 300, height: int = 330):
+        import ipywidgets as w
+
+        self.skeleton, self.solvers, self.start = skeleton, dict(solvers), start
+        self.tolerance_of = tolerance_of or (lambda lam, kind: max(0.1 * lam, 1e-4))
+        self.rows = []  # dicts: effector fields + lam + euler + base rotation + widgets
+        self.viewers, self.labels, self.results = {}, {}, {}
+        boxes = []
+        for k, name in enumerate(self.solvers):
+            v = SkeletonViewer(skeleton, start.global_pos, ghost=truth, width=width, height=height, controls=(k == 0))
+            self.viewers[name] = v
+            self.labels[name] = w.HTML()
+            boxes.append(w.VBox([w.HTML(f"<b>{html.escape(name)}</b>"), v.renderer, self.labels[name]]))
+        self.first = next(iter(self.viewers.values()))
+        self.first.on_target_change(self._on_target)
+        self.add_joint = w.Dropdown(options=list(skeleton.names), value=skeleton.names[skeleton.pelvis()],
+                                    description="joint", layout=w.Layout(width="220px"))
+        self.add_kind = w.Dropdown(options=list(KIND_CHOICES), value="position", description="kind",
+                                   layout=w.Layout(width="200px"))
+        self.add_button = w.Button(description="add effector", button_style="info")
+        self.add_button.on_click(lambda _: self._add_clicked())
+        self.message = w.HTML()
+        self.rows_box = w.VBox([])
+        self._quiet = False
+        self.widget = w.VBox([w.HBox(boxes), self.first.controls,
+                              w.HBox([self.add_joint, self.add_kind, self.add_button, self.message]), self.rows_box])
+        self._quiet = True
+        for e in effectors:
+            self.add(e.joint, e.kind, target=e.target, axis=e.axis)
+        self._quiet = False
+        self.solve()
+
+    def _ipython_display_(self):
+        from IPython.display import display
+
+        display(self.widget)
+
+    # ------------------------------------------------------------------ effectors
+    def _current(self):
+        """World positions (J, 3) and rotations (J, 3, 3) of the first solver's last pose (else the start)."""
+        res = self.results.get(next(iter(self.solvers)))
+        pose = res.pose if res is not None and not isinstance(res, Exception) else self.start
+        if pose.local_rot is None:
+            pose = self.start
+        return fk(self.skeleton, np.asarray(pose.local_rot, float), np.asarray(pose.root_pos, float))
+
+    def add(self, joint, kind: str = "position", lam: float = 0.0, target=None, axis=None):
+        """Add an effector (see the module docstring for where it starts) and re-solve; returns its row index."""
+        import ipywidgets as w
+
+        j = self.skeleton.index(joint)
+        name = self.skeleton.names[j]
+        kind = kind.replace("-", "_")
+        if kind not in KIND_CHOICES:
+            raise ValueError(f"unknown effector kind {kind!r}; valid kinds: {', '.join(KIND_CHOICES)}")
+        P, G = self._current()
+        row = {"joint": name, "kind": kind, "lam": float(lam), "euler": np.zeros(3)}
+        if kind == "position":
+            row["target"] = P[j].copy() if target is None else np.asarray(target, float)
+        elif kind == "rotation":
+            row["base"] = G[j].copy() if target is None else _rotation_of(self.skeleton, name, target)
+        else:
+            if axis is None:
+                heading = facing_angle(self.skeleton, P)
+                world = np.array([np.sin(heading), 0.0, np.cos(heading)])
+                axis = G[j].T @ world
+            row["axis"] = np.asarray(axis, float) if axis is not None else FORWARD.copy()
+            row["target"] = P[j] + G[j] @ row["axis"] if target is None else np.asarray(target, float)
+        tol = w.FloatSlider(value=float(lam), min=0.0, max=1.0, step=0.01, description="tolerance",
+                            continuous_update=False, layout=w.Layout(width="260px"))
+        remove = w.Button(description="remove", layout=w.Layout(width="80px"))
+        parts = [w.HTML(f"<b>{name}</b> {kind.replace('_', '-')}", layout=w.Layout(width="180px")), tol]
+        if kind == "rotation":
+            row["angle_sliders"] = [w.FloatSlider(value=0.0, min=-180, max=180, step=1, description=a,
+                                                  continuous_update=False, layout=w.Layout(width="220px"))
+                                    for a in ("yaw", "pitch", "roll")]
+            parts += row["angle_sliders"]
+            for s in row["angle_sliders"]:
+                s.observe(lambda ch, r=row: self._on_angles(r), names="value")
+        row["widgets"] = w.HBox(parts + [remove])
+        tol.observe(lambda ch, r=row: self.set_tolerance(self.rows.index(r), ch["new"]), names="value")
+        remove.on_click(lambda _, r=row: self.remove(self.rows.index(r)))
+        self.rows.append(row)
+        self.rows_box.children = tuple(r["widgets"] for r in self.rows)
+        if not self._quiet:
+            self.solve()
+        return len(self.rows) - 1
+
+    def _add_clicked(self):
+        try:
+            self.add(self.add_joint.value, self.add_kind.value)
+            self.message.value = ""
+        except ValueError as err:
+            self.message.value = f"<span style='color:#b03a2e'>{html.escape(str(err))}</span>"
+
+    def remove(self, index: int):
+        """Remove effector row ``index`` and re-solve."""
+        self.rows.pop(index)
+        self.rows_box.children = tuple(r["widgets"] for r in self.rows)
+        self.solve()
+
+    def set_tolerance(self, index: int, lam: float):
+        """Set row ``index``'s tolerance slider value (``Lambda`` in [0, 1]) and re-solve."""
+        if not 0.0 <= float(lam) <= 1.0:
+            raise ValueError(f"tolerance must lie in [0, 1], got {lam!r}")
+        self.rows[index]["lam"] = float(lam)
+        self.solve()
+
+    def set_rotation(self, index: int, yaw: float = 0.0, pitch: float = 0.0, roll: float = 0.0):
+        """Turn a rotation effector by yaw (about Y), pitch (X) and roll (Z), degrees, world frame, from the
+        rotation it was added with; re-solve."""
+        row = self.rows[index]
+        if row["kind"] != "rotation":
+            raise ValueError(f"effector {index} on {row['joint']} is a {row['kind']} effector, not a rotation")
+        row["euler"] = np.array([yaw, pitch, roll], float)
+        self.solve()
+
+    def _on_angles(self, row):
+        self.set_rotation(self.rows.index(row), *[s.value for s in row["angle_sliders"]])
+
+    def move_target(self, index: int, position):
+        """Move row ``index``'s target point (position, or the point a look-at faces) and re-solve."""
+        row = self.rows[index]
+        if row["kind"] == "rotation":
+            raise ValueError(f"effector {index} on {row['joint']} is a rotation: turn it with set_rotation")
+        row["target"] = np.asarray(position, float).reshape(3)
+        self.solve()
+
+    def _on_target(self, joint, position):
+        # the first view moves one point per joint: the joint's position effector, else its look-at target,
+        # else a new position effector
+        for kind in ("position", "look_at"):
+            for i, r in enumerate(self.rows):
+                if r["joint"] == joint and r["kind"] == kind:
+                    self.move_target(i, position)
+                    return
+        self.add(joint, "position", target=position)
+
+    @property
+    def effectors(self) -> list:
+        out = []
+        for r in self.rows:
+            tol = float(self.tolerance_of(r["lam"], r["kind"]))
+            if r["kind"] == "rotation":
+                turn = quat_to_matrix(euler_to_quat(r["euler"][[0, 1, 2]], "YXZ", degrees=True))
+                out.append(Effector(r["joint"], turn @ r["base"], "rotation", tolerance=tol))
+            elif r["kind"] == "look_at":
+                out.append(Effector(r["joint"], r["target"], "look_at", tolerance=tol, axis=r["axis"]))
+            else:
+                out.append(Effector(r["joint"], r["target"], "position", tolerance=tol))
+        return out
+
+    # ------------------------------------------------------------------ solving
+    def solve(self):
+        """Solve with every solver and refresh the views (a solver that refuses says why under its view)."""
+        effs = self.effectors
+        targets = {r["joint"]: r["target"] for r in self.rows if r["kind"] in ("position", "look_at")}
+        for name, solver in self.solvers.items():
+            v = self.viewers[name]
+            v.set_targets(targets)
+            if not effs:
+                self.labels[name].value = "add an effector"
+                continue
+            t = time.perf_counter()
+            try:
+                start = None if not getattr(solver, "needs_start", True) else self.start
+                use = [e for e in effs if e.kind in getattr(solver, "kinds", ("position",))]
+                res = solver.solve(start, use)
+            except ValueError as err:
+                self.results[name] = err
+                self.labels[name].value = f"<b>✗ cannot solve</b><br>{html.escape(str(err))}"
+                continue
+            ms = (time.perf_counter() - t) * 1e3
+            self.results[name] = res
+            v.set_pose(res.pose.global_pos)
+            self.labels[name].value = status_line(res, ms)
+
+
+def _rotation_of(skeleton, joint, target) -> np.ndarray:
+    from ..ik.effectors import resolve_effectors
+
+    return resolve_effectors(skeleton, [Effector(joint, target, "rotation")]).rotation[0]
