@@ -196,7 +196,7 @@ _TRAINABLE = {
     "protores-studies": ("data_samples/results/protores_ablation.json",
                          "lesson 05's Table 2 ablations (no GPD, fixed weights) and the width study",
                          "lesson 05 (05_protores.ipynb), posekit bench protores",
-                         "about 20 minutes on 2 cores (five runs, two side by side)"),
+                         "about 15 minutes on 2 cores (five 2,000-step runs, two side by side)"),
 }
 
 

@@ -31,6 +31,10 @@ NEURAL_NOTEBOOK = "03_autoencoder_solvers.ipynb"
 LATENT_NOTEBOOK = "04_aegan_latent_space.ipynb"
 LATENT_CELLS = ("motions = load_bandai_mini()", "cases = build_cases(", "SolverPanel(")
 """Lesson 04's cells the browser test runs: set-up, the cases, the panel (its benchmark takes minutes)."""
+PROTORES_NOTEBOOK = "05_protores.ipynb"
+PROTORES_CELLS = ("solvers = {arch: ProtoResSolver", "benches = {name: load_benchmark", "order = [Effector(",
+                  "EffectorEditor(")
+"""Lesson 05's cells the browser test runs: set-up, the benchmarks, the Fig. 3 effectors, the editor."""
 CHROMIUM = os.environ.get("POSEKIT_CHROMIUM", "/usr/bin/chromium")
 FLAGS = ["--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader", "--disable-background-networking",
          "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-quic"]
@@ -62,6 +66,7 @@ def lab(tmp_path_factory):
     for nb in (NOTEBOOK, PANEL_NOTEBOOK, NEURAL_NOTEBOOK):  # copies: never let autosave touch the repo's notebooks
         shutil.copy(ROOT / "notebooks" / nb, work / nb)
     _trimmed(ROOT / "notebooks" / LATENT_NOTEBOOK, work / LATENT_NOTEBOOK, LATENT_CELLS)
+    _trimmed(ROOT / "notebooks" / PROTORES_NOTEBOOK, work / PROTORES_NOTEBOOK, PROTORES_CELLS)
     port, token = _free_port(), "posekit-test"
     cmd = [sys.executable, "-m", "jupyter", "lab", "--no-browser", f"--port={port}", "--ip=127.0.0.1",
            f"--ServerApp.token={token}", f"--ServerApp.root_dir={work}", "--ServerApp.open_browser=False",
@@ -276,5 +281,49 @@ def test_solvers_solve_live_side_by_side(lab, chromium, notebook, views):
             _wait_for(lambda c=c, im=im: (np.abs(_pixels(c) - im).sum(-1) > 60).mean() > 0.0005 or None, 30,
                       "every view to move")
         page.screenshot(path=str(work / f"panel_{notebook[:2]}.png"))
+    finally:
+        page.close()
+
+
+def test_effector_editor_adds_effectors_and_re_poses(lab, chromium):
+    """Lesson 05's EffectorEditor (ProtoRes beside DLS): both views draw a skeleton; the target slider, a
+    newly added rotation effector's yaw slider and a tolerance slider each make both solvers re-pose."""
+    url, token, work = lab
+    page = chromium.new_page(viewport={"width": 1500, "height": 1300})
+    try:
+        _open_and_run_all(page, url, token, work, PROTORES_NOTEBOOK)
+        labels = page.locator(".widget-html-content", has_text="worst effector")
+        _wait_visible(page, labels, 300, url, token, work, "the effector editor")
+        cell = page.locator(".jp-CodeCell", has=labels.first)
+        cell.scroll_into_view_if_needed()
+        canvases = cell.locator("canvas")
+        assert canvases.count() == 2 and labels.count() == 2
+        before = [_wait_for(lambda c=c: (lambda im: im if _foreground(im).mean() > 0.002 else None)(_pixels(c)),
+                            60, "a skeleton on every canvas") for c in canvases.all()]
+
+        def moved(texts, what):
+            _wait_for(lambda: all(l.inner_text() != t for l, t in zip(labels.all(), texts)), 60, what)
+
+        texts = [l.inner_text() for l in labels.all()]
+        _drag(page, cell.locator(".widget-slider", has_text="target y").locator(".noUi-handle").first, 60)
+        moved(texts, "both solvers to follow the target slider")
+        for c, im in zip(canvases.all(), before):
+            _wait_for(lambda c=c, im=im: (np.abs(_pixels(c) - im).sum(-1) > 60).mean() > 0.0005 or None, 30,
+                      "every view to move")
+        # add a rotation effector on the chest and turn it
+        cell.locator(".widget-dropdown", has_text="joint").last.locator("select").select_option("Chest")
+        cell.locator(".widget-dropdown", has_text="kind").locator("select").select_option("rotation")
+        texts = [l.inner_text() for l in labels.all()]
+        cell.get_by_role("button", name="add effector").click()
+        yaw = cell.locator(".widget-slider", has_text="yaw")
+        _wait_for(lambda: yaw.count() == 1, 30, "the new rotation effector's yaw slider")
+        _wait_for(lambda: all("°" in l.inner_text() for l in labels.all()), 30, "an angular error in both status lines")
+        texts = [l.inner_text() for l in labels.all()]
+        _drag(page, yaw.locator(".noUi-handle").first, 80)
+        moved(texts, "both solvers to follow the yaw slider")
+        texts = [l.inner_text() for l in labels.all()]
+        _drag(page, cell.locator(".widget-slider", has_text="tolerance").first.locator(".noUi-handle").first, 150)
+        _wait_for(lambda: labels.first.inner_text() != texts[0], 60, "ProtoRes to follow the tolerance slider")
+        page.screenshot(path=str(work / "editor_05.png"))
     finally:
         page.close()

@@ -272,7 +272,7 @@ def test_train_list_names_every_trainable_model(capsys, argv):
     out = capsys.readouterr().out
     assert "invrig" in out and "invrig_nn_{uniform,gaussian,mvn,gmm,pca}.pt" in out and "lesson 02" in out
     listed = {line.split()[0] for line in out.splitlines() if line.startswith("  ") and not line.startswith("   ")}
-    assert listed == _train_names() == {"invrig", "ae-solvers", "ae-studies", "aegan"}
+    assert listed == _train_names() == {"invrig", "ae-solvers", "ae-studies", "aegan", "protores", "protores-studies"}
     assert "ae_solvers.pt" in out and "CC BY-NC 4.0" in out and "lesson 03" in out
 
 

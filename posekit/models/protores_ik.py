@@ -28,6 +28,7 @@ from ..data.metrics import body_joints
 from ..ik.api import Pose, SolverBase
 from ..ik.effectors import KINDS
 from ..ik.registry import register
+from ..kinematics import fk
 from ..learn import load_cached, require_skeleton
 from ..rotations import matrix_to_quat, matrix_to_sixd
 from .protores import ARCHS, KIND_IDS, SIGMA_M, PosingNet, centroid, sigma_to_tolerance
@@ -166,9 +167,14 @@ class ProtoResSolver(SolverBase):
                 c = centroid(t[1], t[2], t[3]).numpy()
         far = (kind == KIND_IDS["position"]) & (np.linalg.norm(value[..., :3] - c[:, None], axis=-1) > self.span)
         f64 = lambda a: None if a is None else a.astype(np.float64)  # noqa: E731
-        res = {"global_pos": f64(out["global_pos"]), "global_rot": f64(out["global_rot"]),
-               "local_rot": matrix_to_quat(torch.from_numpy(f64(out["local_rot"]))).numpy(),
-               "root_pos": f64(out["root_pos"]), "gpd_pos": f64(out["gpd_pos"]), "out_of_range": far}
+        # the pose as float64 quaternions and root, and its FK in float64: a Pose that is exactly what
+        # FK of its rotations gives (the network's own float32 FK agrees to about 1e-6 m)
+        quats = matrix_to_quat(torch.from_numpy(f64(out["local_rot"]))).numpy()
+        quats /= np.linalg.norm(quats, axis=-1, keepdims=True)
+        root = f64(out["root_pos"])
+        gpos, grot = fk(self.skeleton, quats, root)
+        res = {"global_pos": gpos, "global_rot": grot, "local_rot": quats, "root_pos": root,
+               "gpd_pos": f64(out["gpd_pos"]), "out_of_range": far}
         if one:
             res = {k: None if v is None else v[0] for k, v in res.items()}
         return res
@@ -232,9 +238,10 @@ def _variant(arch):
 
 
 _LESSON = "notebooks/05_protores.ipynb"
-register("protores", _variant("protores"), lesson=_LESSON, data="bandai-mini", replace=True,
+_COMMON = dict(kinds=KINDS, needs_start=False, lesson=_LESSON, data="bandai-mini", replace=True)
+register("protores", _variant("protores"), **_COMMON,
          description="ProtoRes (Oreshkin et al. 2021): any effectors -> a full pose in one pass")
-register("protores-masked-fcr", _variant("masked-fcr"), lesson=_LESSON, data="bandai-mini", replace=True,
+register("protores-masked-fcr", _variant("masked-fcr"), **_COMMON,
          description="ProtoRes's Masked-FCR baseline (fixed-size input with learned placeholders)")
-register("protores-transformer", _variant("transformer"), lesson=_LESSON, data="bandai-mini", replace=True,
+register("protores-transformer", _variant("transformer"), **_COMMON,
          description="ProtoRes's Transformer baseline (torch nn.Transformer encoder)")
