@@ -312,7 +312,8 @@ def _train_protores_studies(args) -> int:
     out = Path(args.out) if args.out else studies_path()
     res = run_studies(seed=args.seed, out=out, workers=args.workers, progress=sys.stderr.isatty())
     for r in res["rows"] + res["width"]:
-        print(f"{r['method']:<28} random L_ikd-L2 {r['random_ikd_l2_e3']:.3f}e-3 m^2, L_loc-geo {r['random_loc_geo']:.3f}; "
+        print(f"{r['method']:<28} random L_ikd-L2 {r['random_ikd_l2_e3']:.3f}e-3 m^2, "
+              f"L_loc-geo {r['random_loc_geo']:.3f}; "
               f"5-point {r['5point_ikd_l2_e3']:.3f}e-3, {r['5point_loc_geo']:.3f}; {r['train_min']} min")
     print(f"wrote {out} in {res['seconds']} s")
     return 0

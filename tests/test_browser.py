@@ -254,32 +254,43 @@ def test_viewer_renders_and_slider_moves_joint(lab, chromium):
         page.close()
 
 
+def _open_panel(page, lab, notebook, views, what):
+    """Run a notebook and find its panel of solver views: (cell, labels, canvases, first images)."""
+    url, token, work = lab
+    _open_and_run_all(page, url, token, work, notebook)
+    labels = page.locator(".widget-html-content", has_text="worst effector")
+    _wait_visible(page, labels, 300, url, token, work, what)
+    cell = page.locator(".jp-CodeCell", has=labels.first)
+    cell.scroll_into_view_if_needed()
+    canvases = cell.locator("canvas")
+    assert canvases.count() == views and labels.count() == views
+    before = [_wait_for(lambda c=c: (lambda im: im if _foreground(im).mean() > 0.002 else None)(_pixels(c)),
+                        60, "a skeleton on every canvas") for c in canvases.all()]
+    return cell, labels, canvases, before
+
+
+def _views_moved(canvases, before):
+    for c, im in zip(canvases.all(), before):
+        _wait_for(lambda c=c, im=im: (np.abs(_pixels(c) - im).sum(-1) > 60).mean() > 0.0005 or None, 30,
+                  "every view to move")
+
+
 @pytest.mark.parametrize("notebook, views", [(PANEL_NOTEBOOK, 3), (NEURAL_NOTEBOOK, 2), (LATENT_NOTEBOOK, 2)])
 def test_solvers_solve_live_side_by_side(lab, chromium, notebook, views):
     """A lesson's SolverPanel: every canvas shows a skeleton; moving the target slider re-solves with
     every solver (their status lines change) and every view moves. Notebook 01: FABRIK, CCD and DLS;
     notebook 03: the neural solver and FABRIK; notebook 04: latent optimisation and FABRIK."""
-    url, token, work = lab
+    work = lab[2]
     page = chromium.new_page(viewport={"width": 1500, "height": 1100})
     try:
-        _open_and_run_all(page, url, token, work, notebook)
-        labels = page.locator(".widget-html-content", has_text="worst effector")
-        _wait_visible(page, labels, 300, url, token, work, "the solver panel")
-        cell = page.locator(".jp-CodeCell", has=labels.first)
-        cell.scroll_into_view_if_needed()
-        canvases = cell.locator("canvas")
-        assert canvases.count() == views and labels.count() == views
-        before = [_wait_for(lambda c=c: (lambda im: im if _foreground(im).mean() > 0.002 else None)(_pixels(c)),
-                            60, "a skeleton on every canvas") for c in canvases.all()]
+        cell, labels, canvases, before = _open_panel(page, lab, notebook, views, "the solver panel")
         texts = [l.inner_text() for l in labels.all()]
         assert all("mm" in t and "ms" in t for t in texts)
         handle = cell.locator(".widget-slider", has_text="target y").locator(".noUi-handle").first
         _drag(page, handle, 60)
         _wait_for(lambda: all(l.inner_text() != t for l, t in zip(labels.all(), texts)), 60,
                   "every solver to re-solve")
-        for c, im in zip(canvases.all(), before):
-            _wait_for(lambda c=c, im=im: (np.abs(_pixels(c) - im).sum(-1) > 60).mean() > 0.0005 or None, 30,
-                      "every view to move")
+        _views_moved(canvases, before)
         page.screenshot(path=str(work / f"panel_{notebook[:2]}.png"))
     finally:
         page.close()
@@ -288,18 +299,10 @@ def test_solvers_solve_live_side_by_side(lab, chromium, notebook, views):
 def test_effector_editor_adds_effectors_and_re_poses(lab, chromium):
     """Lesson 05's EffectorEditor (ProtoRes beside DLS): both views draw a skeleton; the target slider, a
     newly added rotation effector's yaw slider and a tolerance slider each make both solvers re-pose."""
-    url, token, work = lab
+    work = lab[2]
     page = chromium.new_page(viewport={"width": 1500, "height": 1300})
     try:
-        _open_and_run_all(page, url, token, work, PROTORES_NOTEBOOK)
-        labels = page.locator(".widget-html-content", has_text="worst effector")
-        _wait_visible(page, labels, 300, url, token, work, "the effector editor")
-        cell = page.locator(".jp-CodeCell", has=labels.first)
-        cell.scroll_into_view_if_needed()
-        canvases = cell.locator("canvas")
-        assert canvases.count() == 2 and labels.count() == 2
-        before = [_wait_for(lambda c=c: (lambda im: im if _foreground(im).mean() > 0.002 else None)(_pixels(c)),
-                            60, "a skeleton on every canvas") for c in canvases.all()]
+        cell, labels, canvases, before = _open_panel(page, lab, PROTORES_NOTEBOOK, 2, "the effector editor")
 
         def moved(texts, what):
             _wait_for(lambda: all(l.inner_text() != t for l, t in zip(labels.all(), texts)), 60, what)
@@ -307,9 +310,7 @@ def test_effector_editor_adds_effectors_and_re_poses(lab, chromium):
         texts = [l.inner_text() for l in labels.all()]
         _drag(page, cell.locator(".widget-slider", has_text="target y").locator(".noUi-handle").first, 60)
         moved(texts, "both solvers to follow the target slider")
-        for c, im in zip(canvases.all(), before):
-            _wait_for(lambda c=c, im=im: (np.abs(_pixels(c) - im).sum(-1) > 60).mean() > 0.0005 or None, 30,
-                      "every view to move")
+        _views_moved(canvases, before)
         # add a rotation effector on the chest and turn it
         cell.locator(".widget-dropdown", has_text="joint").last.locator("select").select_option("Chest")
         cell.locator(".widget-dropdown", has_text="kind").locator("select").select_option("rotation")

@@ -78,7 +78,8 @@ def test_draw_batch_follows_algorithm_1(bank):
 
 
 def test_noise_scale_follows_the_tolerance(bank):
-    """sigma = sigma_M Lambda^eta: at Lambda = 1 a position is off by about 0.1 m per axis, at Lambda <= 0.5 not at all."""
+    """sigma = sigma_M Lambda^eta: at Lambda = 1 a position is off by about 0.1 m per axis, at Lambda <= 0.5 not
+    at all."""
     gen = torch.Generator().manual_seed(1)
     loose, tight = [], []
     for _ in range(20):
@@ -128,6 +129,24 @@ def test_every_encoder_gives_a_pose_that_keeps_bone_lengths(mini, arch):
     out2 = net(b.joint, b.kind, v2, b.tol)
     assert torch.allclose(out2["global_pos"], out["global_pos"] + d, atol=1e-4)
     assert torch.allclose(out2["local_rot"], out["local_rot"], atol=1e-5)
+
+
+@pytest.mark.parametrize("arch", ["protores", "masked-fcr"])
+@pytest.mark.parametrize("gpd", [True, False])
+def test_numpy_pass_equals_torch(mini, arch, gpd):
+    from posekit.models.protores_numpy import NumpyPosingNet
+
+    torch.manual_seed(1)
+    net = PosingNet(mini.skeleton, ProtoResConfig(21, arch=arch, width=24, gpd=gpd)).eval()
+    b = draw_batch(PoseBank(mini, mini.split.val[:50]), 5, torch.Generator().manual_seed(4))
+    with torch.no_grad():
+        ref = net(b.joint, b.kind, b.value, b.tol)
+    got = NumpyPosingNet(net).forward(b.joint.numpy(), b.kind.numpy(), b.value.numpy(), b.tol.numpy())
+    for k in ("global_pos", "global_rot", "local_rot", "root_pos"):
+        assert np.abs(got[k] - ref[k].numpy()).max() < 1e-5, k
+    assert (got["gpd_pos"] is None) == (ref["gpd_pos"] is None)
+    with pytest.raises(ValueError, match="Transformer"):
+        NumpyPosingNet(PosingNet(mini.skeleton, ProtoResConfig(21, arch="transformer", width=16, d_model=16, heads=2)))
 
 
 def test_centroid_weights_tight_position_effectors():

@@ -92,3 +92,55 @@ def test_solver_panel_resolves_on_target_moves(sample):
         label = panel.labels[name].value
         assert not panel.results[name].converged and label.startswith("<b>✗ not reached</b><br>"), label
         assert label.count("<br>") == 2 and "iterations," in label
+
+
+def test_effector_editor_edits_every_kind_and_re_solves():
+    """Lesson 05's EffectorEditor: effectors of all three kinds added, turned, loosened and removed; every
+    change re-solves each solver; a solver that refuses a kind gets only the kinds it honours."""
+    from posekit.data import load_bandai_mini
+    from posekit.ik import Effector, Pose
+    from posekit.models.protores_eval import rest_starts
+    from posekit.models.protores_benchmarks import load_benchmark
+    from posekit.rotations import geodesic_distance
+    from posekit.viz import EffectorEditor
+
+    m = load_bandai_mini()
+    s = m.skeleton
+    five = load_benchmark("5point", m)
+    q, r = rest_starts(five, m)
+    ed = EffectorEditor(s, {"ProtoRes": make_solver("protores", s), "FABRIK": make_solver("fabrik", s)},
+                        Pose.from_rotations(s, q[0], r[0]), effectors=five.effectors(0), truth=five.global_pos[0])
+    assert len(ed.effectors) == 5 and all(not isinstance(v, Exception) for v in ed.results.values())
+    before = ed.results["ProtoRes"].pose.global_pos.copy()
+    k = ed.add("Head", "rotation")
+    assert ed.effectors[k].kind == "rotation" and ed.results["ProtoRes"].kinds[-1] == "rotation"
+    assert len(ed.results["FABRIK"].kinds) == 5  # FABRIK gets the position effectors only
+    ed.set_rotation(k, yaw=90)
+    turned = ed.effectors[k].target
+    assert np.degrees(geodesic_distance(turned, ed.rows[k]["base"])) == pytest.approx(90, abs=1e-6)
+    look = ed.add("Hand_L", "look_at")
+    assert ed.effectors[look].kind == "look_at" and np.isclose(np.linalg.norm(ed.effectors[look].axis), 1)
+    ed.move_target(look, ed.effectors[look].target + [0.0, 0.5, 0.0])
+    ed.set_tolerance(0, 1.0)
+    assert ed.effectors[0].tolerance == pytest.approx(0.1)
+    assert not np.allclose(ed.results["ProtoRes"].pose.global_pos, before)
+    with pytest.raises(ValueError, match=r"\[0, 1\]"):
+        ed.set_tolerance(0, 2.0)
+    with pytest.raises(ValueError, match="not a rotation"):
+        ed.set_rotation(0, yaw=10)
+    with pytest.raises(ValueError, match="unknown effector kind"):
+        ed.add("Head", "orientation")
+    ed.remove(k)
+    assert len(ed.effectors) == 6 and all(e.kind != "rotation" for e in ed.effectors)
+    ed.first.move_target("Foot_L", five.global_pos[0, s.index("Foot_L")] + [0.3, 0.0, 0.0])  # a slider move
+    foot = next(e for e in ed.effectors if e.joint == "Foot_L" and e.kind == "position")
+    assert np.allclose(foot.target, five.global_pos[0, s.index("Foot_L")] + [0.3, 0.0, 0.0])
+    ed.first.move_target("Toes_R", [0.0, 0.0, 0.0])  # a joint without an effector gets a position one
+    assert ed.effectors[-1].joint == "Toes_R" and ed.effectors[-1].kind == "position"
+    with pytest.raises(ValueError, match="already has a position effector"):
+        ed.add("Hand_R", "position")
+    with pytest.raises(ValueError, match="already has a look-at effector"):
+        ed.add("Hand_L", "rotation")
+    ed.add("UpperArm_R", "position", target=[40.0, 1.0, 0.0])
+    assert not isinstance(ed.results["ProtoRes"], Exception), ed.results["ProtoRes"]
+    assert "UpperArm_R" in ed.results["ProtoRes"].info["out_of_range"]

@@ -168,7 +168,8 @@ def run(cases: int | None = None, classical: bool = True, speed: bool = True, pr
     for lam in (0.0, 0.5, 0.7, 0.8, 0.9, 1.0):
         r = run_learned(solvers["protores"], b, tolerance=lam)
         sc = scores(b, r["global_pos"], r["local_rot"], r["global_rot"])
-        rows.append({"table": "tolerance", "lambda": lam, "sigma": round(0.1 * lam ** 13, 5), "pos_mm": round(sc["pos_mm"], 2),
+        rows.append({"table": "tolerance", "lambda": lam, "sigma": round(0.1 * lam ** 13, 5),
+                     "pos_mm": round(sc["pos_mm"], 2),
                      "rot_deg": round(sc["rot_deg"], 2), "look_deg": round(sc["look_deg"], 2),
                      "mpjpe_mm": round(sc["mpjpe_mm"], 1)})
     if speed:
@@ -187,8 +188,9 @@ def _header(rows, args) -> str:
 
 
 TABLES = [
-    ("Table 1, 5-point benchmark (chest, hands, feet)", ["method", "ikd_l2_e3", "gpd_l2_e3", "loc_geo", "mpjpe_mm",
-                                                          "pos_mm", "ms_per_case"], {"table": 1, "benchmark": "5point"}),
+    ("Table 1, 5-point benchmark (chest, hands, feet)",
+     ["method", "ikd_l2_e3", "gpd_l2_e3", "loc_geo", "mpjpe_mm", "pos_mm", "ms_per_case"],
+     {"table": 1, "benchmark": "5point"}),
     ("Table 1, random benchmark (6-12 effectors of three kinds)",
      ["method", "ikd_l2_e3", "gpd_l2_e3", "loc_geo", "mpjpe_mm", "pos_mm", "rot_deg", "look_deg", "ms_per_case"],
      {"table": 1, "benchmark": "random"}),

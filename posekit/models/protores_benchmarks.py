@@ -100,7 +100,8 @@ class EffectorBenchmark:
         """Case ``i`` as :class:`~posekit.ik.effectors.Effector` objects (what a Solver takes)."""
         out = []
         for k in range(int(self.n[i])):
-            j, kind, v, tol = int(self.joint[i, k]), KIND_NAMES[int(self.kind[i, k])], self.value[i, k], self.tolerance[i, k]
+            j, kind = int(self.joint[i, k]), KIND_NAMES[int(self.kind[i, k])]
+            v, tol = self.value[i, k], self.tolerance[i, k]
             name = self.skeleton.names[j]
             if kind == "position":
                 out.append(Effector(name, v[:3], "position", tolerance=float(tol)))

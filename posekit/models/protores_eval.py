@@ -14,7 +14,8 @@ method is scored by :func:`scores` on the same cases (:mod:`posekit.models.proto
 
 Classical methods (the paper's FinalIK stand-ins) start from the rest pose of :func:`posekit.data.cases.rest_start`
 placed by the rigid motion (vertical turn + translation) that best fits its joints onto the position
-targets (:func:`rest_starts`): the same information the learned models get. FABRIK moves positions only: it is given the position effectors, and its rotations for L_loc-geo
+targets (:func:`rest_starts`): the same information the learned models get. FABRIK moves positions only:
+it is given the position effectors, and its rotations for L_loc-geo
 come from :func:`posekit.ik.bone_rotations.rotations_from_positions`.
 """
 

@@ -132,8 +132,9 @@ class ProtoResSolver(SolverBase):
         value, tol = np.asarray(value, dtype=np.float64), np.asarray(tol, dtype=np.float64)
         one = joint.ndim == 1
         if one:
-            joint, kind, value, tol = joint[None], kind[None], value[None], tol[None]
-        if joint.ndim != 2 or kind.shape != joint.shape or tol.shape != joint.shape or value.shape != joint.shape + (6,):
+            joint, kind, value, tol = (a[None] for a in (joint, kind, value, tol))
+        if (joint.ndim != 2 or kind.shape != joint.shape or tol.shape != joint.shape
+                or value.shape != joint.shape + (6,)):
             raise ValueError(f"expected joint and kind (B, N), value (B, N, 6), tol (B, N); got {joint.shape}, "
                              f"{kind.shape}, {value.shape}, {tol.shape}")
         N = joint.shape[1]

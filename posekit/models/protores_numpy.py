@@ -57,7 +57,8 @@ class NumpyPosingNet:
 
         cfg = net.config
         if cfg.arch == "transformer":
-            raise ValueError("NumpyPosingNet covers the ProtoRes and Masked-FCR encoders; the Transformer runs in torch")
+            raise ValueError("NumpyPosingNet covers the ProtoRes and Masked-FCR encoders; the Transformer runs in "
+                             "torch")
         self.arch = cfg.arch
         if cfg.arch == "protores":
             self.emb_joint = net.tokens.joint.weight.detach().numpy().astype(np.float32)

@@ -90,11 +90,13 @@ def run_studies(seed: int = 0, out=None, workers: int = 2, progress: bool = True
               {"steps": STEPS, **{k2: v for k2, v in kw.items() if k2 != "gpd"}}, seed) for k, kw in ABLATIONS.items()]
     with ProcessPoolExecutor(max_workers=max(1, workers)) as pool:
         done = list(pool.map(_job, jobs))
-    done.sort(key=lambda r: (not r["method"].startswith("width"), int(r["method"][6:]) if r["method"].startswith("width") else 0))
+    width = lambda r: int(r["method"][6:]) if r["method"].startswith("width") else 0  # noqa: E731
+    done.sort(key=lambda r: (not r["method"].startswith("width"), width(r)))
     shipped = load_protores("protores")
     rep = shipped.checkpoint["extra"]["report"]
     full = {"method": "ProtoRes (shipped)", **score_net(shipped, load_bandai_mini()),
-            "parameters": shipped.n_parameters(), "steps": rep["steps"], "train_min": round(rep["train_seconds"] / 60, 1),
+            "parameters": shipped.n_parameters(), "steps": rep["steps"],
+            "train_min": round(rep["train_seconds"] / 60, 1),
             "ms_per_step": round(rep["seconds_per_step"] * 1000), "val_mpjpe_mm": round(rep["val"]["mpjpe_mm"], 1)}
     ref = dict(next(r for r in done if r["method"] == "width 128"), method=f"ProtoRes ({STEPS} steps)")
     res = {"rows": [full, ref] + [r for r in done if r["method"].startswith("ProtoRes")],

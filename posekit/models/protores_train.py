@@ -42,8 +42,8 @@ from .protores_data import PoseBank, draw_batch
 __all__ = ["DEFAULTS", "STEPS", "WEIGHTS", "LOSSES", "geodesic", "losses", "train_protores", "weights_path",
            "validation_batches", "evaluate_batches", "command"]
 
-DEFAULTS = dict(steps=None, batch=256, lr=5e-4, warmup=200, w_pos=100.0, w_max=1000.0, n_min=3, n_max=16, min_position=3,
-                weighted=True, log_every=250, val_batches=8)
+DEFAULTS = dict(steps=None, batch=256, lr=5e-4, warmup=200, w_pos=100.0, w_max=1000.0, n_min=3, n_max=16,
+                min_position=3, weighted=True, log_every=250, val_batches=8)
 """Training settings of the shipped weights (``steps=None``: :data:`STEPS` of the encoder)."""
 
 STEPS = {"protores": 8000, "masked-fcr": 8000, "transformer": 1500}
@@ -108,7 +108,8 @@ def losses(out: dict, b, body, w_pos: float = 100.0, w_max: float = 1000.0, weig
     P, G, Lr = b.global_pos[:, body], b.global_rot[:, body], b.local_rot[:, body]
     fk_pos, fk_rot = out["global_pos"][:, body], out["global_rot"][:, body]
     terms = {"ikd_l2": _weighted_mse(fk_pos, P, w), "loc_geo": geodesic(out["local_rot"][:, body], Lr).mean()}
-    terms["gpd_l2"] = _weighted_mse(out["gpd_pos"][:, body], P, w) if out["gpd_pos"] is not None else fk_pos.new_zeros(())
+    gpd = out["gpd_pos"]
+    terms["gpd_l2"] = _weighted_mse(gpd[:, body], P, w) if gpd is not None else fk_pos.new_zeros(())
     gg = geodesic(fk_rot, G)
     us = u.sum(-1)
     terms["glob_geo"] = ((u * gg).sum(-1) / us.clamp_min(1e-9)).sum() / (us > 0).sum().clamp_min(1)

@@ -15,7 +15,7 @@ import numpy as np
 from ..ik.api import Effector, Pose
 from .viewer import SkeletonViewer
 
-__all__ = ["SolverPanel"]
+__all__ = ["SolverPanel", "solver_views"]
 
 
 def status_line(result, ms: float) -> str:
@@ -34,6 +34,19 @@ def status_line(result, ms: float) -> str:
         parts.append(f"{np.degrees(err[angular].max()):.1f}°")
     return (f"<b>{mark}</b><br>worst effector {', '.join(parts)}<br>"
             f"{it} iteration{'' if it == 1 else 's'}, {ms:.2f} ms")
+
+
+def solver_views(skeleton, names, pose, truth=None, width: int = 300, height: int = 330):
+    """One viewer per solver name (the first with the joint selector and target sliders), a status label
+    under each: ``(viewers, labels, boxes)``, dicts by name and the list of titled boxes to lay out."""
+    import ipywidgets as w
+
+    viewers, labels, boxes = {}, {}, []
+    for k, name in enumerate(names):
+        v = SkeletonViewer(skeleton, pose, ghost=truth, width=width, height=height, controls=(k == 0))
+        viewers[name], labels[name] = v, w.HTML()
+        boxes.append(w.VBox([w.HTML(f"<b>{html.escape(str(name))}</b>"), v.renderer, labels[name]]))
+    return viewers, labels, boxes
 
 
 class SolverPanel:
@@ -71,13 +84,8 @@ class SolverPanel:
         self.solvers = dict(solvers)
         self.start = start
         self.effectors = {skeleton.names[skeleton.index(e.joint)]: e for e in effectors}
-        self.viewers, self.labels, self.results = {}, {}, {}
-        boxes = []
-        for k, name in enumerate(self.solvers):
-            v = SkeletonViewer(skeleton, start.global_pos, ghost=truth, width=width, height=height, controls=(k == 0))
-            self.viewers[name] = v
-            self.labels[name] = w.HTML()
-            boxes.append(w.VBox([w.HTML(f"<b>{name}</b>"), v.renderer, self.labels[name]]))
+        self.results = {}
+        self.viewers, self.labels, boxes = solver_views(skeleton, self.solvers, start.global_pos, truth, width, height)
         first = next(iter(self.viewers.values()))
         first.on_target_change(self._on_target)
         self.widget = w.VBox([w.HBox(boxes), first.controls])

@@ -27,8 +27,7 @@ from ..ik.api import Effector, Pose
 from ..kinematics import fk
 from ..rotations import euler_to_quat, quat_to_matrix
 from ..transforms import facing_angle
-from .compare import status_line
-from .viewer import SkeletonViewer
+from .compare import solver_views, status_line
 
 __all__ = ["EffectorEditor"]
 
@@ -69,13 +68,8 @@ class EffectorEditor:
         self.skeleton, self.solvers, self.start = skeleton, dict(solvers), start
         self.tolerance_of = tolerance_of or (lambda lam, kind: max(0.1 * lam, 1e-4))
         self.rows = []  # dicts: effector fields + lam + euler + base rotation + widgets
-        self.viewers, self.labels, self.results = {}, {}, {}
-        boxes = []
-        for k, name in enumerate(self.solvers):
-            v = SkeletonViewer(skeleton, start.global_pos, ghost=truth, width=width, height=height, controls=(k == 0))
-            self.viewers[name] = v
-            self.labels[name] = w.HTML()
-            boxes.append(w.VBox([w.HTML(f"<b>{html.escape(name)}</b>"), v.renderer, self.labels[name]]))
+        self.results = {}
+        self.viewers, self.labels, boxes = solver_views(skeleton, self.solvers, start.global_pos, truth, width, height)
         self.first = next(iter(self.viewers.values()))
         self.first.on_target_change(self._on_target)
         self.add_joint = w.Dropdown(options=list(skeleton.names), value=skeleton.names[skeleton.pelvis()],
@@ -118,6 +112,10 @@ class EffectorEditor:
         kind = kind.replace("-", "_")
         if kind not in KIND_CHOICES:
             raise ValueError(f"unknown effector kind {kind!r}; valid kinds: {', '.join(KIND_CHOICES)}")
+        for r in self.rows:  # the Solver API's rule, said before any solver sees it
+            if r["joint"] == name and (r["kind"] == kind or {r["kind"], kind} == {"rotation", "look_at"}):
+                raise ValueError(f"{name} already has a {r['kind'].replace('_', '-')} effector; remove it first "
+                                 "(one effector of a kind per joint, and a rotation fixes where a joint faces)")
         P, G = self._current()
         row = {"joint": name, "kind": kind, "lam": float(lam), "euler": np.zeros(3)}
         if kind == "position":
