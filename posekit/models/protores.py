@@ -121,7 +121,9 @@ class PosingNet(nn.Module):
         pel = skeleton.pelvis()
         self.pelvis_index = int(np.nonzero(self.body == pel)[0][0])
         self.helper_root = int(skeleton.parents[pel]) if skeleton.parents[pel] >= 0 else -1
-        self.register_buffer("pelvis_offset", torch.tensor(np.asarray(skeleton.offsets[pel], dtype=np.float32)))
+        # skeleton data, not a weight: rebuilt from the skeleton, never stored (float16 would round it)
+        self.register_buffer("pelvis_offset", torch.tensor(np.asarray(skeleton.offsets[pel], dtype=np.float32)),
+                             persistent=False)
 
     def n_parameters(self) -> int:
         return sum(p.numel() for p in self.parameters())
@@ -195,7 +197,7 @@ class PosingNet(nn.Module):
         ck = load_checkpoint(path, kind=KIND, skeleton=skeleton)
         net = cls(ck["skeleton"], ProtoResConfig(**ck["config"]))
         try:
-            net.load_state_dict({k: v.float() for k, v in ck["state"].items()})
+            net.load_state_dict({k: v.float() for k, v in ck["state"].items() if k != "pelvis_offset"})
         except RuntimeError as err:
             raise ValueError(f"checkpoint {path}: weights do not match its config ({err})") from None
         net.eval()
