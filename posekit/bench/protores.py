@@ -12,8 +12,9 @@ random benchmarks (:mod:`posekit.models.protores_benchmarks`) with one metric co
 * **speed** — one pose through ``solve`` and through the array path on one thread (goal 2 ms; the paper
   reports about 10 ms, 100 FPS, in Unity), and poses per second in batches of 1,000 (goal 20,000);
 * **training** — each shipped model's size, steps, minutes and validation error (from its checkpoint);
-* **Table 2** — the ablations (no GPD; every joint weighted 1), from ``data_samples/results/protores_ablation.json``
-  (written by ``posekit train protores-ablation``), beside the shipped ProtoRes.
+* **Table 2** — the ablations (no GPD; every joint weighted 1) and their 2,000-step reference, stored in
+  ``data_samples/results/protores_ablation.json`` (written by ``posekit train protores-studies``), under
+  the shipped ProtoRes as measured in this run.
 """
 
 from __future__ import annotations
@@ -66,6 +67,19 @@ def _claims(rows) -> list[dict]:
     return out
 
 
+def _net_seconds(solver, batch) -> float:
+    """Seconds of the network's own pass on a batch (torch, no wrapper: no checks, float32 FK only)."""
+    import torch
+
+    t = [torch.as_tensor(solver._body_lookup[batch[0]]), torch.as_tensor(batch[1]),
+         torch.as_tensor(batch[2], dtype=torch.float32), torch.as_tensor(batch[3], dtype=torch.float32)]
+    with torch.no_grad():
+        solver.net(*t)
+        start = time.perf_counter()
+        solver.net(*t)
+        return time.perf_counter() - start
+
+
 def _speed_rows(solvers, five) -> list[dict]:
     from ..learn.threads import limit_threads
 
@@ -92,13 +106,16 @@ def _speed_rows(solvers, five) -> list[dict]:
             t = time.perf_counter()
             solver.predict(*batch)
             one = time.perf_counter() - t
+            net_one = _net_seconds(solver, batch)
         solver.predict(*batch)
         t = time.perf_counter()
         solver.predict(*batch)
         allt = time.perf_counter() - t
+        net_all = _net_seconds(solver, batch)
         rows.append({"table": "speed", "method": _label(arch), "ms_solve": round(float(np.median(ts)) * 1000, 2),
                      "ms_predict": round(float(np.median(tp)) * 1000, 2), "goal_ms": GOAL_MS, "paper_ms": PAPER_MS,
                      "poses_per_s_1_thread": round(n / one), "poses_per_s_all_threads": round(n / allt),
+                     "net_poses_per_s_1_thread": round(n / net_one), "net_poses_per_s_all_threads": round(n / net_all),
                      "goal_poses_per_s": GOAL_POSES_PER_S})
     return rows
 
@@ -118,14 +135,23 @@ def _training_rows(solvers) -> list[dict]:
     return rows
 
 
-def _ablation_rows() -> list[dict]:
+def _ablation_rows(rows, training) -> list[dict]:
+    """Table 2: the shipped ProtoRes as measured in this run, then the stored 2,000-step runs."""
     from ..paths import samples_dir
 
+    t1 = {(r["benchmark"], r["method"]): r for r in rows if r.get("table") == 1}
+    out = []
+    if ("random", "ProtoRes") in t1 and ("5point", "ProtoRes") in t1:
+        tr = next((r for r in training if r["method"] == "ProtoRes"), {})
+        out.append({"table": 2, "method": f"ProtoRes (shipped, {tr.get('steps')} steps)",
+                    **{f"{b}_{k}": t1[(b, "ProtoRes")][k] for b in ("random", "5point")
+                       for k in ("ikd_l2_e3", "loc_geo")},
+                    "train_min": tr.get("train_min")})
     path = samples_dir() / "results" / ABLATION_FILE
     if not path.is_file():
-        return [{"table": 2, "method": "(no ablation results: run `posekit train protores-ablation`)"}]
+        return out + [{"table": 2, "method": "(no stored ablations: run `posekit train protores-studies`)"}]
     res = json.loads(path.read_text())
-    return [{"table": 2, **r} for r in res["rows"]]
+    return out + [{"table": 2, **r} for r in res["rows"] if not r["method"].startswith("ProtoRes (shipped")]
 
 
 def run(cases: int | None = None, classical: bool = True, speed: bool = True, progress: bool = False) -> list[dict]:
@@ -174,8 +200,9 @@ def run(cases: int | None = None, classical: bool = True, speed: bool = True, pr
                      "mpjpe_mm": round(sc["mpjpe_mm"], 1)})
     if speed:
         rows += _speed_rows(solvers, benches["5point"])
-    rows += _training_rows(solvers)
-    rows += _ablation_rows()
+    training = _training_rows(solvers)
+    rows += training
+    rows += _ablation_rows(rows, training)
     return rows
 
 
@@ -197,12 +224,13 @@ TABLES = [
     ("The paper's claims on this run", ["claim", "holds", "detail"], {"table": "claims"}),
     ("Tolerance: ProtoRes on the random benchmark, every effector's Lambda set to one value",
      ["lambda", "sigma", "pos_mm", "rot_deg", "look_deg", "mpjpe_mm"], {"table": "tolerance"}),
-    ("Speed: one 5-point pose on one thread (solve: the Solver API; predict: the arrays) and batches of 1,000",
+    ("Speed: one 5-point pose on one thread (solve: the Solver API; predict: the arrays) and batches of 1,000\n"
+     "(predict: whole poses, float64 FK and quaternions; net: the network's pass alone)",
      ["method", "ms_solve", "ms_predict", "goal_ms", "paper_ms", "poses_per_s_1_thread", "poses_per_s_all_threads",
-      "goal_poses_per_s"], {"table": "speed"}),
+      "net_poses_per_s_1_thread", "net_poses_per_s_all_threads", "goal_poses_per_s"], {"table": "speed"}),
     ("Training (one thread; from each shipped checkpoint)", ["method", "parameters", "kB", "steps", "train_min",
                                                               "ms_per_step", "val_mpjpe_mm"], {"table": "training"}),
-    ("Table 2, ablations (random and 5-point benchmarks; stored results)",
+    ("Table 2, ablations (random and 5-point benchmarks; the 2,000-step runs are stored results)",
      ["method", "random_ikd_l2_e3", "random_loc_geo", "5point_ikd_l2_e3", "5point_loc_geo", "train_min"],
      {"table": 2}),
 ]
@@ -211,6 +239,7 @@ LABELS = {"ikd_l2_e3": "L_ikd-L2", "gpd_l2_e3": "L_gpd-L2", "loc_geo": "L_loc-ge
           "pos_mm": "pos mm", "rot_deg": "rot deg", "look_deg": "look deg", "ms_per_case": "ms/case",
           "ms_solve": "solve ms", "ms_predict": "predict ms", "goal_ms": "goal ms", "paper_ms": "paper ms",
           "poses_per_s_1_thread": "poses/s 1 thr", "poses_per_s_all_threads": "poses/s all",
+          "net_poses_per_s_1_thread": "net 1 thr", "net_poses_per_s_all_threads": "net all",
           "goal_poses_per_s": "goal poses/s", "train_min": "train min", "ms_per_step": "ms/step",
           "val_mpjpe_mm": "val MPJPE mm", "random_ikd_l2_e3": "random L_ikd", "random_loc_geo": "random L_loc",
           "5point_ikd_l2_e3": "5-pt L_ikd", "5point_loc_geo": "5-pt L_loc"}

@@ -142,14 +142,15 @@ class ProtoResSolver(SolverBase):
             raise ValueError(f"{self.name}: expected at least one effector, got none")
         if N > MAX_EFFECTORS:
             raise ValueError(f"{self.name}: at most {MAX_EFFECTORS} effectors per pose, got {N}")
-        bad = ~np.isin(joint, self.body)
+        bad = (joint < 0) | (joint >= self.skeleton.n_joints)
+        bad[~bad] = self._body_lookup[joint[~bad]] < 0
         if bad.any():
             j = int(joint[bad][0])
             what = self.skeleton.names[j] if 0 <= j < self.skeleton.n_joints else str(j)
             raise ValueError(f"{self.name}: joint {what} is not a body joint of {self.skeleton.name!r}; valid: "
                              + ", ".join(self.skeleton.names[b] for b in self.body))
-        if not np.isin(kind, list(KIND_IDS.values())).all():
-            raise ValueError(f"{self.name}: unknown kind id {int(kind[~np.isin(kind, [0, 1, 2])][0])}; valid: "
+        if ((kind < 0) | (kind > 2)).any():
+            raise ValueError(f"{self.name}: unknown kind id {int(kind[(kind < 0) | (kind > 2)][0])}; valid: "
                              + ", ".join(f"{v} {k}" for k, v in KIND_IDS.items()))
         if not (np.isfinite(value).all() and np.isfinite(tol).all()):
             raise ValueError(f"{self.name}: effector values or tolerances contain NaN or inf")
@@ -157,9 +158,11 @@ class ProtoResSolver(SolverBase):
             raise ValueError(f"{self.name}: tolerance Lambda must lie in [0, 1] (0 exact, 1 loosest: "
                              f"{SIGMA_M} m or rad of noise), got {float(tol[(tol < 0) | (tol > 1)][0])!r}")
         bj = self._body_lookup[joint]
+        exact = False
         if self._numpy is not None and len(bj) <= NUMPY_BATCH:  # few requests: the numpy pass is faster
             out = self._numpy.forward(bj, kind, value, tol)
             c = self._numpy._centroid(kind, value.astype(np.float32), tol.astype(np.float32))
+            exact = True  # its pose is float64 FK of its rotations already
         else:
             with torch.no_grad():
                 t = [torch.as_tensor(bj), torch.as_tensor(kind, dtype=torch.int64),
@@ -173,7 +176,7 @@ class ProtoResSolver(SolverBase):
         quats = matrix_to_quat(torch.from_numpy(f64(out["local_rot"]))).numpy()
         quats /= np.linalg.norm(quats, axis=-1, keepdims=True)
         root = f64(out["root_pos"])
-        gpos, grot = fk(self.skeleton, quats, root)
+        gpos, grot = (out["global_pos"], out["global_rot"]) if exact else fk(self.skeleton, quats, root)
         res = {"global_pos": gpos, "global_rot": grot, "local_rot": quats, "root_pos": root,
                "gpd_pos": f64(out["gpd_pos"]), "out_of_range": far}
         if one:

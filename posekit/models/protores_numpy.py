@@ -32,7 +32,7 @@ def _run_block(blk, x):
     h = x
     for W, b in fcs:
         h = h @ W + b
-        h = np.where(h > 0, h, np.float32(0.01) * h)  # LeakyReLU, torch's default slope
+        h = np.maximum(h, np.float32(0.01) * h)  # LeakyReLU, torch's default slope
     return np.maximum(h + x @ Ws + bs, 0), h @ Wf + bf
 
 
@@ -49,7 +49,8 @@ class NumpyPosingNet:
 
     ``forward(joint, kind, value, tol)`` takes the arrays of ``PosingNet.forward`` (body-joint ids, kind ids,
     values (B, N, 6), Lambda) and returns ``global_pos`` (B, J, 3), ``global_rot`` (B, J, 3, 3),
-    ``local_rot`` (B, J, 3, 3), ``root_pos`` (B, 3) and ``gpd_pos`` (B, J, 3) or None, float32.
+    ``local_rot`` (B, J, 3, 3), ``root_pos`` (B, 3) — float64, the pose exactly FK of its rotations — and
+    ``gpd_pos`` (B, J, 3) or None (float32).
     """
 
     def __init__(self, net):
@@ -71,11 +72,11 @@ class NumpyPosingNet:
         self.ikd = [_block(b) for b in net.ikd.blocks]
         s = net.skeleton
         self.parents = np.asarray(s.parents)
-        self.offsets = np.asarray(s.offsets, dtype=np.float32)
+        self.offsets = np.asarray(s.offsets, dtype=np.float64)
         self.body = net.body
         self.pelvis_index = net.pelvis_index
         self.helper_root = net.helper_root
-        self.pelvis_offset = net.pelvis_offset.numpy()
+        self.pelvis_offset = np.asarray(s.offsets[s.pelvis()], dtype=np.float64)
         self.J = s.n_joints
 
     def _centroid(self, kind, value, tol):
@@ -112,12 +113,13 @@ class NumpyPosingNet:
         else:
             out = _run_fcr(self.ikd, code)
             pelvis = out[:, 6 * nb:]
-        local = np.broadcast_to(np.eye(3, dtype=np.float32), (Bn, self.J, 3, 3)).copy()
-        local[:, self.body] = sixd_to_matrix(out[:, :6 * nb].reshape(Bn, nb, 6)).astype(np.float32)
-        pelvis = pelvis + c
+        # from here on float64: Gram-Schmidt and FK, so that the pose is exactly FK of its rotations
+        local = np.broadcast_to(np.eye(3), (Bn, self.J, 3, 3)).copy()
+        local[:, self.body] = sixd_to_matrix(out[:, :6 * nb].reshape(Bn, nb, 6))
+        pelvis = (pelvis + c).astype(np.float64)
         root = pelvis - self.pelvis_offset if self.helper_root >= 0 else pelvis
         G = np.empty_like(local)
-        P = np.empty((Bn, self.J, 3), dtype=np.float32)
+        P = np.empty((Bn, self.J, 3))
         G[:, 0], P[:, 0] = local[:, 0], root
         for j in range(1, self.J):
             p = self.parents[j]
