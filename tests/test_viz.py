@@ -121,6 +121,12 @@ def test_effector_editor_edits_every_kind_and_re_solves():
     look = ed.add("Hand_L", "look_at")
     assert ed.effectors[look].kind == "look_at" and np.isclose(np.linalg.norm(ed.effectors[look].axis), 1)
     ed.move_target(look, ed.effectors[look].target + [0.0, 0.5, 0.0])
+    v = ed.viewers["ProtoRes"]  # the look-at target: an orange marker and a ray from the hand to it
+    assert set(v.look_targets) == {"Hand_L"} and v._look_mesh.mesh.visible and v._rays.visible
+    ray = v._rays.geometry.attributes["position"].array
+    hand = ed.results["ProtoRes"].pose.global_pos[s.index("Hand_L")]
+    assert np.allclose(ray[0], hand, atol=1e-5) and np.allclose(ray[1], ed.effectors[look].target, atol=1e-5)
+    assert v._targets_mesh.n == 5 and v._look_mesh.n == 1  # five red position targets, one orange look-at
     ed.set_tolerance(0, 1.0)
     assert ed.effectors[0].tolerance == pytest.approx(0.1)
     assert not np.allclose(ed.results["ProtoRes"].pose.global_pos, before)

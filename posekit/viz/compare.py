@@ -118,6 +118,7 @@ class SolverPanel:
         # points to draw: position and look-at targets (a rotation has none)
         targets = {self.skeleton.names[self.skeleton.index(e.joint)]: e.target for e in effs
                    if e.kind in ("position", "look_at")}
+        looks = {self.skeleton.names[self.skeleton.index(e.joint)]: e.target for e in effs if e.kind == "look_at"}
         for name, solver in self.solvers.items():
             t = time.perf_counter()
             try:
@@ -130,5 +131,5 @@ class SolverPanel:
             self.results[name] = res
             v = self.viewers[name]
             v.set_pose(res.pose.global_pos)
-            v.set_targets(targets)
+            v.set_targets(targets, looks)
             self.labels[name].value = status_line(res, ms)

@@ -11,6 +11,7 @@ a tolerance comes in as ``tolerance_of``).
 * **Each effector's row** — its tolerance slider (``Lambda`` in [0, 1]: 0 exact, 1 loose), for a rotation
   effector yaw / pitch / roll sliders (degrees, applied in the world frame on top of the rotation it was
   added with), and *remove*.
+* **Markers** — position targets are red; a look-at target is orange, with a ray from its joint.
 * **Move a target** — pick the effector's joint in the first view (double-click or the joint list) and
   drag the X/Y/Z sliders: a position target moves, or the point a look-at effector faces.
 """
@@ -217,10 +218,14 @@ class EffectorEditor:
     def solve(self):
         """Solve with every solver and refresh the views (a solver that refuses says why under its view)."""
         effs = self.effectors
-        targets = {r["joint"]: r["target"] for r in self.rows if r["kind"] in ("position", "look_at")}
+        # the sliders move a joint's position target, else its look-at target; look-at targets are
+        # drawn apart (orange, with a ray from the joint)
+        looks = {r["joint"]: r["target"] for r in self.rows if r["kind"] == "look_at"}
+        targets = dict(looks)
+        targets.update({r["joint"]: r["target"] for r in self.rows if r["kind"] == "position"})
         for name, solver in self.solvers.items():
             v = self.viewers[name]
-            v.set_targets(targets)
+            v.set_targets(targets, looks)
             if not effs:
                 self.labels[name].value = "add an effector"
                 continue

@@ -140,7 +140,7 @@ class SkeletonViewer:
         J = skeleton.n_joints
         self.pose = np.array(rest_pose(skeleton) if pose is None else pose, dtype=float)
         self._check(self.pose, "pose")
-        self.targets = {}
+        self.targets, self.look_targets = {}, {}
         self.selected = None
         self._select_callbacks, self._target_callbacks = [], []
         self._syncing = False
@@ -233,6 +233,7 @@ class SkeletonViewer:
         self.pose = self._check(global_pos, "pose").copy()
         self._bones.set(self.pose)
         self._joints.set(self.pose)
+        self._draw_rays()
         if self.selected is not None:
             self._selected_marker.set(self.pose[[self.skeleton.index(self.selected)]])
             self._update_status()
@@ -247,24 +248,52 @@ class SkeletonViewer:
         self._ghost_joints.set(g)
         self._ghost_group.visible = True
 
-    def set_targets(self, targets: dict):
-        """Replace the target markers: joint name -> (3,) position in metres."""
+    def _points(self, targets: dict, what: str) -> dict:
         new = {}
         for name, p in targets.items():
-            self.skeleton.index(name)
+            name = self.skeleton.names[self.skeleton.index(name)]
             p = np.asarray(p, dtype=float).reshape(3)
             if not np.all(np.isfinite(p)):
-                raise ValueError(f"target for {name} contains NaN or inf")
+                raise ValueError(f"{what} for {name} contains NaN or inf")
             new[name] = p
-        rebuild = set(new) != set(self.targets) or self._targets_mesh is None
-        self.targets = new
+        return new
+
+    def set_targets(self, targets: dict, look_at: dict | None = None):
+        """Replace the target markers: joint name -> (3,) position in metres (red spheres; the sliders
+        move these). ``look_at``: joint name -> (3,) point the joint should face, drawn as an orange
+        sphere with a ray from the joint (a joint may appear in both)."""
+        new = self._points(targets, "target")
+        looks = self._points(look_at or {}, "look-at target")
+        red = {n: p for n, p in new.items() if not (n in looks and np.array_equal(looks[n], p))}
+        key = (tuple(red), tuple(looks))
+        rebuild = key != getattr(self, "_target_key", None) or self._targets_mesh is None
+        self.targets, self.look_targets, self._target_key = new, looks, key
         if rebuild:
-            self._targets_mesh = _Spheres(max(len(new), 1), self._joints.radius * 1.3, "#e74c3c")
-            self._targets_mesh.mesh.visible = bool(new)
-            self._target_group.children = [self._targets_mesh.mesh]
-        if new:
-            self._targets_mesh.set(np.array(list(new.values())))
+            import pythreejs as three
+
+            self._targets_mesh = _Spheres(max(len(red), 1), self._joints.radius * 1.3, "#e74c3c")
+            self._targets_mesh.mesh.visible = bool(red)
+            self._look_mesh = _Spheres(max(len(looks), 1), self._joints.radius * 1.3, "#e67e22")
+            self._look_mesh.mesh.visible = bool(looks)
+            self._rays = three.LineSegments(
+                three.BufferGeometry(attributes={"position": three.BufferAttribute(
+                    np.zeros((2 * max(len(looks), 1), 3), np.float32), normalized=False)}),
+                three.LineBasicMaterial(color="#e67e22", linewidth=1))
+            self._rays.visible = bool(looks)
+            self._target_group.children = [self._targets_mesh.mesh, self._look_mesh.mesh, self._rays]
+        if red:
+            self._targets_mesh.set(np.array(list(red.values())))
+        if looks:
+            self._look_mesh.set(np.array(list(looks.values())))
+        self._draw_rays()
         self._sync_sliders()
+
+    def _draw_rays(self):
+        looks = getattr(self, "look_targets", {})
+        if looks:
+            joints = self.pose[[self.skeleton.index(n) for n in looks]]
+            seg = np.stack([joints, np.array(list(looks.values()))], axis=1).reshape(-1, 3)
+            self._rays.geometry.attributes["position"].array = seg.astype(np.float32)
 
     def frame_camera(self):
         """Re-centre the view on the current pose."""
@@ -329,7 +358,7 @@ class SkeletonViewer:
         name = self.skeleton.names[self.skeleton.index(joint)]
         targets = dict(self.targets)
         targets[name] = np.asarray(position, dtype=float).reshape(3)
-        self.set_targets(targets)
+        self.set_targets(targets, self.look_targets)
         self._update_status()
         for cb in self._target_callbacks:
             cb(name, self.targets[name].copy())
