@@ -33,6 +33,9 @@ GOAL_POSES_PER_S = 20_000
 PAPER_MS = 10.0
 """About 100 FPS for one pose in Unity (the paper's Sec. 5)."""
 
+BATCH = 1000
+"""Poses per batch of the throughput rows (whatever ``--cases`` says)."""
+
 ABLATION_FILE = "protores_ablation.json"
 LEARNED = ("protores", "masked-fcr", "transformer")
 
@@ -87,7 +90,7 @@ def _speed_rows(solvers, five) -> list[dict]:
     effs = five.effectors(0)
     for arch, solver in solvers.items():
         args = solver.arrays(solver.resolve(effs))
-        n = len(five)
+        n = BATCH
         with limit_threads(1):
             for _ in range(5):
                 solver.solve(None, effs)
@@ -102,7 +105,7 @@ def _speed_rows(solvers, five) -> list[dict]:
                 solver.predict(*args)
                 tp.append(time.perf_counter() - t)
             batch = tuple(a[None].repeat(n, 0) for a in args)
-            solver.predict(*(b[:8] for b in batch))
+            solver.predict(*batch)  # warm-up of the batched (torch) path
             t = time.perf_counter()
             solver.predict(*batch)
             one = time.perf_counter() - t
@@ -156,11 +159,10 @@ def _ablation_rows(rows, training) -> list[dict]:
 
 def run(cases: int | None = None, classical: bool = True, speed: bool = True, progress: bool = False) -> list[dict]:
     """Every table of the module docstring; one dict per row. ``cases`` limits each benchmark (default all)."""
-    import dataclasses
-
     from ..data.bandai_mini import load_bandai_mini
     from ..models.protores_benchmarks import BENCHMARKS, load_benchmark
     from ..models.protores_eval import run_classical, run_learned, scores
+    from ..models.protores import tolerance_to_sigma
     from ..models.protores_ik import ProtoResSolver
 
     motions = load_bandai_mini()
@@ -168,10 +170,7 @@ def run(cases: int | None = None, classical: bool = True, speed: bool = True, pr
     benches = {}
     for name in BENCHMARKS:
         b = load_benchmark(name, motions)
-        if cases is not None:
-            b = dataclasses.replace(b, **{f.name: getattr(b, f.name)[:cases] for f in dataclasses.fields(b)
-                                          if f.name not in ("name", "skeleton")})
-        benches[name] = b
+        benches[name] = b if cases is None else b.first(cases)
     solvers = {arch: ProtoResSolver(s, arch=arch) for arch in LEARNED}
     rows = []
     from ..learn.threads import limit_threads
@@ -194,7 +193,7 @@ def run(cases: int | None = None, classical: bool = True, speed: bool = True, pr
     for lam in (0.0, 0.5, 0.7, 0.8, 0.9, 1.0):
         r = run_learned(solvers["protores"], b, tolerance=lam)
         sc = scores(b, r["global_pos"], r["local_rot"], r["global_rot"])
-        rows.append({"table": "tolerance", "lambda": lam, "sigma": round(0.1 * lam ** 13, 5),
+        rows.append({"table": "tolerance", "lambda": lam, "sigma": round(tolerance_to_sigma(lam), 5),
                      "pos_mm": round(sc["pos_mm"], 2),
                      "rot_deg": round(sc["rot_deg"], 2), "look_deg": round(sc["look_deg"], 2),
                      "mpjpe_mm": round(sc["mpjpe_mm"], 1)})

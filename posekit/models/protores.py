@@ -153,7 +153,8 @@ class PosingNet(nn.Module):
         dict of tensors
             ``gpd_pos`` (B, J, 3) the GPD's positions (None without the GPD); ``local_rot`` (B, J, 3, 3);
             ``root_pos`` (B, 3); ``global_pos`` (B, J, 3) and ``global_rot`` (B, J, 3, 3) by FK. ``J`` is the
-            skeleton's joint count (helper root included), world frame.
+            skeleton's joint count (helper root included), world frame; ``centroid`` (B, 3) the effectors'
+            centroid the inputs were re-referenced to.
         """
         c = centroid(kind, value, tol)
         code = self.encode(joint, kind, effector_inputs(kind, value, c), tol)
@@ -180,7 +181,8 @@ class PosingNet(nn.Module):
             gpd_full[:, self.body] = gpd + c[:, None]
             if self.helper_root >= 0:
                 gpd_full[:, self.helper_root] = pelvis - self.pelvis_offset
-        return {"gpd_pos": gpd_full, "local_rot": local, "root_pos": root, "global_pos": gpos, "global_rot": grot}
+        return {"gpd_pos": gpd_full, "local_rot": local, "root_pos": root, "global_pos": gpos, "global_rot": grot,
+                "centroid": c}
 
     # ---------------------------------------------------------------------------------- files
     def save(self, path, *, command: str = "", seed: int | None = None, data: str = "", licence: str = "",

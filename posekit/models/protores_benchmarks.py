@@ -96,6 +96,13 @@ class EffectorBenchmark:
     def __len__(self):
         return len(self.frames)
 
+    def first(self, n: int) -> "EffectorBenchmark":
+        """The benchmark's first ``n`` cases (a quicker run of the same cases)."""
+        from dataclasses import fields, replace
+
+        return replace(self, **{f.name: getattr(self, f.name)[:n] for f in fields(self)
+                                if f.name not in ("name", "skeleton")})
+
     def effectors(self, i: int) -> list[Effector]:
         """Case ``i`` as :class:`~posekit.ik.effectors.Effector` objects (what a Solver takes)."""
         out = []

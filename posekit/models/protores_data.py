@@ -124,7 +124,7 @@ class Batch:
     global_pos: torch.Tensor
 
 
-def add_noise(kind, pos, rot, lookdir, sigma, gen):
+def add_noise(pos, rot, lookdir, sigma, gen):
     """The three noise models (Appendix B), one per kind, each of scale ``sigma`` (B, N).
 
     * position: ``p + sigma n``, ``n ~ N(0, I_3)`` (metres);
@@ -192,7 +192,7 @@ def draw_batch(bank: PoseBank, batch: int, gen: torch.Generator, n_min: int = 3,
     tol = torch.rand(batch, N, generator=gen)
     sigma = SIGMA_M * tol ** ETA
     if noise:
-        pos_n, rot_n, dir_n = add_noise(kind, pos, rot, lookdir, sigma, gen)
+        pos_n, rot_n, dir_n = add_noise(pos, rot, lookdir, sigma, gen)
     else:
         pos_n, rot_n, dir_n = pos, rot, lookdir
     target = pos + dist * dir_n

@@ -24,36 +24,21 @@ from __future__ import annotations
 import numpy as np
 
 from ..data.metrics import body_joints
-from ..ik.effectors import errors_into
-from ..rotations import geodesic_distance, quat_to_matrix, sixd_to_matrix
+from ..ik.effectors import errors_of, resolve_effectors
+from ..rotations import geodesic_distance, quat_to_matrix
 from .protores import KIND_IDS, sigma_to_tolerance
 
 __all__ = ["scores", "run_learned", "run_classical", "rest_starts", "effector_error_table"]
 
 
-def _targets(bench, i):
-    n = int(bench.n[i])
-    kind = bench.kind[i, :n]
-    v = bench.value[i, :n]
-    tpos = np.ascontiguousarray(v[:, :3])
-    trot = np.broadcast_to(np.eye(3), (n, 3, 3)).copy()
-    rot = kind == KIND_IDS["rotation"]
-    if rot.any():
-        trot[rot] = sixd_to_matrix(v[rot])
-    axis = np.ascontiguousarray(np.where((kind == KIND_IDS["look_at"])[:, None], v[:, 3:], 0.0))
-    return bench.joint[i, :n].astype(np.int64), kind.astype(np.int64), tpos, trot, axis
-
-
 def effector_error_table(bench, global_pos, global_rot) -> np.ndarray:
-    """Every effector's error, shape (C, K) (NaN past each case's ``n``): metres or radians by kind."""
+    """Every effector's error, shape (C, K) (NaN past each case's ``n``): metres or radians by kind, by the
+    solvers' own definition (:func:`posekit.ik.effectors.errors_of`)."""
     C, K = bench.joint.shape
     out = np.full((C, K), np.nan)
     for i in range(C):
-        j, kind, tpos, trot, axis = _targets(bench, i)
-        e = np.empty(len(j))
-        errors_into(np.ascontiguousarray(global_pos[i]), np.ascontiguousarray(global_rot[i]), j, kind, tpos, trot,
-                    axis, e)
-        out[i, :len(j)] = e
+        res = resolve_effectors(bench.skeleton, bench.effectors(i))
+        out[i, :len(res)] = errors_of(global_pos[i], global_rot[i], res)[0]
     return out
 
 
@@ -162,14 +147,12 @@ def run_classical(name: str, bench, motions, progress: bool = False, **options) 
         start = Pose.from_rotations(s, q[i], root[i])
         r = solver.solve(start, effs)
         P[i] = r.pose.global_pos
-        Lq[i] = r.pose.local_rot if r.pose.local_rot is not None else q[i]
-        if r.pose.root_pos is not None:
-            R0[i] = r.pose.root_pos
+        if r.pose.local_rot is not None:
+            Lq[i], R0[i] = r.pose.local_rot, r.pose.root_pos
     sec = time.perf_counter() - t
-    L = quat_to_matrix(Lq)
     if "rotation" not in solver.kinds:  # positions only: rotations that turn the start's bones onto them
-        L, root_new = rotations_from_positions(s, quat_to_matrix(q), root, P)
-        G = fk(s, L, root_new)[1]
+        L, R0 = rotations_from_positions(s, quat_to_matrix(q), root, P)
     else:
-        G = fk(s, L, R0)[1]
+        L = quat_to_matrix(Lq)
+    G = fk(s, L, R0)[1]
     return {"global_pos": P, "local_rot": L, "global_rot": G, "gpd_pos": None, "seconds": sec}

@@ -31,7 +31,7 @@ from ..ik.registry import register
 from ..kinematics import fk
 from ..learn import load_cached, require_skeleton
 from ..rotations import matrix_to_quat, matrix_to_sixd
-from .protores import ARCHS, KIND_IDS, SIGMA_M, PosingNet, centroid, sigma_to_tolerance
+from .protores import ARCHS, KIND_IDS, SIGMA_M, PosingNet, sigma_to_tolerance
 from .protores_numpy import NumpyPosingNet
 from .protores_train import weights_path
 
@@ -95,7 +95,6 @@ class ProtoResSolver(SolverBase):
         self.arch = self.net.config.arch
         self.name = "protores" if self.arch == "protores" else f"protores-{self.arch}"
         self.body = np.asarray(body_joints(skeleton), dtype=np.int64)
-        self._body_index = {int(j): i for i, j in enumerate(self.body)}
         self._body_lookup = np.full(skeleton.n_joints, -1, dtype=np.int64)
         self._body_lookup[self.body] = np.arange(len(self.body))
         self.span = skeleton_span(skeleton)
@@ -158,18 +157,16 @@ class ProtoResSolver(SolverBase):
             raise ValueError(f"{self.name}: tolerance Lambda must lie in [0, 1] (0 exact, 1 loosest: "
                              f"{SIGMA_M} m or rad of noise), got {float(tol[(tol < 0) | (tol > 1)][0])!r}")
         bj = self._body_lookup[joint]
-        exact = False
-        if self._numpy is not None and len(bj) <= NUMPY_BATCH:  # few requests: the numpy pass is faster
+        exact = self._numpy is not None and len(bj) <= NUMPY_BATCH  # few requests: the numpy pass is faster
+        if exact:  # its pose is float64 FK of its rotations already
             out = self._numpy.forward(bj, kind, value, tol)
-            c = self._numpy._centroid(kind, value.astype(np.float32), tol.astype(np.float32))
-            exact = True  # its pose is float64 FK of its rotations already
         else:
             with torch.no_grad():
                 t = [torch.as_tensor(bj), torch.as_tensor(kind, dtype=torch.int64),
                      torch.as_tensor(value, dtype=torch.float32), torch.as_tensor(tol, dtype=torch.float32)]
                 out = {k: None if v is None else v.numpy() for k, v in self.net(*t).items()}
-                c = centroid(t[1], t[2], t[3]).numpy()
-        far = (kind == KIND_IDS["position"]) & (np.linalg.norm(value[..., :3] - c[:, None], axis=-1) > self.span)
+        far = (kind == KIND_IDS["position"]) & (
+            np.linalg.norm(value[..., :3] - out["centroid"][:, None], axis=-1) > self.span)
         f64 = lambda a: None if a is None else a.astype(np.float64)  # noqa: E731
         # the pose as float64 quaternions and root, and its FK in float64: a Pose that is exactly what
         # FK of its rotations gives (the network's own float32 FK agrees to about 1e-6 m)
@@ -215,9 +212,6 @@ class ProtoResSolver(SolverBase):
         return self.result(pose, resolved, 1, info, global_rot=pick(res["global_rot"]))
 
     def _solve(self, start, resolved):
-        if any(int(j) not in self._body_index for j in resolved.joints):
-            self.predict(resolved.joints[None], np.zeros((1, len(resolved)), np.int64), np.zeros((1, len(resolved), 6)),
-                         np.zeros((1, len(resolved))))  # raises the message naming the joint
         return self._result(self.predict(*self.arrays(resolved)), resolved)
 
     def _solve_many(self, starts, resolved):
@@ -237,7 +231,6 @@ def _variant(arch):
     def factory(skeleton, weights=None, **options):
         return ProtoResSolver(skeleton, arch=arch, weights=weights, **options)
 
-    factory.kinds, factory.needs_start = KINDS, False
     return factory
 
 

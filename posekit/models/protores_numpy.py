@@ -50,7 +50,7 @@ class NumpyPosingNet:
     ``forward(joint, kind, value, tol)`` takes the arrays of ``PosingNet.forward`` (body-joint ids, kind ids,
     values (B, N, 6), Lambda) and returns ``global_pos`` (B, J, 3), ``global_rot`` (B, J, 3, 3),
     ``local_rot`` (B, J, 3, 3), ``root_pos`` (B, 3) — float64, the pose exactly FK of its rotations — and
-    ``gpd_pos`` (B, J, 3) or None (float32).
+    ``gpd_pos`` (B, J, 3) or None and ``centroid`` (B, 3) (float32).
     """
 
     def __init__(self, net):
@@ -131,4 +131,5 @@ class NumpyPosingNet:
             gpd_full[:, self.body] = gpd + c[:, None]
             if self.helper_root >= 0:
                 gpd_full[:, self.helper_root] = root
-        return {"gpd_pos": gpd_full, "local_rot": local, "root_pos": root, "global_pos": P, "global_rot": G}
+        return {"gpd_pos": gpd_full, "local_rot": local, "root_pos": root, "global_pos": P, "global_rot": G,
+                "centroid": c}

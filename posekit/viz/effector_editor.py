@@ -23,7 +23,6 @@ import time
 
 import numpy as np
 
-from ..conventions import FORWARD
 from ..ik.api import Effector, Pose
 from ..kinematics import fk
 from ..rotations import euler_to_quat, quat_to_matrix
@@ -81,7 +80,6 @@ class EffectorEditor:
         self.add_button.on_click(lambda _: self._add_clicked())
         self.message = w.HTML()
         self.rows_box = w.VBox([])
-        self._quiet = False
         self.widget = w.VBox([w.HBox(boxes), self.first.controls,
                               w.HBox([self.add_joint, self.add_kind, self.add_button, self.message]), self.rows_box])
         self._quiet = True
@@ -128,7 +126,7 @@ class EffectorEditor:
                 heading = facing_angle(self.skeleton, P)
                 world = np.array([np.sin(heading), 0.0, np.cos(heading)])
                 axis = G[j].T @ world
-            row["axis"] = np.asarray(axis, float) if axis is not None else FORWARD.copy()
+            row["axis"] = np.asarray(axis, float)
             row["target"] = P[j] + G[j] @ row["axis"] if target is None else np.asarray(target, float)
         tol = w.FloatSlider(value=float(lam), min=0.0, max=1.0, step=0.01, description="tolerance",
                             continuous_update=False, layout=w.Layout(width="260px"))
@@ -206,7 +204,7 @@ class EffectorEditor:
         for r in self.rows:
             tol = float(self.tolerance_of(r["lam"], r["kind"]))
             if r["kind"] == "rotation":
-                turn = quat_to_matrix(euler_to_quat(r["euler"][[0, 1, 2]], "YXZ", degrees=True))
+                turn = quat_to_matrix(euler_to_quat(r["euler"], "YXZ", degrees=True))
                 out.append(Effector(r["joint"], turn @ r["base"], "rotation", tolerance=tol))
             elif r["kind"] == "look_at":
                 out.append(Effector(r["joint"], r["target"], "look_at", tolerance=tol, axis=r["axis"]))

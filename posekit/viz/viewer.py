@@ -152,7 +152,7 @@ class SkeletonViewer:
         self._selected_marker = _Spheres(1, joint_radius * 1.6, "#f1c40f", opacity=0.6)
         self._ghost_group = three.Group(children=[self._ghost_bones.lines, self._ghost_joints.mesh])
         self._target_group = three.Group()
-        self._targets_mesh = None
+        self._targets_mesh, self._target_key = None, None
         self._selected_marker.mesh.visible = False
 
         # The scene content sits in a group shifted by -centre, so the orbit pivot (the origin,
@@ -266,7 +266,7 @@ class SkeletonViewer:
         looks = self._points(look_at or {}, "look-at target")
         red = {n: p for n, p in new.items() if not (n in looks and np.array_equal(looks[n], p))}
         key = (tuple(red), tuple(looks))
-        rebuild = key != getattr(self, "_target_key", None) or self._targets_mesh is None
+        rebuild = key != self._target_key or self._targets_mesh is None
         self.targets, self.look_targets, self._target_key = new, looks, key
         if rebuild:
             import pythreejs as three
@@ -289,7 +289,7 @@ class SkeletonViewer:
         self._sync_sliders()
 
     def _draw_rays(self):
-        looks = getattr(self, "look_targets", {})
+        looks = self.look_targets
         if looks:
             joints = self.pose[[self.skeleton.index(n) for n in looks]]
             seg = np.stack([joints, np.array(list(looks.values()))], axis=1).reshape(-1, 3)
