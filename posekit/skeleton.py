@@ -202,6 +202,17 @@ class Skeleton:
                 out[j] = self.names.index(other)
         return out
 
+    def sides(self) -> np.ndarray:
+        """Which side of the body each joint is on, from its name: +1 left, -1 right, 0 central, shape (J,)
+        (``"left_hip"``, ``"Hand_L"``, ``"LeftArm"`` are left; a name without a side marker is central)."""
+        out = np.zeros(self.n_joints, dtype=int)
+        for j, n in enumerate(self.names):
+            for pattern, other in _SIDE_SWAPS:
+                if pattern.search(n):
+                    out[j] = 1 if other.strip("_").upper().startswith("R") else -1
+                    break
+        return out
+
     def is_symmetric(self, atol: float = 1e-4) -> bool:
         """True when mirrored rest offsets (x -> -x, sides swapped) equal the offsets within ``atol`` metres."""
         m = self.mirror_indices()

@@ -15,8 +15,111 @@ def test_viewer_updates_buffers_not_scene(sample):
     attr = v._joints.geometry.attributes["position"]
     v.set_pose(sample.global_pos[50])
     assert v.scene.children is children and v._joints.geometry.attributes["position"] is attr
-    np.testing.assert_allclose(v._bones.geometry.attributes["position"].array.reshape(-1, 2, 3)[:, 1],
-                               sample.global_pos[50][1:], atol=1e-6)
+    # each bone is a ring of vertices round the parent and one round the child, at the bone's radius
+    b = v._bones
+    rings = b.geometry.attributes["position"].array.reshape(-1, 2, b.sides, 3)
+    pos = sample.global_pos[50]
+    np.testing.assert_allclose(rings[:, 1].mean(1), pos[b.pairs[:, 1]], atol=1e-5)
+    np.testing.assert_allclose(rings[:, 0].mean(1), pos[b.pairs[:, 0]], atol=1e-5)
+    np.testing.assert_allclose(np.linalg.norm(rings[:, 1] - pos[b.pairs[:, 1]][:, None], axis=-1), b.radius, atol=1e-5)
+    axis = pos[b.pairs[:, 1]] - pos[b.pairs[:, 0]]
+    radial = rings[:, 1] - pos[b.pairs[:, 1]][:, None]
+    assert np.abs(np.einsum("bsk,bk->bs", radial, axis)).max() < 1e-5  # rings square to the bone
+    normals = b.geometry.attributes["normal"].array.reshape(rings.shape)
+    np.testing.assert_allclose(normals[:, 1] * b.radius, radial, atol=1e-5)
+
+
+def test_bones_are_coloured_by_side(sample):
+    s = sample.skeleton
+    v = SkeletonViewer(s)
+    colours = v._bones.geometry.attributes["color"].array.reshape(len(v._bones.pairs), -1, 3)[:, 0]
+    side = s.sides()[v._bones.pairs[:, 1]]
+    left, right, centre = (colours[side == k] for k in (1, -1, 0))
+    assert len(left) and len(right) and len(centre)
+    assert np.ptp(left, axis=0).max() == 0 and np.ptp(right, axis=0).max() == 0
+    assert left[0, 2] > left[0, 0] and right[0, 0] > right[0, 2]  # left blue, right red
+    assert list(s.sides()[[s.index("left_hip"), s.index("right_hip"), s.index("chest")]]) == [1, -1, 0]
+
+
+def _in_view(v, pos):
+    """Every joint inside the camera's field of view (pinhole model of the viewer's camera)."""
+    cam = np.asarray(v.camera.position, float)
+    forward = -cam / np.linalg.norm(cam)  # the camera looks at the orbit pivot, the origin
+    right = np.cross(forward, [0.0, 1.0, 0.0])
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    rel = pos - v._offset - cam
+    depth = rel @ forward
+    tan_v = np.tan(np.radians(v.FOV) / 2)
+    return bool(np.all(depth > 0) and np.all(np.abs(rel @ up) / depth < tan_v)
+                and np.all(np.abs(rel @ right) / depth < tan_v * v.aspect))
+
+
+def test_camera_keeps_the_pose_framed(sample):
+    s = sample.skeleton
+    v = SkeletonViewer(s, sample.global_pos[0], width=300, height=330)
+    assert _in_view(v, sample.global_pos[0])
+    far = sample.global_pos[0] + np.array([3.0, 0.0, -4.0])
+    assert not _in_view(v, far)
+    v.set_pose(far)  # a pose that walked off: the view follows it
+    assert _in_view(v, far)
+    # playback: framed on the whole clip, every frame in view without moving the camera again
+    frames = sample.global_pos[sample.clip_frames("walk")]
+    w = SkeletonViewer(s, frames[0], width=300, height=330)
+    w.player(frames)
+    cam = list(w.camera.position)
+    assert all(_in_view(w, f) for f in frames[::10])
+    w.set_pose(frames[-1])
+    assert list(w.camera.position) == cam
+
+
+def test_drag_moves_the_target_across_the_camera_facing_plane(sample):
+    from posekit.viz.viewer import drag_point
+
+    np.testing.assert_allclose(drag_point([0, 0, 5], [0, 1, 4], [0, 0, 0], [0, 0, 1]), [0, 5, 0])
+    assert drag_point([0, 0, 5], [1, 0, 5], [0, 0, 0], [0, 0, 1]) is None  # parallel to the plane
+    assert drag_point([0, 0, 5], [0, 0, 6], [0, 0, 0], [0, 0, 1]) is None  # behind the camera
+    s = sample.skeleton
+    v = SkeletonViewer(s, sample.global_pos[0])
+    seen = []
+    v.on_target_change(lambda n, p: seen.append((n, p)))
+    hand = sample.global_pos[0][s.index("left_wrist")]
+    v.drag_mode.value = True
+    assert v.orbit.enabled is False
+    v.grab(hand + 0.005)  # pressed on the joint
+    assert v.dragging == "left_wrist" and v.selected == "left_wrist"
+    cam = np.asarray(v.camera.position) + v._offset
+    # the browser reports a point on the mouse ray (here: half-way to a point 10 cm right of the hand,
+    # seen from the camera); the target goes where the ray meets the plane through the hand
+    goal = hand + 0.1 * np.cross(cam - hand, [0, 1, 0]) / np.linalg.norm(np.cross(cam - hand, [0, 1, 0]))
+    v.drag_to(cam + 0.5 * (goal - cam))
+    assert seen and seen[-1][0] == "left_wrist"
+    np.testing.assert_allclose(v.targets["left_wrist"], goal, atol=1e-9)
+    np.testing.assert_allclose(v.sliders[0].value, goal[0], atol=v.SLIDER_STEP)
+    v._on_release({"new": [0, 0, 0]})
+    n = len(seen)
+    v.drag_to(cam + 0.5 * (hand - cam))
+    assert len(seen) == n  # released: moving the mouse no longer drags
+    # pressed on the target marker (not the joint): the same target is grabbed again
+    v.grab(goal + 0.01)
+    assert v.dragging == "left_wrist"
+    v.drag_mode.value = False
+    assert v.orbit.enabled is True and v.dragging is None
+
+
+def test_target_sliders_are_fine_and_centred_on_the_joint(sample):
+    s = sample.skeleton
+    v = SkeletonViewer(s, sample.global_pos[0])
+    v.select("right_ankle")
+    ankle = sample.global_pos[0][s.index("right_ankle")]
+    for sl, c in zip(v.sliders, ankle):
+        assert sl.step == 0.001 and sl.min <= c - 0.49 and sl.max >= c + 0.49 and sl.max - sl.min < 1.01
+    # a target moved far away from code: the range follows it
+    v.move_target("right_ankle", ankle + [2.0, 0.0, 0.0])
+    assert v.sliders[0].min <= ankle[0] + 2.0 <= v.sliders[0].max
+    # stored under the joint's name whatever the caller used (a role here)
+    v.move_target("left_hand", [0.1, 1.0, 0.3])
+    assert "left_wrist" in v.targets and "left_hand" not in v.targets
 
 
 def test_viewer_selection_sliders_and_callbacks(sample):
@@ -29,7 +132,10 @@ def test_viewer_selection_sliders_and_callbacks(sample):
     v.sliders[1].value = v.sliders[1].value + 0.2
     assert seen and seen[-1][0] == "left_wrist"
     np.testing.assert_allclose(v.targets["left_wrist"][1], sample.global_pos[0][s.index("left_wrist"), 1] + 0.2)
-    # a double-click near a joint selects it
+    # a double-click near a joint selects it; one that hits nothing (distance None) changes nothing
+    v._on_pick({"new": [0.0, 0.0, 0.0]})
+    assert v.selected == "left_wrist"
+    v.picker.distance = 2.0
     v._on_pick({"new": list(sample.global_pos[0][s.index("head")] - v._offset + 0.01)})
     assert v.selected == "head"
 
@@ -85,12 +191,12 @@ def test_solver_panel_resolves_on_target_moves(sample):
         res = panel.results[name]
         assert res.converged, name
         np.testing.assert_allclose(panel.viewers[name].pose[s.index("left_hand")], target, atol=1e-3)
-        assert panel.labels[name].value.startswith("<b>✓ reached</b><br>"), panel.labels[name].value
+        assert panel.labels[name].value.startswith("<b>✓ reached</b><table"), panel.labels[name].value
     # a target out of every solver's reach is reported as not reached, each status on its own lines
     panel.move_target("left_hand", target + np.array([0.0, 5.0, 0.0]))
     for name in ("fabrik", "dls"):
         label = panel.labels[name].value
-        assert not panel.results[name].converged and label.startswith("<b>✗ not reached</b><br>"), label
+        assert not panel.results[name].converged and label.startswith("<b>✗ not reached</b><table"), label
         assert label.count("<br>") == 2 and "iterations," in label
 
 

@@ -15,13 +15,13 @@ import numpy as np
 from ..ik.api import Effector, Pose
 from .viewer import SkeletonViewer
 
-__all__ = ["SolverPanel", "solver_views"]
+__all__ = ["SolverPanel", "solver_views", "status_line", "status_table"]
 
 
 def status_line(result, ms: float) -> str:
-    """One solver's status under its view, as HTML on three lines: reached or not, the worst
-    effector error (mm for positions; degrees for rotation and look-at effectors, when there are any),
-    iterations and time (ms)."""
+    """One solver's status under its view, as a small HTML table: reached or not, the worst effector
+    error (mm for positions; degrees for rotation and look-at effectors, when there are any), iterations
+    and time (ms)."""
     mark = "✓ reached" if result.converged else "✗ not reached"
     it = result.iterations
     err = np.asarray(result.effector_error, dtype=float)
@@ -32,8 +32,15 @@ def status_line(result, ms: float) -> str:
         parts.append(f"{err[~angular].max() * 1000:.1f} mm")
     if angular.any():
         parts.append(f"{np.degrees(err[angular].max()):.1f}°")
-    return (f"<b>{mark}</b><br>worst effector {', '.join(parts)}<br>"
-            f"{it} iteration{'' if it == 1 else 's'}, {ms:.2f} ms")
+    return status_table(f"<b>{mark}</b>", [("worst effector", ", ".join(parts)),
+                                           (f"iteration{'' if it == 1 else 's'}", str(it)), ("time", f"{ms:.2f} ms")])
+
+
+def status_table(title: str, rows) -> str:
+    """A title over a two-column HTML table of ``(label, value)`` rows (values right-aligned)."""
+    body = "".join(f"<tr><td style='padding-right:10px'>{label}</td>"
+                   f"<td style='text-align:right;font-family:monospace'>{value}</td></tr>" for label, value in rows)
+    return f"{title}<table style='border-collapse:collapse'>{body}</table>"
 
 
 def solver_views(skeleton, names, pose, truth=None, width: int = 300, height: int = 330):

@@ -1,103 +1,60 @@
 """An interactive 3D skeleton viewer for Jupyter (pythreejs + ipywidgets).
 
-Introduced in ``notebooks/00_skeletons_and_poses.ipynb``; every later lesson poses through it.
-World axes: :mod:`posekit.conventions` (metres, Y up, the character faces +Z).
+Introduced in ``notebooks/00_skeletons_and_poses.ipynb``; every later lesson poses through it, and
+``notebooks/06_posing_studio.ipynb`` drags targets in it. World axes: :mod:`posekit.conventions`
+(metres, Y up, the character faces +Z).
 
-What it shows: a skeleton (bones as lines, joints as small spheres), an optional *ghost* pose for
-comparison, and *target* markers. Updating a pose rewrites the position buffers of the existing
-geometries instead of rebuilding the scene, so playback and live solving stay smooth.
+What it shows: a skeleton (bones as solid cylinders coloured by side — left blue, right red, centre
+grey — with a sphere at every joint, so that they read as capsules), an optional translucent *ghost*
+pose for comparison, *target* markers (red) and *look-at* targets (orange, with a ray from the joint).
+Updating a pose rewrites the buffers of the existing geometries (:mod:`posekit.viz.meshes`) instead of
+rebuilding the scene, so playback and live solving stay smooth. The camera keeps the pose framed: it is
+fitted to the pose (or to a whole clip in :meth:`SkeletonViewer.player`), and follows a pose that leaves
+the framed region.
 
 Interaction: orbit with the mouse (drag to rotate, wheel to zoom, right-drag to pan);
 **double-click** a joint to select it (a single-click picker would also fire at the end of every
-orbit drag); the X/Y/Z sliders then move that joint's target, and ``on_target_change`` callbacks
-(an IK solver, in later lessons) receive ``(joint_name, position)``.
+orbit drag); the X/Y/Z sliders then move that joint's target, in 1 mm steps within
+:attr:`SkeletonViewer.SLIDER_SPAN` of it. With **drag in 3D** on, orbiting stops and pressing the mouse
+on a target marker or a joint and moving it drags that target across the plane through it that faces
+the camera. ``on_target_change`` callbacks (an IK solver, in later lessons) receive
+``(joint_name, position)``; targets are always stored under the joint's own name, whatever name, role
+or index the caller used.
 
 The viewer knows no solver: lessons connect one through :meth:`SkeletonViewer.on_target_change`.
 """
 
 from __future__ import annotations
 
+import html
+
 import numpy as np
 
 from ..skeleton import Skeleton
+from .meshes import Bones, Spheres, icosphere
 
-__all__ = ["SkeletonViewer", "icosphere"]
-
-
-def icosphere(subdivisions: int = 1):
-    """Unit sphere mesh: vertices (V, 3) and triangle indices (T, 3), from a subdivided icosahedron."""
-    t = (1.0 + 5 ** 0.5) / 2
-    v = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t),
-         (0, -1, -t), (0, 1, -t), (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
-    f = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4), (11, 10, 2),
-         (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8), (3, 8, 9), (4, 9, 5),
-         (2, 4, 11), (6, 2, 10), (8, 6, 7), (9, 8, 1)]
-    verts = [np.array(p, float) / np.linalg.norm(p) for p in v]
-    faces = f
-    for _ in range(subdivisions):
-        cache, new = {}, []
-
-        def mid(a, b):
-            key = (min(a, b), max(a, b))
-            if key not in cache:
-                m = verts[a] + verts[b]
-                verts.append(m / np.linalg.norm(m))
-                cache[key] = len(verts) - 1
-            return cache[key]
-
-        for a, b, c in faces:
-            ab, bc, ca = mid(a, b), mid(b, c), mid(c, a)
-            new += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
-        faces = new
-    return np.array(verts), np.array(faces, dtype=np.uint32)
+__all__ = ["SkeletonViewer", "icosphere", "drag_point"]
 
 
-class _Spheres:
-    """Many spheres in one mesh: moving them rewrites one position buffer."""
+def drag_point(camera, through, plane_point, plane_normal):
+    """Where the ray from ``camera`` through ``through`` meets a plane (all (3,) arrays, one frame).
 
-    def __init__(self, n, radius, color, opacity=1.0):
-        import pythreejs as three
-
-        self.unit, faces = icosphere(1)
-        self.radius = radius
-        self.n = n
-        V = len(self.unit)
-        self.faces_per_sphere = len(faces)
-        index = (faces[None] + (np.arange(n) * V)[:, None, None]).reshape(-1).astype(np.uint32)
-        normals = np.tile(self.unit, (n, 1)).astype(np.float32)
-        self.geometry = three.BufferGeometry(attributes={
-            "position": three.BufferAttribute(self._positions(np.zeros((n, 3))), normalized=False),
-            "normal": three.BufferAttribute(normals, normalized=False),
-            "index": three.BufferAttribute(index, normalized=False),
-        })
-        material = three.MeshLambertMaterial(color=color, transparent=opacity < 1, opacity=opacity)
-        self.mesh = three.Mesh(self.geometry, material)
-
-    def _positions(self, centres):
-        return (centres[:, None, :] + self.radius * self.unit[None]).reshape(-1, 3).astype(np.float32)
-
-    def set(self, centres):
-        self.geometry.attributes["position"].array = self._positions(np.asarray(centres, float))
-
-
-class _Bones:
-    """Bones as line segments parent -> child in one buffer."""
-
-    def __init__(self, skeleton, color, linewidth=3, opacity=1.0):
-        import pythreejs as three
-
-        self.pairs = np.array([(skeleton.parents[j], j) for j in range(1, skeleton.n_joints)], dtype=int)
-        self.geometry = three.BufferGeometry(attributes={
-            "position": three.BufferAttribute(np.zeros((2 * len(self.pairs), 3), np.float32), normalized=False)})
-        material = three.LineBasicMaterial(color=color, linewidth=linewidth, transparent=opacity < 1, opacity=opacity)
-        self.lines = three.LineSegments(self.geometry, material)
-
-    def set(self, pos):
-        self.geometry.attributes["position"].array = np.asarray(pos, np.float32)[self.pairs.reshape(-1)]
+    The browser reports where the mouse ray hits a large sphere around the scene; the ray is the line
+    from the camera through that point, and the dragged target goes where it crosses the drag plane.
+    Returns None when the ray runs parallel to the plane or meets it behind the camera.
+    """
+    camera, through = np.asarray(camera, float), np.asarray(through, float)
+    n = np.asarray(plane_normal, float)
+    d = through - camera
+    denom = float(d @ n)
+    if abs(denom) < 1e-9 * max(np.linalg.norm(d), 1e-12):
+        return None
+    t = float((np.asarray(plane_point, float) - camera) @ n) / denom
+    return None if t <= 0 else camera + t * d
 
 
 class SkeletonViewer:
-    """A pythreejs scene of one skeleton with a ghost, targets, picking and sliders.
+    """A pythreejs scene of one skeleton with a ghost, targets, picking, dragging and sliders.
 
     Parameters
     ----------
@@ -107,13 +64,15 @@ class SkeletonViewer:
     ghost : ndarray, shape (J, 3), optional
         A second pose drawn translucent (e.g. the ground truth, or another solver).
     targets : dict, optional
-        Joint name -> (3,) target position, drawn as red spheres.
+        Joint name (or role, or index) -> (3,) target position, drawn as red spheres.
     width, height : int
         Canvas size in pixels.
     joint_radius : float
-        Sphere radius in metres.
+        Joint sphere radius in metres (bones are 0.7 of it).
     controls : bool
-        Show the joint selector, X/Y/Z target sliders and the status line.
+        Show the joint selector, the drag toggle, the X/Y/Z target sliders and the status table.
+    follow : bool
+        Re-centre the view when a pose leaves the framed region.
 
     Attributes
     ----------
@@ -122,15 +81,24 @@ class SkeletonViewer:
     selected : str or None
         Name of the selected joint.
     pose : ndarray, shape (J, 3)
-    targets : dict
+    targets, look_targets : dict
+        Joint name -> (3,) point, metres.
+    dragging : str or None
+        The joint whose target the mouse is dragging.
     """
 
-    SLIDER_STEP = 0.005
+    SLIDER_STEP = 0.001
     """Target slider resolution, metres."""
+    SLIDER_SPAN = 0.5
+    """The X/Y/Z sliders reach this far (metres) either side of the selected joint's target."""
+    VIEW_DIRECTION = np.array([0.35, 0.2, 1.0]) / np.linalg.norm([0.35, 0.2, 1.0])
+    """From the pose towards the camera: in front of the character, a little right and above."""
+    FOV = 40.0
+    """Vertical field of view, degrees."""
 
     def __init__(self, skeleton: Skeleton, pose=None, ghost=None, targets=None, width: int = 560,
                  height: int = 420, joint_radius: float = 0.025, controls: bool = True,
-                 background: str = "#f7f7f2", floor: bool = True):
+                 background: str = "#f7f7f2", floor: bool = True, follow: bool = True):
         import ipywidgets as w
         import pythreejs as three
 
@@ -141,39 +109,56 @@ class SkeletonViewer:
         self.pose = np.array(rest_pose(skeleton) if pose is None else pose, dtype=float)
         self._check(self.pose, "pose")
         self.targets, self.look_targets = {}, {}
-        self.selected = None
+        self.selected, self.dragging = None, None
+        self.follow = follow
+        self.aspect = width / height
         self._select_callbacks, self._target_callbacks = [], []
         self._syncing = False
 
-        self._bones = _Bones(skeleton, "#1f4e79", linewidth=3)
-        self._joints = _Spheres(J, joint_radius, "#2e86c1")
-        self._ghost_bones = _Bones(skeleton, "#999999", linewidth=2, opacity=0.6)
-        self._ghost_joints = _Spheres(J, joint_radius * 0.8, "#aaaaaa", opacity=0.5)
-        self._selected_marker = _Spheres(1, joint_radius * 1.6, "#f1c40f", opacity=0.6)
-        self._ghost_group = three.Group(children=[self._ghost_bones.lines, self._ghost_joints.mesh])
+        self._bones = Bones(skeleton, radius=0.7 * joint_radius)
+        self._joints = Spheres(J, joint_radius, "#2e86c1")
+        self._ghost_bones = Bones(skeleton, radius=0.45 * joint_radius, opacity=0.35, colour="#8c8c8c")
+        self._ghost_joints = Spheres(J, joint_radius * 0.6, "#aaaaaa", opacity=0.4)
+        self._selected_marker = Spheres(1, joint_radius * 1.6, "#f1c40f", opacity=0.6)
+        self._ghost_group = three.Group(children=[self._ghost_bones.mesh, self._ghost_joints.mesh])
         self._target_group = three.Group()
         self._targets_mesh, self._target_key = None, None
         self._selected_marker.mesh.visible = False
+        # what a drag can grab (joints and target markers), and the sphere the mouse ray always meets
+        self._grabbable = three.Group(children=[self._joints.mesh, self._target_group])
+        unit, faces = icosphere(2)
+        self._drag_sphere = three.Mesh(
+            three.BufferGeometry(attributes={
+                "position": three.BufferAttribute((40.0 * unit).astype(np.float32), normalized=False),
+                "index": three.BufferAttribute(faces.reshape(-1).astype(np.uint32), normalized=False)}),
+            three.MeshBasicMaterial(color="#ffffff", transparent=True, opacity=0.0, depthWrite=False,
+                                    side="BackSide"))
 
         # The scene content sits in a group shifted by -centre, so the orbit pivot (the origin,
         # where OrbitControls starts) is the middle of the pose.
-        centre, extent = self._frame(self.pose)
-        self._offset = centre.copy()
-        self.camera = three.PerspectiveCamera(position=self._camera_position(extent), fov=40,
-                                              aspect=width / height, near=0.01, far=100)
-        content = [self._bones.lines, self._joints.mesh, self._ghost_group, self._target_group,
-                   self._selected_marker.mesh]
+        centre, radius = self._frame(self.pose)
+        self._offset, self._radius = centre.copy(), radius
+        self.camera = three.PerspectiveCamera(position=self._camera_position(radius), fov=self.FOV,
+                                              aspect=self.aspect, near=0.01, far=200)
+        content = [self._bones.mesh, self._grabbable, self._ghost_group, self._selected_marker.mesh]
         if floor:
             content.append(three.GridHelper(size=6, divisions=24, colorCenterLine="#888888", colorGrid="#cccccc"))
         self._world = three.Group(children=content, position=[float(-c) for c in centre])
-        self.scene = three.Scene(children=[self._world, self.camera,
-                                           three.AmbientLight(color="#ffffff", intensity=0.6),
-                                           three.DirectionalLight(color="#ffffff", position=[3, 5, 4], intensity=0.7)],
+        self.scene = three.Scene(children=[self._world, self._drag_sphere, self.camera,
+                                           three.AmbientLight(color="#ffffff", intensity=0.55),
+                                           three.DirectionalLight(color="#ffffff", position=[3, 5, 4], intensity=0.75)],
                                  background=background)
         self.orbit = three.OrbitControls(controlling=self.camera)
         self.picker = three.Picker(controlling=self._joints.mesh, event="dblclick")
         self.picker.observe(self._on_pick, names=["point"])
-        self.renderer = three.Renderer(camera=self.camera, scene=self.scene, controls=[self.orbit, self.picker],
+        self._grab = three.Picker(controlling=self._grabbable, event="mousedown")
+        self._grab.observe(self._on_grab, names=["point"])
+        self._move = three.Picker(controlling=self._drag_sphere, event="mousemove")
+        self._move.observe(self._on_drag, names=["point"])
+        self._release = three.Picker(controlling=self._drag_sphere, event="mouseup")
+        self._release.observe(self._on_release, names=["point"])
+        self.renderer = three.Renderer(camera=self.camera, scene=self.scene,
+                                       controls=[self.orbit, self.picker, self._grab, self._move, self._release],
                                        width=width, height=height, antialias=True)
 
         self.status = w.HTML(value="double-click a joint to select it")
@@ -181,19 +166,19 @@ class SkeletonViewer:
         self.joint_select = w.Dropdown(options=[("(none)", "")] + [(n, n) for n in skeleton.names],
                                        value="", description="joint", layout=w.Layout(width="220px"))
         self.joint_select.observe(lambda ch: self.select(ch["new"] or None), names="value")
-        span = max(extent, 1.0)
+        self.drag_mode = w.ToggleButton(value=False, description="drag in 3D", icon="hand-pointer-o",
+                                        tooltip="on: press on a joint or a target and move the mouse to drag "
+                                                "the target (orbiting stops); off: the mouse orbits")
+        self.drag_mode.observe(self._on_drag_mode, names="value")
         step = self.SLIDER_STEP
-        # limits on the step grid, so that the browser's snapping to it does not move a value
-        lo = np.floor((self.pose.min(0) - span) / step) * step
-        hi = np.ceil((self.pose.max(0) + span) / step) * step
-        self.sliders = [w.FloatSlider(value=float(lo[k]), min=float(lo[k]), max=float(hi[k]), step=step,
-                                      description=f"target {a}", continuous_update=True, readout_format=".3f",
-                                      disabled=True, readout=False, layout=w.Layout(width="320px"))
-                        for k, a in enumerate("xyz")]
+        self.sliders = [w.FloatSlider(value=0.0, min=-step, max=step, step=step, description=f"target {a}",
+                                      continuous_update=True, readout_format=".3f", disabled=True, readout=False,
+                                      layout=w.Layout(width="340px"))
+                        for a in "xyz"]
         self._synced = None
         for s in self.sliders:
             s.observe(self._on_slider, names="value")
-        self.controls = w.VBox([w.HBox([self.joint_select, self.status]), *self.sliders])
+        self.controls = w.VBox([w.HBox([self.joint_select, self.drag_mode]), *self.sliders, self.status])
         self.controls.layout.display = None if controls else "none"
         self._extra = w.VBox([])
         self.widget = w.VBox([self.renderer, self.controls, self._extra])
@@ -211,16 +196,19 @@ class SkeletonViewer:
             raise ValueError(f"{what} contains NaN or inf")
         return pos
 
-    @staticmethod
-    def _camera_position(extent):
-        return [0.7 * extent, 0.3 * extent, 1.9 * extent]
+    def _camera_position(self, radius):
+        """Camera position (scene frame) that fits a sphere of ``radius`` metres around the pivot in the view."""
+        half = np.radians(self.FOV) / 2
+        half = min(half, np.arctan(np.tan(half) * self.aspect))  # the narrower of the two fields of view
+        return [float(c) for c in self.VIEW_DIRECTION * (1.08 * radius / np.sin(half))]
 
     @staticmethod
     def _frame(pos):
-        lo, hi = pos.min(0), pos.max(0)
-        centre = 0.5 * (lo + hi)
-        centre[1] = 0.5 * hi[1]  # look at half the height above the floor
-        return centre, float(max(np.ptp(pos, axis=0).max(), 1.0))
+        """Centre and radius (metres) of the box around joint positions ``(..., J, 3)`` and the floor below them."""
+        pts = np.asarray(pos, float).reshape(-1, 3)
+        lo, hi = pts.min(0), pts.max(0)
+        lo[1] = min(lo[1], 0.0)  # keep the floor under the feet in view
+        return 0.5 * (lo + hi), float(max(0.5 * np.linalg.norm(hi - lo), 0.6))
 
     def _ipython_display_(self):
         from IPython.display import display
@@ -229,11 +217,14 @@ class SkeletonViewer:
 
     # ------------------------------------------------------------------ drawing
     def set_pose(self, global_pos):
-        """Show a new pose: global joint positions, shape (J, 3), metres."""
+        """Show a new pose: global joint positions, shape (J, 3), metres (the view follows a pose that
+        leaves the framed region, when ``follow``)."""
         self.pose = self._check(global_pos, "pose").copy()
         self._bones.set(self.pose)
         self._joints.set(self.pose)
         self._draw_rays()
+        if self.follow and np.linalg.norm(self.pose - self._offset, axis=1).max() > 1.05 * self._radius:
+            self.frame_camera(keep_distance=True)
         if self.selected is not None:
             self._selected_marker.set(self.pose[[self.skeleton.index(self.selected)]])
             self._update_status()
@@ -271,9 +262,9 @@ class SkeletonViewer:
         if rebuild:
             import pythreejs as three
 
-            self._targets_mesh = _Spheres(max(len(red), 1), self._joints.radius * 1.3, "#e74c3c")
+            self._targets_mesh = Spheres(max(len(red), 1), self._joints.radius * 1.3, "#e74c3c")
             self._targets_mesh.mesh.visible = bool(red)
-            self._look_mesh = _Spheres(max(len(looks), 1), self._joints.radius * 1.3, "#e67e22")
+            self._look_mesh = Spheres(max(len(looks), 1), self._joints.radius * 1.3, "#e67e22")
             self._look_mesh.mesh.visible = bool(looks)
             self._rays = three.LineSegments(
                 three.BufferGeometry(attributes={"position": three.BufferAttribute(
@@ -295,12 +286,20 @@ class SkeletonViewer:
             seg = np.stack([joints, np.array(list(looks.values()))], axis=1).reshape(-1, 3)
             self._rays.geometry.attributes["position"].array = seg.astype(np.float32)
 
-    def frame_camera(self):
-        """Re-centre the view on the current pose."""
-        centre, extent = self._frame(self.pose)
+    def frame_camera(self, poses=None, keep_distance: bool = False):
+        """Frame the view on ``poses`` (shape (..., J, 3); default the current pose): the orbit pivot moves
+        to their middle and the camera steps back along its current direction until they fit (with
+        ``keep_distance``, only further back, never closer)."""
+        centre, radius = self._frame(self.pose if poses is None else poses)
         self._offset = centre.copy()
         self._world.position = [float(-c) for c in centre]
-        self.camera.position = self._camera_position(extent)
+        current = np.asarray(self.camera.position, float) - np.asarray(self.orbit.target, float)
+        dist = float(np.linalg.norm(self._camera_position(radius)))
+        if keep_distance:
+            dist = max(dist, float(np.linalg.norm(current)))
+        direction = current / np.linalg.norm(current) if np.linalg.norm(current) > 1e-9 else self.VIEW_DIRECTION
+        self.camera.position = [float(c) for c in np.asarray(self.orbit.target, float) + direction * dist]
+        self._radius = max(radius, self._radius) if keep_distance else radius
 
     # ------------------------------------------------------------------ selection and targets
     def select(self, joint):
@@ -312,21 +311,65 @@ class SkeletonViewer:
         self._selected_marker.mesh.visible = name is not None
         if name is not None:
             self._selected_marker.set(self.pose[[self.skeleton.index(name)]])
-        self._sync_sliders()
+        self._sync_sliders(recentre=True)
         self._update_status()
         for cb in self._select_callbacks:
             cb(name)
 
+    def _nearest_joint(self, p):
+        return self.skeleton.names[int(np.argmin(np.linalg.norm(self.pose - p, axis=1)))]
+
     def _on_pick(self, change):
         p = np.asarray(change["new"], dtype=float)
-        if p.shape != (3,) or not np.all(np.isfinite(p)):
-            return
-        p = p + self._offset  # picked point is in scene coordinates
-        j = int(np.argmin(np.linalg.norm(self.pose - p, axis=1)))
-        self.select(self.skeleton.names[j])
+        if p.shape != (3,) or not np.all(np.isfinite(p)) or self.picker.distance is None:
+            return  # the double-click hit nothing
+        self.select(self._nearest_joint(p + self._offset))  # picked point is in scene coordinates
 
-    def _sync_sliders(self):
-        """Show the selected joint's target (or, without one, the joint) on the sliders; with no
+    # ------------------------------------------------------------------ dragging in 3D
+    def _on_drag_mode(self, change):
+        self.orbit.enabled = not change["new"]
+        self.dragging = None
+
+    def grab(self, point):
+        """Start dragging at ``point`` (world frame, metres): the target marker it is on (within two
+        marker radii), else the nearest joint's target (created on the first move)."""
+        p = np.asarray(point, float).reshape(3)
+        markers = {**self.targets, **self.look_targets}
+        near = [(np.linalg.norm(q - p), n) for n, q in markers.items()]
+        near = [x for x in near if x[0] <= 2.6 * self._joints.radius]
+        name = min(near)[1] if near else self._nearest_joint(p)
+        self.dragging = name
+        if self.selected != name:
+            self.select(name)
+        anchor = markers.get(name, self.pose[self.skeleton.index(name)])
+        camera = np.asarray(self.camera.position, float) + self._offset  # world frame
+        self._drag_plane = (anchor.copy(), (camera - anchor) / max(np.linalg.norm(camera - anchor), 1e-9))
+
+    def drag_to(self, through):
+        """Move the dragged target to where the mouse ray (camera -> ``through``, world frame) meets the
+        drag plane (through the grabbed point, facing the camera); notifies ``on_target_change``."""
+        if self.dragging is None:
+            return
+        camera = np.asarray(self.camera.position, float) + self._offset
+        p = drag_point(camera, through, *self._drag_plane)
+        if p is not None and np.linalg.norm(p - self._drag_plane[0]) < 10.0:  # not off towards the horizon
+            self.move_target(self.dragging, p)
+
+    def _on_grab(self, change):
+        if self.drag_mode.value and self._grab.distance is not None:
+            self.grab(np.asarray(change["new"], float) + self._offset)
+
+    def _on_drag(self, change):
+        if self.drag_mode.value and self.dragging is not None and self._move.distance is not None:
+            self.drag_to(np.asarray(change["new"], float) + self._offset)
+
+    def _on_release(self, change):
+        self.dragging = None
+
+    # ------------------------------------------------------------------ sliders
+    def _sync_sliders(self, recentre: bool = False):
+        """Show the selected joint's target (or, without one, the joint) on the sliders, within
+        ``SLIDER_SPAN`` of it (the range moves with a new selection, or when the target leaves it); with no
         selection the sliders are disabled and show no number."""
         active = self.selected is not None
         for s in self.sliders:
@@ -335,9 +378,18 @@ class SkeletonViewer:
             self._synced = None
             return
         p = self.targets.get(self.selected, self.pose[self.skeleton.index(self.selected)])
+        step = self.SLIDER_STEP
         self._syncing = True
         try:
             for s, v in zip(self.sliders, p):
+                if recentre or not (s.min <= v <= s.max):
+                    # limits on the step grid, so that the browser's snapping to it does not move a value
+                    lo = float(np.floor((v - self.SLIDER_SPAN) / step) * step)
+                    hi = float(np.ceil((v + self.SLIDER_SPAN) / step) * step)
+                    if lo > s.max:
+                        s.max, s.min = hi, lo
+                    else:
+                        s.min, s.max = lo, hi
                 s.value = float(np.clip(v, s.min, s.max))
         finally:
             self._syncing = False
@@ -356,9 +408,15 @@ class SkeletonViewer:
     def move_target(self, joint, position):
         """Set one joint's target (creating it if needed) and notify ``on_target_change`` callbacks."""
         name = self.skeleton.names[self.skeleton.index(joint)]
+        position = np.asarray(position, dtype=float).reshape(3)
+        if not np.all(np.isfinite(position)):
+            raise ValueError(f"target for {name} contains NaN or inf")
         targets = dict(self.targets)
-        targets[name] = np.asarray(position, dtype=float).reshape(3)
-        self.set_targets(targets, self.look_targets)
+        targets[name] = position
+        looks = dict(self.look_targets)
+        if name in looks:  # the joint's point is the one it looks at
+            looks[name] = position
+        self.set_targets(targets, looks)
         self._update_status()
         for cb in self._target_callbacks:
             cb(name, self.targets[name].copy())
@@ -368,7 +426,7 @@ class SkeletonViewer:
         self._select_callbacks.append(callback)
 
     def on_target_change(self, callback):
-        """Call ``callback(joint_name, position)`` whenever a target moves (sliders or code)."""
+        """Call ``callback(joint_name, position)`` whenever a target moves (sliders, dragging or code)."""
         self._target_callbacks.append(callback)
 
     def _update_status(self):
@@ -376,11 +434,17 @@ class SkeletonViewer:
             self.status.value = "double-click a joint to select it"
             return
         p = self.pose[self.skeleton.index(self.selected)]
-        text = f"<b>{self.selected}</b> at ({p[0]:+.3f}, {p[1]:+.3f}, {p[2]:+.3f}) m"
+        rows = [(html.escape(self.selected), p, "")]
         if self.selected in self.targets:
             t = self.targets[self.selected]
-            text += f", target {np.linalg.norm(t - p) * 100:.1f} cm away"
-        self.status.value = text
+            rows.append(("target", t, f"{np.linalg.norm(t - p) * 100:.1f} cm away"))
+        cell = "<td style='padding:0 8px;text-align:right;font-family:monospace'>{}</td>"
+        body = "".join(f"<tr><th style='text-align:left;padding-right:8px'>{n}</th>"
+                       + "".join(cell.format(f"{c:+.3f}") for c in q) + f"<td style='padding-left:8px'>{extra}</td></tr>"
+                       for n, q, extra in rows)
+        self.status.value = ("<table style='border-collapse:collapse'><tr><th></th>"
+                             + "".join(f"<th style='text-align:right;padding:0 8px'>{a} m</th>" for a in "xyz")
+                             + f"<th></th></tr>{body}</table>")
 
     # ------------------------------------------------------------------ playback
     def add_controls(self, *widgets):
@@ -389,6 +453,7 @@ class SkeletonViewer:
 
     def player(self, frames, frame_time: float = 1 / 30, description: str = "frame"):
         """A Play button and a frame slider that show ``frames`` (F, J, 3) in turn; added under the view.
+        The camera is framed on the whole clip, so the character stays in view while it plays.
 
         Returns
         -------
@@ -400,12 +465,15 @@ class SkeletonViewer:
         frames = np.asarray(frames, dtype=float)
         if frames.ndim != 3 or frames.shape[1:] != (self.skeleton.n_joints, 3):
             raise ValueError(f"frames: expected shape (F, {self.skeleton.n_joints}, 3), got {frames.shape}")
+        if not np.all(np.isfinite(frames)):
+            raise ValueError("frames contain NaN or inf")
         play = w.Play(value=0, min=0, max=len(frames) - 1, step=1, interval=max(int(frame_time * 1000), 15),
                       description="play")
         slider = w.IntSlider(value=0, min=0, max=len(frames) - 1, description=description)
         w.jslink((play, "value"), (slider, "value"))
         slider.observe(lambda ch: self.set_pose(frames[ch["new"]]), names="value")
         box = w.HBox([play, slider])
+        self.frame_camera(frames)
         self.set_pose(frames[0])
         self.add_controls(box)
         return box
