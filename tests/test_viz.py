@@ -197,7 +197,7 @@ def test_solver_panel_resolves_on_target_moves(sample):
     for name in ("fabrik", "dls"):
         label = panel.labels[name].value
         assert not panel.results[name].converged and label.startswith("<b>✗ not reached</b><table"), label
-        assert label.count("<br>") == 2 and "iterations," in label
+        assert label.count("<tr>") == 3 and ">iterations<" in label and " ms<" in label
 
 
 def test_effector_editor_edits_every_kind_and_re_solves():

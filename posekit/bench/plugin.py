@@ -12,8 +12,8 @@ benchmark without editing the CLI::
                        help="my benchmark", args=[arg("--n", type=int, default=3, help="repeats")],
                        tables=[("My table", ["method", "ms"])])
 
-The built-in benchmarks (``fk``, ``ik``, ``invrig``, ``ae-scale``) register themselves when their modules are
-imported; :func:`benchmark_names` imports them.
+The built-in benchmarks (``fk``, ``ik``, ``invrig``, ``ae-scale``, ``protores``, ``all``) register themselves
+when their modules are imported; :func:`benchmark_names` imports them.
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ __all__ = ["Arg", "arg", "Benchmark", "register_benchmark", "unregister_benchmar
 WIDTH = 100
 """Text output stays within this many columns."""
 
-_BUILTIN = ("fk", "ik", "invrig", "ae-scale", "protores")
+_BUILTIN = ("fk", "ik", "invrig", "ae-scale", "protores", "all")
 
 
 @dataclass(frozen=True)
@@ -209,5 +209,6 @@ def _load_builtin():
     _loading = True
     try:
         from . import ae_scale, fk, ik, invrig, protores  # noqa: F401
+        from . import all as _all  # noqa: F401  (a module named like the builtin: imported under another name)
     finally:
         _loading = False
