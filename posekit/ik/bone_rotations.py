@@ -22,9 +22,11 @@ from __future__ import annotations
 import numpy as np
 
 from ..kinematics import fk
+from ..rotations import matrix_to_quat, quat_to_matrix
 from ..skeleton import Skeleton
+from .api import Pose
 
-__all__ = ["rotations_from_positions", "shortest_rotation", "check_roundtrip"]
+__all__ = ["rotations_from_positions", "shortest_rotation", "check_roundtrip", "pose_with_rotations"]
 
 
 def shortest_rotation(a, b) -> np.ndarray:
@@ -108,3 +110,32 @@ def check_roundtrip(skeleton, local_rot, root_pos) -> float:
     P = fk(skeleton, local_rot, root_pos)[0]
     L, r = rotations_from_positions(skeleton, local_rot, root_pos, P)
     return float(np.abs(fk(skeleton, L, r)[0] - P).max())
+
+
+def pose_with_rotations(skeleton: Skeleton, pose, reference, atol: float = 1e-6):
+    """A :class:`~posekit.ik.api.Pose` with local rotations that reproduces ``pose``'s positions exactly.
+
+    ``pose`` itself when it has rotations; else rotations turned from ``reference``'s (a Pose with
+    rotations, e.g. the solve's start) onto ``pose``'s positions (:func:`rotations_from_positions`). One
+    rotation per joint cannot always place every child of a multi-child joint (full-body FABRIK moves a
+    pelvis's or a chest's children independently, keeping each bone's length): those children get a
+    local translation (``local_pos``, a BVH position channel) of their bone's length in the new direction,
+    so that FK of the result gives ``pose.global_pos`` to within ``atol`` metres. Used to write a
+    positions-only solver's pose as BVH (``notebooks/06_posing_studio.ipynb``).
+    """
+    if pose.local_rot is not None:
+        return pose
+    if reference is None or reference.local_rot is None:
+        raise ValueError("a pose known only by its positions needs a reference pose with rotations")
+    P = np.asarray(pose.global_pos, float)
+    L, root = rotations_from_positions(skeleton, quat_to_matrix(np.asarray(reference.local_rot, float))[None],
+                                       P[None, 0], P[None])
+    _, G = fk(skeleton, L[0], root[0])
+    par = skeleton.parents
+    local_pos = np.array(skeleton.offsets, dtype=float)
+    for j in range(1, skeleton.n_joints):
+        local_pos[j] = G[par[j]].T @ (P[j] - P[par[j]])
+    moved = np.linalg.norm(local_pos - skeleton.offsets, axis=-1) > atol
+    moved[0] = False
+    local_pos = np.where(moved[:, None], local_pos, skeleton.offsets)
+    return Pose.from_rotations(skeleton, matrix_to_quat(L[0]), root[0], local_pos if moved.any() else None)

@@ -57,7 +57,12 @@ class EffectorEditor:
     effectors : list of Effector
         What the solvers get (rebuilt from the rows on every change).
     results : dict
-        Name -> last IKResult, or the ValueError a solver raised.
+        Name -> last IKResult, or the exception a solver raised (its view shows the message; the others
+        go on).
+    times : dict
+        Name -> milliseconds of its last solve.
+    updates : int
+        How many times the solvers have solved.
     widget : ipywidgets.VBox
     """
 
@@ -68,7 +73,9 @@ class EffectorEditor:
         self.skeleton, self.solvers, self.start = skeleton, dict(solvers), start
         self.tolerance_of = tolerance_of or (lambda lam, kind: max(0.1 * lam, 1e-4))
         self.rows = []  # dicts: effector fields + lam + euler + base rotation + widgets
-        self.results = {}
+        self.results, self.times = {}, {}
+        self.updates = 0  # solves so far (every change solves once)
+        self._change_callbacks = []
         self.viewers, self.labels, boxes = solver_views(skeleton, self.solvers, start.global_pos, truth, width, height)
         self.first = next(iter(self.viewers.values()))
         self.first.on_target_change(self._on_target)
@@ -144,8 +151,7 @@ class EffectorEditor:
         remove.on_click(lambda _, r=row: self.remove(self.rows.index(r)))
         self.rows.append(row)
         self.rows_box.children = tuple(r["widgets"] for r in self.rows)
-        if not self._quiet:
-            self.solve()
+        self._changed("add", len(self.rows) - 1)
         return len(self.rows) - 1
 
     def _add_clicked(self):
@@ -159,14 +165,14 @@ class EffectorEditor:
         """Remove effector row ``index`` and re-solve."""
         self.rows.pop(index)
         self.rows_box.children = tuple(r["widgets"] for r in self.rows)
-        self.solve()
+        self._changed("remove", index)
 
     def set_tolerance(self, index: int, lam: float):
         """Set row ``index``'s tolerance slider value (``Lambda`` in [0, 1]) and re-solve."""
         if not 0.0 <= float(lam) <= 1.0:
             raise ValueError(f"tolerance must lie in [0, 1], got {lam!r}")
         self.rows[index]["lam"] = float(lam)
-        self.solve()
+        self._changed("tolerance", index)
 
     def set_rotation(self, index: int, yaw: float = 0.0, pitch: float = 0.0, roll: float = 0.0):
         """Turn a rotation effector by yaw (about Y), pitch (X) and roll (Z), degrees, world frame, from the
@@ -175,7 +181,7 @@ class EffectorEditor:
         if row["kind"] != "rotation":
             raise ValueError(f"effector {index} on {row['joint']} is a {row['kind']} effector, not a rotation")
         row["euler"] = np.array([yaw, pitch, roll], float)
-        self.solve()
+        self._changed("rotation", index)
 
     def _on_angles(self, row):
         self.set_rotation(self.rows.index(row), *[s.value for s in row["angle_sliders"]])
@@ -185,8 +191,11 @@ class EffectorEditor:
         row = self.rows[index]
         if row["kind"] == "rotation":
             raise ValueError(f"effector {index} on {row['joint']} is a rotation: turn it with set_rotation")
-        row["target"] = np.asarray(position, float).reshape(3)
-        self.solve()
+        position = np.asarray(position, float).reshape(3)
+        if not np.all(np.isfinite(position)):
+            raise ValueError(f"target of effector {index} on {row['joint']} contains NaN or inf")
+        row["target"] = position
+        self._changed("move", index)
 
     def _on_target(self, joint, position):
         # the first view moves one point per joint: the joint's position effector, else its look-at target,
@@ -197,6 +206,86 @@ class EffectorEditor:
                     self.move_target(i, position)
                     return
         self.add(joint, "position", target=position)
+
+    def on_change(self, callback):
+        """Call ``callback(what, index)`` after every change and its solve: ``what`` is ``"add"``, ``"remove"``,
+        ``"tolerance"``, ``"rotation"``, ``"move"`` (row ``index``) or ``"setup"`` (a whole setup, index None)."""
+        self._change_callbacks.append(callback)
+
+    def _changed(self, what, index):
+        if self._quiet:
+            return
+        self.solve()
+        for cb in self._change_callbacks:
+            cb(what, index)
+
+    def setup(self) -> list:
+        """The effector rows as plain data (lists and floats; :func:`posekit.viz.setup_file.save_setup` writes
+        them as JSON): joint, kind, ``lam`` and ``target`` (position, look-at), ``axis`` (look-at), ``base``
+        rotation matrix and ``euler`` yaw/pitch/roll degrees (rotation)."""
+        out = []
+        for r in self.rows:
+            d = {"joint": r["joint"], "kind": r["kind"], "lam": float(r["lam"])}
+            for key in ("target", "axis", "base", "euler"):
+                if key in r and not (key == "euler" and r["kind"] != "rotation"):
+                    d[key] = np.asarray(r[key], float).tolist()
+            out.append(d)
+        return out
+
+    def set_setup(self, rows):
+        """Replace every effector by ``rows`` (the form :meth:`setup` returns) and solve once. Everything is
+        checked before anything changes: on a ValueError the editor keeps its effectors."""
+        rows = [dict(r) for r in rows]
+        names = set()
+        for k, r in enumerate(rows):
+            try:
+                j = self.skeleton.names[self.skeleton.index(r["joint"])]
+            except (KeyError, ValueError, IndexError) as err:
+                raise ValueError(f"effector {k + 1}: {err}") from None
+            kind = str(r.get("kind", "")).replace("-", "_")
+            if kind not in KIND_CHOICES:
+                raise ValueError(f"effector {k + 1} on {j}: unknown kind {r.get('kind')!r}; valid: {', '.join(KIND_CHOICES)}")
+            clash = [(j, kind)] + ([(j, "rotation-or-look_at")] if kind in ("rotation", "look_at") else [])
+            if names & set(clash):
+                raise ValueError(f"effector {k + 1}: {j} already has a {kind.replace('_', '-')} effector (or a "
+                                 "rotation and a look-at: a rotation fixes where a joint faces)")
+            names |= set(clash)
+            if not 0.0 <= float(r.get("lam", 0.0)) <= 1.0:
+                raise ValueError(f"effector {k + 1} on {j}: tolerance must lie in [0, 1], got {r.get('lam')!r}")
+            need = {"position": ("target",), "look_at": ("target", "axis"), "rotation": ("base",)}[kind]
+            for key in need:
+                if key not in r:
+                    raise ValueError(f"effector {k + 1} on {j}: a {kind.replace('_', '-')} effector needs {key!r}")
+            shapes = {"target": (3,), "axis": (3,), "base": (3, 3), "euler": (3,)}
+            for key, shape in shapes.items():
+                if key in r:
+                    a = np.asarray(r[key], float)
+                    if a.shape != shape or not np.all(np.isfinite(a)):
+                        raise ValueError(f"effector {k + 1} on {j}: {key!r} must be {shape} finite numbers, "
+                                         f"got {r[key]!r}")
+            if kind == "rotation":
+                R = np.asarray(r["base"], float)
+                if np.abs(R.T @ R - np.eye(3)).max() > 1e-4 or np.linalg.det(R) < 0:
+                    raise ValueError(f"effector {k + 1} on {j}: 'base' is not a rotation matrix")
+            if kind == "look_at" and np.linalg.norm(np.asarray(r["axis"], float)) < 1e-9:
+                raise ValueError(f"effector {k + 1} on {j}: 'axis' must not be zero")
+        self._quiet = True
+        try:
+            self.rows = []
+            for r in rows:
+                kind = r["kind"].replace("-", "_")
+                i = self.add(r["joint"], kind, lam=float(r.get("lam", 0.0)),
+                             target=r.get("base") if kind == "rotation" else r.get("target"), axis=r.get("axis"))
+                row = self.rows[i]
+                row["widgets"].children[1].value = float(row["lam"])
+                if kind == "rotation" and "euler" in r:
+                    row["euler"] = np.asarray(r["euler"], float)
+                    for sl, v in zip(row["angle_sliders"], row["euler"]):
+                        sl.value = float(v)
+        finally:
+            self._quiet = False
+        self.rows_box.children = tuple(r["widgets"] for r in self.rows)
+        self._changed("setup", None)
 
     @property
     def effectors(self) -> list:
@@ -216,6 +305,7 @@ class EffectorEditor:
     def solve(self):
         """Solve with every solver and refresh the views (a solver that refuses says why under its view)."""
         effs = self.effectors
+        self.updates += 1
         # the sliders move a joint's position target, else its look-at target; look-at targets are
         # drawn apart (orange, with a ray from the joint)
         looks = {r["joint"]: r["target"] for r in self.rows if r["kind"] == "look_at"}
@@ -232,12 +322,13 @@ class EffectorEditor:
                 start = None if not getattr(solver, "needs_start", True) else self.start
                 use = [e for e in effs if e.kind in getattr(solver, "kinds", ("position",))]
                 res = solver.solve(start, use)
-            except ValueError as err:
+            except Exception as err:  # noqa: BLE001 - a solver that fails says why in its view; the others go on
                 self.results[name] = err
-                self.labels[name].value = f"<b>✗ cannot solve</b><br>{html.escape(str(err))}"
+                what = "" if isinstance(err, ValueError) else f"{type(err).__name__}: "
+                self.labels[name].value = f"<b>✗ cannot solve</b><br>{html.escape(what + str(err))}"
                 continue
             ms = (time.perf_counter() - t) * 1e3
-            self.results[name] = res
+            self.results[name], self.times[name] = res, ms
             v.set_pose(res.pose.global_pos)
             self.labels[name].value = status_line(res, ms)
 

@@ -1,0 +1,454 @@
+"""``posekit bench all``: every registered IK solver in one report — a table per start condition and a
+speed/quality scatter.
+
+Introduced in ``notebooks/06_posing_studio.ipynb``. Nothing is measured here that
+:func:`posekit.bench.ik.run` does not measure: this module calls it with every registered solver that
+honours position effectors (:func:`posekit.bench.ik.resolve_solvers` with ``"all"``), no extra methods
+and no peers, so every row comes from the same held-out cases (:func:`posekit.data.cases.build_cases`),
+the same start poses and the same metric code (:mod:`posekit.data.metrics`) as ``posekit bench ik``.
+The data is the Bandai mini set, which the learned solvers were trained on
+(:func:`posekit.bench.ik.default_data`).
+
+What it writes (``out``, a folder; by default ``data_samples/results``):
+
+* ``bench_all.json`` — the rows and how they were made (command, cases, seed, data, machine); no
+  date, so two runs differ only in their timings;
+* ``bench_all.md`` — what was measured, one Markdown table per start condition sorted by MPJPE, and how
+  to read the scatter;
+* ``bench_all.png`` — median time per solve (ms, log scale) against median MPJPE (mm), one point per
+  solver and start condition: a speed/quality scatter in the spirit of Fig. 5 of Victor & Meyer 2020.
+
+Units: times in milliseconds on one thread; distances in millimetres (the library's metres times 1000).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import re
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..data.cases import START_CONDITIONS, start_condition
+from ..ik.api import EFFECTOR_SETS
+from ..ik.registry import solver_info
+from .ik import TABLE_LABELS, default_data, resolve_solvers
+from .ik import run as run_ik
+from .plugin import arg, register_benchmark
+
+__all__ = ["run", "write_report", "markdown", "plot", "pareto", "default_out", "FILES", "KEYS"]
+
+FILES = ("bench_all.json", "bench_all.md", "bench_all.png")
+"""What :func:`write_report` writes into its folder."""
+
+KEYS = ("method", "start", "effectors", "lesson", "kinds", "latency_ms_median", "mpjpe_mm_median",
+        "effector_error_mm_median", "natural_mm_median", "converged_fraction", "bone_length_error_mm_max",
+        "cases", "data")
+"""The keys of every row (definitions in :mod:`posekit.bench.ik`)."""
+
+_DIGITS = {"latency_ms_median": 4, "mpjpe_mm_median": 3, "effector_error_mm_median": 3, "natural_mm_median": 3,
+           "converged_fraction": 4, "bone_length_error_mm_max": 4}
+"""Decimals kept in the rows (0.1 us, 1 um): beyond them the numbers are noise."""
+
+DPI = 150
+
+
+def default_out() -> Path:
+    """Where the report goes by default: ``data_samples/results`` (:func:`posekit.paths.samples_dir`)."""
+    from ..paths import samples_dir
+
+    return samples_dir() / "results"
+
+
+def _lesson(notebook: str) -> str:
+    """``notebooks/05_protores.ipynb`` -> ``"05"`` (the notebook's name when it has no number)."""
+    name = Path(notebook).name if notebook else ""
+    m = re.match(r"(\d+)_", name)
+    return m.group(1) if m else Path(name).stem
+
+
+def _check(n_cases, starts, effectors) -> tuple:
+    """The run's start conditions and effector set, refused before any work with a sentence that says why."""
+    if isinstance(n_cases, bool) or int(n_cases) != n_cases or int(n_cases) < 1:
+        raise ValueError(f"cases must be a whole number of at least 1, got {n_cases!r}")
+    names = starts.split(",") if isinstance(starts, str) else list(starts)
+    names = tuple(dict.fromkeys(start_condition(n.strip()) for n in names if n.strip()))  # raises on unknown names
+    if not names:
+        raise ValueError(f"no start condition given; valid: {', '.join(START_CONDITIONS)}")
+    e = str(effectors).strip()
+    if e not in EFFECTOR_SETS:
+        raise ValueError(f"unknown effector set {e!r} (one set per report); valid: {', '.join(EFFECTOR_SETS)}")
+    return names, e
+
+
+def run(n_cases: int = 200, starts=("same-clip", "rest"), effectors: str = "5", seed: int = 0, out=None,
+        progress: bool = True) -> list[dict]:
+    """Benchmark every registered solver on the same held-out cases; one row per solver and start condition.
+
+    Parameters
+    ----------
+    n_cases : int
+        Held-out (start, target) cases per start condition (the same targets under every start).
+    starts : str or sequence of str
+        Start conditions (comma-separated or a sequence): ``same-clip``, ``other-clip``, ``rest``.
+    effectors : str
+        One effector set (:data:`posekit.ik.api.EFFECTOR_SETS`): ``2``, ``5`` or ``5point``.
+    seed : int
+        Seed of the case draw and of the naturalness index (:func:`posekit.bench.ik.run`).
+    out : str, Path or None
+        A folder to write :data:`FILES` into (created if missing); None writes nothing.
+    progress : bool
+        A progress bar (one step per solver and start condition).
+
+    Returns
+    -------
+    list of dict
+        The :data:`KEYS` of each row, sorted by start condition (in the order given), then by MPJPE.
+        ``lesson`` is the number of the notebook that introduces the solver, ``kinds`` the effector kinds
+        it honours; times in ms, distances in mm, ``converged_fraction`` in [0, 1].
+
+    Raises
+    ------
+    ValueError
+        For ``n_cases < 1``, an unknown start condition or an unknown effector set (before any work).
+    """
+    from ..data.sources import open_dataset
+
+    starts, effectors = _check(n_cases, starts, effectors)
+    names = resolve_solvers("all")
+    data = default_data(names)
+    t0 = time.perf_counter()
+    motions = open_dataset(data)
+    raw = run_ik(motions, solvers="all", effector_sets=(effectors,), n_cases=int(n_cases), start=starts,
+                 seed=int(seed), baseline=False, batched=False, peers=False, methods="none", natural=True,
+                 progress=progress)
+    seconds = time.perf_counter() - t0
+    rows = []
+    for r in raw:
+        info = solver_info(r["method"])
+        row = {"method": r["method"], "start": r["start"], "effectors": r["effectors"],
+               "lesson": _lesson(info.lesson), "kinds": ", ".join(info.kinds)}
+        for k, digits in _DIGITS.items():
+            v = r.get(k)
+            row[k] = None if v is None else round(float(v), digits)
+        row["cases"], row["data"] = int(r["cases"]), data
+        rows.append(row)
+    rows.sort(key=lambda r: (starts.index(r["start"]), r["mpjpe_mm_median"], r["method"]))
+    if out is not None:
+        floors = {}
+        for r in raw:
+            floors.setdefault(r["start"], round(float(r["natural_floor_mm_median"]), 3))
+        meta = {"benchmark": "all",
+                "command": (f"posekit bench all --cases {int(n_cases)} --start {','.join(starts)} "
+                            f"--effectors {effectors} --seed {int(seed)}"),
+                "cases": int(n_cases), "starts": list(starts), "effectors": effectors,
+                "effector_roles": list(EFFECTOR_SETS[effectors]), "seed": int(seed), "data": data, "threads": 1,
+                "solvers": list(names), "skipped": [n for n in names if n not in {r["method"] for r in rows}],
+                "natural_floor_mm_median": floors, "seconds": round(seconds, 1), "machine": _machine()}
+        write_report(rows, meta, out)
+    return rows
+
+
+def _machine() -> dict:
+    return {"platform": platform.platform(), "processor": platform.processor() or platform.machine(),
+            "cpu_count": os.cpu_count(), "python": platform.python_version()}
+
+
+def write_report(rows: list[dict], meta: dict, out) -> list[Path]:
+    """Write ``bench_all.json`` (``{**meta, "rows": rows}``), ``bench_all.md`` and ``bench_all.png`` into ``out``.
+
+    Parameters
+    ----------
+    rows : list of dict
+        :func:`run`'s rows.
+    meta : dict
+        How they were made (at least ``command``, ``cases``, ``starts``, ``effectors``, ``data``, ``machine``).
+    out : str or Path
+        The folder (created if missing).
+
+    Returns
+    -------
+    list of Path
+        The three files.
+    """
+    folder = Path(out)
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = [folder / f for f in FILES]
+    paths[0].write_text(json.dumps({**meta, "rows": rows}, indent=1) + "\n")
+    paths[1].write_text(markdown(rows, meta))
+    plot(rows, meta, paths[2])
+    return paths
+
+
+# ------------------------------------------------------------------------------------------- the report
+def pareto(rows: list[dict]) -> list[dict]:
+    """The rows no other row beats on both speed and MPJPE (no row is both faster and closer), fastest first."""
+    xy = [(r["latency_ms_median"], r["mpjpe_mm_median"]) for r in rows]
+    front = [r for r, (x, y) in zip(rows, xy) if not any(a <= x and b <= y and (a, b) != (x, y) for a, b in xy)]
+    return sorted(front, key=lambda r: r["latency_ms_median"])
+
+
+def _ms(v: float) -> str:
+    return f"{v:.0f}" if v >= 100 else f"{v:.1f}" if v >= 10 else f"{v:.2f}" if v >= 1 else f"{v:.3f}"
+
+
+def _mm(v) -> str:
+    return "" if v is None else f"{v:.2f}" if v < 10 else f"{v:.1f}"
+
+
+_COLUMNS = ("solver", "lesson", "ms per solve", "MPJPE mm", "effector mm", "natural mm", "converged")
+
+
+def _table(rows: list[dict]) -> str:
+    lines = ["| " + " | ".join(_COLUMNS) + " |", "|:--|:-:|" + "--:|" * (len(_COLUMNS) - 2)]
+    for r in sorted(rows, key=lambda r: (r["mpjpe_mm_median"], r["method"])):
+        cells = (f"`{r['method']}`", r["lesson"], _ms(r["latency_ms_median"]), f"{r['mpjpe_mm_median']:.1f}",
+                 _mm(r["effector_error_mm_median"]), _mm(r["natural_mm_median"]),
+                 f"{100 * r['converged_fraction']:.0f}%")
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def markdown(rows: list[dict], meta: dict) -> str:
+    """The report ``bench_all.md``: how the numbers were measured, a table per start condition (sorted by
+    MPJPE) and a paragraph on reading ``bench_all.png``."""
+    starts = list(meta["starts"])
+    solvers = list(dict.fromkeys(r["method"] for r in rows))
+    roles = ", ".join(r.replace("_", " ") for r in EFFECTOR_SETS[meta["effectors"]])
+    floors = meta.get("natural_floor_mm_median", {})
+    floor = next(iter(floors.values()), None)
+    m = meta["machine"]
+    out = ["# Every posekit IK solver on the same cases", "",
+           f"Made by `{meta['command']}` (rows: `bench_all.json`; figure: `bench_all.png`). "
+           "The numbers come from `posekit bench ik`'s cases and metric code.", "",
+           f"**What was measured.** {len(solvers)} registered solvers, each on the same {meta['cases']} held-out "
+           f"cases of `{meta['data']}` per start condition ({', '.join(f'`{s}`' for s in starts)}). "
+           f"A case's target is a real pose of a test clip; the solver gets the true positions of effector "
+           f"set `{meta['effectors']}` ({roles}) and the case's start pose, and is timed one solve at a time "
+           "on one thread after a warm-up solve.", "",
+           "**Columns** (medians over the cases): *ms per solve*; *MPJPE mm*, the mean distance of the body "
+           "joints to the true pose's, pelvis-relative; *effector mm*, the worst effector of a case; "
+           "*natural mm*, the distance to the nearest training pose"
+           + (f" (the true poses' own: {floor:.1f} mm)" if floor is not None else "")
+           + "; *converged*, the share of cases with every effector within 1 mm. *lesson*: the notebook "
+           "that introduces the solver.", "",
+           f"Machine: {m['platform']}, {m['processor']}, {m['cpu_count']} CPUs; the run took "
+           f"{meta.get('seconds', float('nan')) / 60:.1f} min. Times depend on the machine and its load; "
+           "the errors do not (same seed, same numbers)."]
+    if meta.get("skipped"):
+        out += ["", "Not measured (the solver refused this data): "
+                + ", ".join(f"`{n}`" for n in meta["skipped"]) + "."]
+    for st in starts:
+        out += ["", f"## Start: {st} — {START_CONDITIONS.get(st, st)}", "",
+                _table([r for r in rows if r["start"] == st])]
+    out += ["", "## Reading the scatter", "", "![time per solve against MPJPE](bench_all.png)", "",
+            _reading(rows, starts)]
+    return "\n".join(out) + "\n"
+
+
+def _reading(rows: list[dict], starts: list) -> str:
+    text = ("Each point is one solver under one start condition (marker and colour: the start); a thin grey "
+            "line joins a solver's points. Left is faster (log scale: equal steps are equal ratios of time) "
+            "and lower is closer to the true pose, so the useful solvers sit on the lower-left edge, where no "
+            "other solver is both faster and closer: ")
+    fronts = []
+    for st in starts:
+        front = pareto([r for r in rows if r["start"] == st])
+        fronts.append(f"under `{st}`, "
+                      + ", ".join(f"`{r['method']}` ({_ms(r['latency_ms_median'])} ms, "
+                                  f"{r['mpjpe_mm_median']:.1f} mm)" for r in front))
+    text += "; ".join(fronts) + ". "
+    mpjpe = {}
+    for r in rows:
+        mpjpe.setdefault(r["method"], set()).add(r["mpjpe_mm_median"])
+    free = [n for n, v in mpjpe.items() if len(v) == 1 and not solver_info(n).needs_start]
+    if free and len(starts) > 1:
+        text += (f"Solvers that predict a whole pose without a start pose ({', '.join(f'`{n}`' for n in free)}) "
+                 "give the same MPJPE under every start, so their grey lines are flat: only the time changes. ")
+    text += ("A grey line that climbs or falls means the result depends on where the solver starts. MPJPE and "
+             "*effector mm* tell "
+             "different stories: the effectors do not determine the pose, so a solver can meet every effector "
+             "(converged) and still be far from the true pose, and a learned solver can land close to it while "
+             "missing the effectors by centimetres.")
+    return text
+
+
+# ------------------------------------------------------------------------------------------- the figure
+_STYLE = {"same-clip": ("o", "C0"), "other-clip": ("s", "C2"), "rest": ("^", "C3")}
+
+
+def plot(rows: list[dict], meta: dict, path=None):
+    """The speed/quality scatter: median ms per solve (log x) against median MPJPE mm, one labelled point
+    per solver and start condition. Rendered with Agg at :data:`DPI`; saved to ``path`` when given.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
+    fig = Figure(figsize=(10, 6.5), dpi=DPI)
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    starts = list(meta["starts"])
+    for name in dict.fromkeys(r["method"] for r in rows):
+        mine = [r for r in rows if r["method"] == name]
+        if len(mine) > 1:
+            ax.plot([r["latency_ms_median"] for r in mine], [r["mpjpe_mm_median"] for r in mine], color="0.75",
+                    lw=0.8, zorder=1)
+    for i, st in enumerate(starts):
+        marker, colour = _STYLE.get(st, ("D", f"C{4 + i}"))
+        mine = [r for r in rows if r["start"] == st]
+        ax.scatter([r["latency_ms_median"] for r in mine], [r["mpjpe_mm_median"] for r in mine], s=28,
+                   marker=marker, color=colour, zorder=3, label=f"start: {st}")
+    ax.set_xscale("log")
+    ax.xaxis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+    ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    x = np.array([r["latency_ms_median"] for r in rows])
+    y = np.array([r["mpjpe_mm_median"] for r in rows])
+    ax.set_xlim(x.min() / 1.8, x.max() * 1.8)
+    pad = 0.08 * (y.max() - y.min() + 1.0)
+    ax.set_ylim(max(0.0, y.min() - pad), y.max() + pad)
+    ax.grid(True, which="major", color="0.9", lw=0.6)
+    ax.set_axisbelow(True)
+    ax.set_xlabel("median time per solve, ms (one thread, log scale)")
+    ax.set_ylabel("median MPJPE, mm (body joints, pelvis-relative)")
+    ax.set_title(f"Speed and quality of every posekit IK solver: {meta['data']}, {meta['cases']} held-out cases "
+                 f"per start, effector set {meta['effectors']}", fontsize=10)
+    handles, _ = ax.get_legend_handles_labels()
+    if len(starts) > 1:
+        handles.append(Line2D([], [], color="0.75", lw=0.8, label="one solver, its starts joined"))
+    ax.legend(handles=handles, loc="upper left", fontsize=8, frameon=False)
+    fig.tight_layout()
+    _label_points(fig, ax, rows, {st: _STYLE.get(st, ("D", f"C{4 + i}"))[1] for i, st in enumerate(starts)})
+    if path is not None:
+        fig.savefig(path, dpi=DPI)
+    return fig
+
+
+def _label_points(fig, ax, rows: list[dict], colours: dict, fontsize: float = 6.5) -> None:
+    """Name every point (in a darker shade of its start's colour). Each label takes the nearest spot (a
+    greedy search over 8 directions and 5 distances, the most crowded points first) that overlaps no
+    other label, point, the legend or the frame, and is nearer its own point than any other; a leader line
+    joins a label that is not next to its point."""
+    from matplotlib.colors import to_rgb
+
+    renderer = fig.canvas.get_renderer()
+    pts = ax.transData.transform([(r["latency_ms_median"], r["mpjpe_mm_median"]) for r in rows])
+    pt_r = 4.0 * DPI / 72  # half a marker and a little air, px
+    frame = ax.get_window_extent(renderer)
+    taken = [(p[0] - pt_r, p[1] - pt_r, p[0] + pt_r, p[1] + pt_r) for p in pts]
+    if ax.get_legend() is not None:
+        lb = ax.get_legend().get_window_extent(renderer)
+        taken.append((lb.x0, lb.y0, lb.x1, lb.y1))
+    dirs = [(1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (-1, 1), (1, -1), (-1, -1)]
+    align = {-1: "right", 0: "center", 1: "left"}, {-1: "top", 0: "center", 1: "bottom"}
+    ink = {st: tuple(0.6 * np.array(to_rgb(c))) for st, c in colours.items()}
+
+    def overlap(a, b) -> float:
+        w, h = min(a[2], b[2]) - max(a[0], b[0]), min(a[3], b[3]) - max(a[1], b[1])
+        return w * h if w > 0 and h > 0 else 0.0
+
+    def gap(box, p) -> float:  # distance from a point to a box, px
+        return float(np.hypot(max(box[0] - p[0], 0, p[0] - box[2]), max(box[1] - p[1], 0, p[1] - box[3])))
+
+    def cost(box, i) -> float:
+        outside = (max(0, frame.x0 - box[0]) + max(0, box[2] - frame.x1) + max(0, frame.y0 - box[1])
+                   + max(0, box[3] - frame.y1))
+        own = gap(box, pts[i])
+        nearer = sum(1 for j, p in enumerate(pts) if j != i and gap(box, p) < own + 4)
+        return sum(overlap(box, t) for j, t in enumerate(taken) if j != i) + 1e3 * outside + 400 * nearer
+
+    crowd = [int(np.sum(np.hypot(*(pts - p).T) < 60)) for p in pts]
+    for i in sorted(range(len(rows)), key=lambda k: -crowd[k]):
+        r = rows[i]
+        text = ax.annotate(r["method"], (r["latency_ms_median"], r["mpjpe_mm_median"]), fontsize=fontsize,
+                           textcoords="offset points", xytext=(0, 0), zorder=4, color=ink[r["start"]])
+        best = None
+        for dist in (5, 11, 19, 30, 45):
+            for dx, dy in dirs:
+                step = dist / np.sqrt(2) if dx and dy else dist
+                text.set_position((dx * step, dy * step))
+                text.set_ha(align[0][dx])
+                text.set_va(align[1][dy])
+                b = text.get_window_extent(renderer)
+                box = (b.x0 - 1, b.y0 - 1, b.x1 + 1, b.y1 + 1)
+                c = cost(box, i)
+                if best is None or c < best[0]:
+                    best = (c, dx * step, dy * step, dx, dy, box)
+                if c == 0:
+                    break
+            if best[0] == 0:
+                break
+        _, ox, oy, dx, dy, box = best
+        text.set_position((ox, oy))
+        text.set_ha(align[0][dx])
+        text.set_va(align[1][dy])
+        if np.hypot(ox, oy) > 6:
+            ax.annotate("", (r["latency_ms_median"], r["mpjpe_mm_median"]), textcoords="offset points",
+                        xytext=(ox, oy), zorder=2, arrowprops={"arrowstyle": "-", "color": colours[r["start"]],
+                                                               "lw": 0.6, "shrinkA": 1, "shrinkB": 3})
+        taken.append(box)
+
+
+# ------------------------------------------------------------------------------------------- the CLI
+def _out(value):
+    """``--out``: None (not given) -> :func:`default_out`; ``""``, ``none``, ``false`` or ``-`` -> write nothing."""
+    if value is None:
+        return default_out()
+    if str(value).strip().lower() in ("", "none", "false", "-"):
+        return None
+    return Path(value)
+
+
+def _cli_run(args) -> list[dict]:
+    import sys
+
+    _check(args.cases, args.start, args.effectors)  # refuse before loading anything
+    return run(n_cases=args.cases, starts=args.start, effectors=args.effectors, seed=args.seed, out=_out(args.out),
+               progress=not args.json and sys.stderr.isatty())
+
+
+def _header(rows, args) -> str:
+    data = rows[0]["data"] if rows else "bandai-mini"
+    out = _out(args.out)
+    files = f"report: {out / FILES[1]} (and .json, .png)" if out is not None else "report: not written (--out none)"
+    return (f"Every registered IK solver: {data}, {args.cases} held-out cases per start condition (the same "
+            f"targets), effector set {args.effectors}, one thread; {files}\n"
+            "errors in mm; MPJPE and natural: body joints, pelvis-relative; effector: the worst of a case; "
+            "converged: every effector within 1 mm; sorted by MPJPE")
+
+
+def _group_title(start: str) -> str:
+    return f"Start: {start} ({START_CONDITIONS.get(start, start)})"
+
+
+TABLES = [("Speed and quality (medians over cases; bone error: the worst case)",
+           ["method", "lesson", "latency_ms_median", "mpjpe_mm_median", "effector_error_mm_median",
+            "natural_mm_median", "converged_fraction", "bone_length_error_mm_max"])]
+"""The table ``posekit bench all`` prints per start condition (fits 100 columns)."""
+
+register_benchmark(
+    "all", _cli_run,
+    help="every registered IK solver on the same held-out cases: tables, a Markdown report and a speed/quality "
+         "scatter",
+    args=[
+        arg("--cases", type=int, default=200, help="held-out (start, target) cases per start condition"),
+        arg("--start", default="same-clip,rest",
+            help="comma-separated start conditions: " + ", ".join(START_CONDITIONS)),
+        arg("--effectors", default="5", help="one effector set: 2 (hands), 5 (hands, feet, head), "
+                                             "5point (hands, feet, chest)"),
+        arg("--seed", type=int, default=0, help="seed of the case draw"),
+        arg("--out", default=None,
+            help="folder for bench_all.json, .md and .png (default: data_samples/results; none or '': "
+                 "do not write)"),
+    ],
+    tables=TABLES, labels={**TABLE_LABELS, "lesson": "lesson", "method": "solver"}, header=_header,
+    group_by="start", group_title=_group_title, lesson="notebooks/06_posing_studio.ipynb", replace=True)

@@ -1,0 +1,131 @@
+"""``posekit bench all``: every registered solver once per start condition, and the report files that say so.
+
+One tiny run (3 cases, one start) is shared by the tests; most of its ~50 s is compiling the solvers'
+numba kernels, which the later runs in this file reuse.
+"""
+
+import json
+import math
+import re
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from posekit.bench import all as bench_all
+from posekit.bench.ik import resolve_solvers
+from posekit.bench.plugin import benchmark_names
+from posekit.cli import main
+
+CASES = 3
+START = "rest"
+
+
+@pytest.fixture(scope="module")
+def report(tmp_path_factory):
+    out = tmp_path_factory.mktemp("bench_all")
+    rows = bench_all.run(n_cases=CASES, starts=(START,), effectors="5", seed=0, out=out, progress=False)
+    return rows, out
+
+
+def test_every_registered_solver_appears_once_per_start(report):
+    rows, _ = report
+    names = resolve_solvers("all")
+    assert len(names) >= 16
+    assert sorted(r["method"] for r in rows) == sorted(names)  # once each
+    for r in rows:
+        assert set(r) == set(bench_all.KEYS)
+        assert r["start"] == START and r["effectors"] == "5" and r["cases"] == CASES and r["data"] == "bandai-mini"
+        assert re.fullmatch(r"\d\d", r["lesson"]) and "position" in r["kinds"]
+        assert r["latency_ms_median"] > 0 and 0 <= r["converged_fraction"] <= 1
+        for k in ("mpjpe_mm_median", "effector_error_mm_median", "natural_mm_median", "bone_length_error_mm_max"):
+            assert math.isfinite(r[k]) and r[k] >= 0, (r["method"], k)
+    assert [r["mpjpe_mm_median"] for r in rows] == sorted(r["mpjpe_mm_median"] for r in rows)
+    by_name = {r["method"]: r for r in rows}
+    assert by_name["fabrik"]["lesson"] == "01" and by_name["protores"]["lesson"] == "05"
+    assert by_name["fabrik"]["converged_fraction"] == 1.0  # FABRIK reaches 5 reachable targets within 1 mm
+
+
+def test_the_json_parses_and_agrees_with_the_rows(report):
+    rows, out = report
+    assert sorted(p.name for p in out.iterdir()) == sorted(bench_all.FILES)
+    text = (out / "bench_all.json").read_text()
+    d = json.loads(text)
+    assert d["rows"] == rows
+    assert d["command"] == f"posekit bench all --cases {CASES} --start {START} --effectors 5 --seed 0"
+    assert (d["cases"], d["starts"], d["effectors"], d["seed"], d["data"]) == (CASES, [START], "5", 0, "bandai-mini")
+    assert d["machine"]["cpu_count"] >= 1 and d["machine"]["platform"]
+    assert d["skipped"] == [] and d["solvers"] == list(resolve_solvers("all"))
+    assert not re.search(r"\b20\d\d-\d\d-\d\d", text)  # no date: reruns differ only in their timings
+
+
+def test_the_markdown_has_a_sorted_table_per_start_with_every_solver(report):
+    rows, out = report
+    md = (out / "bench_all.md").read_text()
+    assert md.startswith("# ") and f"{CASES} held-out cases" in md and "one thread" in md
+    sections = re.split(r"^## ", md, flags=re.M)
+    tables = [s for s in sections if s.startswith("Start: ")]
+    assert len(tables) == 1 and tables[0].startswith(f"Start: {START} ")
+    lines = [ln for ln in tables[0].splitlines() if ln.startswith("|")]
+    assert lines[0] == "| solver | lesson | ms per solve | MPJPE mm | effector mm | natural mm | converged |"
+    body = [[c.strip() for c in ln.strip("|").split("|")] for ln in lines[2:]]
+    assert [c[0].strip("`") for c in body] == [r["method"] for r in rows]  # every solver, by MPJPE
+    assert [float(c[3]) for c in body] == [round(r["mpjpe_mm_median"], 1) for r in rows]
+    assert all(c[6].endswith("%") for c in body)
+    assert any(s.startswith("Reading the scatter") for s in sections) and "(bench_all.png)" in md
+
+
+def test_the_png_is_a_valid_figure(report):
+    _, out = report
+    path = out / "bench_all.png"
+    with Image.open(path) as im:
+        im.verify()
+    with Image.open(path) as im:
+        assert im.format == "PNG"
+        assert (im.width, im.height) == (1500, 975)  # 10 x 6.5 in at 150 dpi
+        pixels = np.asarray(im.convert("L"))
+    assert pixels.std() > 5 and (pixels < 128).mean() > 0.002  # drawn on, not blank
+
+
+def test_the_pareto_edge_is_the_rows_nothing_beats():
+    rows = [{"method": m, "latency_ms_median": t, "mpjpe_mm_median": e}
+            for m, t, e in (("a", 1.0, 30.0), ("b", 2.0, 20.0), ("c", 3.0, 25.0), ("d", 0.5, 40.0))]
+    assert [r["method"] for r in bench_all.pareto(rows)] == ["d", "a", "b"]
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"n_cases": 0}, "at least 1"),
+    ({"starts": ("same-clip", "sideways")}, "unknown start condition 'sideways'; valid: same-clip"),
+    ({"starts": ""}, "no start condition"),
+    ({"effectors": "7"}, "unknown effector set '7'.*valid: 2, 5, 5point"),
+    ({"effectors": "2,5"}, "one set per report"),
+])
+def test_bad_input_is_refused_with_a_sentence(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        bench_all.run(**kwargs, out=None, progress=False)
+
+
+def test_the_cli(report, capsys, monkeypatch):
+    assert "all" in benchmark_names()
+    with pytest.raises(SystemExit):
+        main(["bench", "all", "--help"])
+    help_text = " ".join(capsys.readouterr().out.split())
+    assert "(default: 200)" in help_text and "(default: same-clip,rest)" in help_text
+    assert main(["bench", "all", "--cases", "0"]) == 2
+    assert "posekit: error: cases must be a whole number of at least 1" in capsys.readouterr().err
+    assert main(["bench", "all", "--start", "sideways"]) == 2
+    assert "unknown start condition 'sideways'" in capsys.readouterr().err
+    assert bench_all._out(None) == bench_all.default_out() and bench_all.default_out().parts[-2:] == (
+        "data_samples", "results")
+    assert bench_all._out("") is None and bench_all._out("none") is None
+
+    def no_files(*a, **k):
+        raise AssertionError("--out none must write nothing")
+
+    monkeypatch.setattr(bench_all, "write_report", no_files)
+    assert main(["bench", "all", "--cases", "2", "--start", START, "--out", "none"]) == 0  # kernels compiled: quick
+    out = capsys.readouterr().out
+    assert "report: not written" in out and f"Start: {START}" in out
+    assert max(map(len, out.splitlines())) <= 100
+    table = out.split("Speed and quality")[1].splitlines()[3:]
+    assert sorted(ln.split()[0] for ln in table if ln.strip()) == sorted(resolve_solvers("all"))
