@@ -15,7 +15,7 @@ What it writes (``out``, a folder; by default ``data_samples/results``):
   date, so two runs differ only in their timings;
 * ``bench_all.md`` — what was measured, one Markdown table per start condition sorted by MPJPE, and how
   to read the scatter;
-* ``bench_all.png`` — median time per solve (ms, log scale) against median MPJPE (mm), one point per
+* ``bench_all.png`` — median time per solve (ms) against median MPJPE (mm), both log, one point per
   solver and start condition: a speed/quality scatter in the spirit of Fig. 5 of Victor & Meyer 2020.
 
 Units: times in milliseconds on one thread; distances in millimetres (the library's metres times 1000).
@@ -251,8 +251,8 @@ def markdown(rows: list[dict], meta: dict) -> str:
 
 def _reading(rows: list[dict], starts: list) -> str:
     text = ("Each point is one solver under one start condition (marker and colour: the start); a thin grey "
-            "line joins a solver's points. Left is faster (log scale: equal steps are equal ratios of time) "
-            "and lower is closer to the true pose, so the useful solvers sit on the lower-left edge, where no "
+            "line joins a solver's points. Left is faster and lower is closer to the true pose (both axes log: "
+            "equal steps are equal ratios), so the useful solvers sit on the lower-left edge, where no "
             "other solver is both faster and closer: ")
     fronts = []
     for st in starts:
@@ -281,7 +281,7 @@ _STYLE = {"same-clip": ("o", "C0"), "other-clip": ("s", "C2"), "rest": ("^", "C3
 
 
 def plot(rows: list[dict], meta: dict, path=None):
-    """The speed/quality scatter: median ms per solve (log x) against median MPJPE mm, one labelled point
+    """The speed/quality scatter: median ms per solve against median MPJPE mm (both log), one labelled point
     per solver and start condition. Rendered with Agg at :data:`DPI`; saved to ``path`` when given.
 
     Returns
@@ -308,18 +308,19 @@ def plot(rows: list[dict], meta: dict, path=None):
         ax.scatter([r["latency_ms_median"] for r in mine], [r["mpjpe_mm_median"] for r in mine], s=28,
                    marker=marker, color=colour, zorder=3, label=f"start: {st}")
     ax.set_xscale("log")
-    ax.xaxis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
-    ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
-    ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.set_yscale("log")  # both log: equal steps are equal ratios (twice as fast, half the error)
+    for axis in (ax.xaxis, ax.yaxis):
+        axis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+        axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+        axis.set_minor_formatter(NullFormatter())
     x = np.array([r["latency_ms_median"] for r in rows])
     y = np.array([r["mpjpe_mm_median"] for r in rows])
     ax.set_xlim(x.min() / 1.8, x.max() * 1.8)
-    pad = 0.08 * (y.max() - y.min() + 1.0)
-    ax.set_ylim(max(0.0, y.min() - pad), y.max() + pad)
+    ax.set_ylim(y.min() / 1.3, y.max() * 1.3)
     ax.grid(True, which="major", color="0.9", lw=0.6)
     ax.set_axisbelow(True)
     ax.set_xlabel("median time per solve, ms (one thread, log scale)")
-    ax.set_ylabel("median MPJPE, mm (body joints, pelvis-relative)")
+    ax.set_ylabel("median MPJPE, mm (body joints, pelvis-relative; log scale)")
     ax.set_title(f"Speed and quality of every posekit IK solver: {meta['data']}, {meta['cases']} held-out cases "
                  f"per start, effector set {meta['effectors']}", fontsize=10)
     handles, _ = ax.get_legend_handles_labels()

@@ -24,7 +24,7 @@ from typing import Callable
 
 from .effectors import normalise_kind
 
-__all__ = ["SolverInfo", "register", "make_solver", "solver_names", "solver_info"]
+__all__ = ["SolverInfo", "register", "unregister", "make_solver", "solver_names", "solver_info"]
 
 
 @dataclass(frozen=True)
@@ -128,6 +128,13 @@ def register(name: str, factory: Callable, *, kinds=None, needs_start: bool | No
     info = SolverInfo(name, factory, kinds, bool(needs_start), description, lesson, dict(defaults), str(data))
     _REGISTRY[name] = info
     return info
+
+
+def unregister(name: str) -> None:
+    """Forget a registered solver (e.g. one a notebook registered to try out)."""
+    if name not in _REGISTRY:
+        raise ValueError(f"no solver named {name!r} is registered")
+    del _REGISTRY[name]
 
 
 def _parameters(factory):

@@ -10,7 +10,7 @@ dragging in 3D) with what an animator expects around it:
 * **undo / redo** — every change is a step (a drag, or a slider moved without a second's pause, is one);
 * **setups** — save and load the effectors as JSON (:mod:`posekit.viz.setup_file`), from a path on the
   server or uploaded from the browser; a malformed file is reported and nothing is lost;
-* **export** — the chosen solver's pose as BVH (read back through :func:`posekit.io.read_bvh` to check it)
+* **export** — the chosen solver's pose as BVH (read back through :func:`posekit.io.bvh.read_bvh` to check it)
   and all views as a PNG, each with a download link; a start pose can be read from a BVH file;
 * **timeline** — key effector setups, in-betweens posed by one solver (:mod:`posekit.ik.keyframes`),
   played back and exported as an animated BVH.
@@ -195,6 +195,8 @@ class PosingStudio:
         editor.on_change(self._on_change)
         self.editor = editor
         self.views_box.children = (editor.widget,)
+        if tuple(self.choose.options) != tuple(self.available):
+            self.choose.options = list(self.available)
         self.choose.value = tuple(names)
         self.export_solver.options = names
         self.export_solver.value = names[0]
