@@ -278,6 +278,8 @@ class EffectorEditor:
                              target=r.get("base") if kind == "rotation" else r.get("target"), axis=r.get("axis"))
                 row = self.rows[i]
                 row["widgets"].children[1].value = float(row["lam"])
+                if kind == "rotation":
+                    row["base"] = np.array(r["base"], dtype=float)  # as saved (a rotation, checked above)
                 if kind == "rotation" and "euler" in r:
                     row["euler"] = np.asarray(r["euler"], float)
                     for sl, v in zip(row["angle_sliders"], row["euler"]):
