@@ -256,3 +256,36 @@ def test_effector_editor_edits_every_kind_and_re_solves():
     ed.add("UpperArm_R", "position", target=[40.0, 1.0, 0.0])
     assert not isinstance(ed.results["ProtoRes"], Exception), ed.results["ProtoRes"]
     assert "UpperArm_R" in ed.results["ProtoRes"].info["out_of_range"]
+
+
+def test_dragging_an_orange_marker_moves_the_look_at_target():
+    """A joint with a position and a look-at effector: pressing on its orange marker drags the point it looks
+    at (the position target stays); pressing on the red one drags the position target."""
+    from posekit.data import load_bandai_mini
+    from posekit.ik import Pose
+    from posekit.viz import EffectorEditor
+
+    m = load_bandai_mini()
+    s = m.skeleton
+    start = Pose.from_rotations(s, m.local_rot[0], m.root_pos[0])
+    ed = EffectorEditor(s, {"dls": make_solver("dls", s), "fabrik": make_solver("fabrik", s)}, start)
+    head = start.global_pos[s.index("Head")]
+    ed.add("Head", "position", target=head)
+    ed.add("Head", "look_at")
+    look0 = ed.rows[1]["target"].copy()
+    v = ed.first
+    v.grab(look0 + 0.01)
+    assert v.dragging == "Head" and v.dragging_look
+    cam = np.asarray(v.camera.position) + v._offset
+    goal = look0 + np.array([0.3, 0.0, 0.0])
+    goal = goal - ((goal - look0) @ (cam - look0)) / np.sum((cam - look0) ** 2) * (cam - look0)  # in the plane
+    v.drag_to(cam + 0.5 * (goal - cam))
+    np.testing.assert_allclose(ed.rows[1]["target"], goal, atol=1e-9)
+    np.testing.assert_allclose(ed.rows[0]["target"], head)
+    np.testing.assert_allclose(v.look_targets["Head"], goal, atol=1e-9)
+    assert "dls" in ed.results and ed.results["dls"].kinds == ("position", "look_at")
+    v._on_release({"new": [0, 0, 0]})
+    v.grab(head + 0.005)
+    assert v.dragging == "Head" and not v.dragging_look
+    v.drag_to(cam + 0.5 * (head + [0.0, 0.05, 0.0] - cam))
+    assert not np.allclose(ed.rows[0]["target"], head) and np.allclose(ed.rows[1]["target"], goal)

@@ -79,6 +79,7 @@ class EffectorEditor:
         self.viewers, self.labels, boxes = solver_views(skeleton, self.solvers, start.global_pos, truth, width, height)
         self.first = next(iter(self.viewers.values()))
         self.first.on_target_change(self._on_target)
+        self.first.on_look_target_change(self._on_look)
         self.add_joint = w.Dropdown(options=list(skeleton.names), value=skeleton.names[skeleton.pelvis()],
                                     description="joint", layout=w.Layout(width="220px"))
         self.add_kind = w.Dropdown(options=list(KIND_CHOICES), value="position", description="kind",
@@ -288,6 +289,13 @@ class EffectorEditor:
             self._quiet = False
         self.rows_box.children = tuple(r["widgets"] for r in self.rows)
         self._changed("setup", None)
+
+    def _on_look(self, joint, position):
+        # an orange marker dragged in 3D: that joint's look-at target
+        for i, r in enumerate(self.rows):
+            if r["joint"] == joint and r["kind"] == "look_at":
+                self.move_target(i, position)
+                return
 
     @property
     def effectors(self) -> list:

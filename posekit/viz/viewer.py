@@ -112,7 +112,8 @@ class SkeletonViewer:
         self.selected, self.dragging = None, None
         self.follow = follow
         self.aspect = width / height
-        self._select_callbacks, self._target_callbacks = [], []
+        self._select_callbacks, self._target_callbacks, self._look_callbacks = [], [], []
+        self.dragging_look = False  # the drag holds a look-at marker (orange), not a target
         self._syncing = False
 
         self._bones = Bones(skeleton, radius=0.7 * joint_radius)
@@ -334,14 +335,18 @@ class SkeletonViewer:
         """Start dragging at ``point`` (world frame, metres): the target marker it is on (within two
         marker radii), else the nearest joint's target (created on the first move)."""
         p = np.asarray(point, float).reshape(3)
-        markers = {**self.targets, **self.look_targets}
-        near = [(np.linalg.norm(q - p), n) for n, q in markers.items()]
-        near = [x for x in near if x[0] <= 2.6 * self._joints.radius]
-        name = min(near)[1] if near else self._nearest_joint(p)
+        looks = self.look_targets
+        red = [(float(np.linalg.norm(q - p)), n, False) for n, q in self.targets.items()
+               if not (n in looks and np.array_equal(looks[n], q))]
+        orange = [(float(np.linalg.norm(q - p)), n, True) for n, q in looks.items()]
+        near = [c for c in red + orange if c[0] <= 2.6 * self._joints.radius]
+        # on a marker: that target (an orange one: the point the joint looks at); else the nearest joint's
+        _, name, self.dragging_look = min(near) if near else (0.0, self._nearest_joint(p), False)
         self.dragging = name
         if self.selected != name:
             self.select(name)
-        anchor = markers.get(name, self.pose[self.skeleton.index(name)])
+        anchor = (self.look_targets[name] if self.dragging_look
+                  else self.targets.get(name, self.pose[self.skeleton.index(name)]))
         camera = np.asarray(self.camera.position, float) + self._offset  # world frame
         self._drag_plane = (anchor.copy(), (camera - anchor) / max(np.linalg.norm(camera - anchor), 1e-9))
 
@@ -353,7 +358,10 @@ class SkeletonViewer:
         camera = np.asarray(self.camera.position, float) + self._offset
         p = drag_point(camera, through, *self._drag_plane)
         if p is not None and np.linalg.norm(p - self._drag_plane[0]) < 10.0:  # not off towards the horizon
-            self.move_target(self.dragging, p)
+            if self.dragging_look and self._look_callbacks:
+                self.move_look_target(self.dragging, p)
+            else:
+                self.move_target(self.dragging, p)
 
     def _on_grab(self, change):
         if self.drag_mode.value and self._grab.distance is not None:
@@ -420,6 +428,27 @@ class SkeletonViewer:
         self._update_status()
         for cb in self._target_callbacks:
             cb(name, self.targets[name].copy())
+
+    def move_look_target(self, joint, position):
+        """Move the point a joint looks at (its orange marker) and notify ``on_look_target_change`` callbacks."""
+        name = self.skeleton.names[self.skeleton.index(joint)]
+        position = np.asarray(position, dtype=float).reshape(3)
+        if name not in self.look_targets:
+            raise ValueError(f"{name} has no look-at target to move")
+        if not np.all(np.isfinite(position)):
+            raise ValueError(f"look-at target for {name} contains NaN or inf")
+        looks = dict(self.look_targets)
+        looks[name] = position
+        targets = {n: (position if n == name and np.array_equal(p, self.look_targets[name]) else p)
+                   for n, p in self.targets.items()}
+        self.set_targets(targets, looks)
+        for cb in self._look_callbacks:
+            cb(name, position.copy())
+
+    def on_look_target_change(self, callback):
+        """Call ``callback(joint_name, position)`` whenever an orange look-at marker is dragged (without such a
+        callback, dragging one moves the joint's target through ``on_target_change``)."""
+        self._look_callbacks.append(callback)
 
     def on_select(self, callback):
         """Call ``callback(joint_name or None)`` whenever the selection changes."""
