@@ -12,7 +12,7 @@ benchmark without editing the CLI::
                        help="my benchmark", args=[arg("--n", type=int, default=3, help="repeats")],
                        tables=[("My table", ["method", "ms"])])
 
-The built-in benchmarks (``fk``, ``ik``, ``invrig``, ``ae-scale``, ``protores``, ``all``) register themselves
+The built-in benchmarks (``fk``, ``ik``, ``invrig``, ``ae-scale``, ``protores``, ``all``, ``studio``) register themselves
 when their modules are imported; :func:`benchmark_names` imports them.
 """
 
@@ -31,7 +31,7 @@ __all__ = ["Arg", "arg", "Benchmark", "register_benchmark", "unregister_benchmar
 WIDTH = 100
 """Text output stays within this many columns."""
 
-_BUILTIN = ("fk", "ik", "invrig", "ae-scale", "protores", "all")
+_BUILTIN = ("fk", "ik", "invrig", "ae-scale", "protores", "all", "studio")
 
 
 @dataclass(frozen=True)
@@ -208,7 +208,7 @@ def _load_builtin():
         return
     _loading = True
     try:
-        from . import ae_scale, fk, ik, invrig, protores  # noqa: F401
+        from . import ae_scale, fk, ik, invrig, protores, studio  # noqa: F401
         from . import all as _all  # noqa: F401  (a module named like the builtin: imported under another name)
     finally:
         _loading = False

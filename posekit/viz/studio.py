@@ -144,6 +144,9 @@ class PosingStudio:
             w.HTML("<b>Timeline</b> — key setups; in-betweens posed by the export solver"),
             w.HBox([add_key, clear, self.inbetweens, self.ease, build, anim]), self.keys_label, self.timeline_box,
             self.message])
+        for widget, name in ((self.summary, "summary"), (self.choose, "solver-choice"),
+                             (self.compare_button, "compare"), (self.views_box, "views"), (self.message, "message")):
+            widget.add_class(f"posekit-{name}")  # for a browser test (and a stylesheet)
         self.editor = None
         self.set_solvers(solvers, effectors=effectors)
         self.history, self.position = [self.editor.setup()], 0
@@ -191,8 +194,11 @@ class PosingStudio:
         editor = EffectorEditor(self.skeleton, built, self.start, effectors, tolerance_of=self.tolerance_of,
                                 width=w, height=h)
         if setup is not None:
+            editor.updates += self.editor.updates  # the summary's update count goes on across solver changes
             editor.set_setup(setup)
         editor.on_change(self._on_change)
+        if self.editor is not None and self.editor.first.selected is not None:
+            editor.first.select(self.editor.first.selected)  # keep the joint the sliders move
         self.editor = editor
         self.views_box.children = (editor.widget,)
         if tuple(self.choose.options) != tuple(self.available):

@@ -177,7 +177,8 @@ class SkeletonViewer:
                                       layout=w.Layout(width="340px"))
                         for a in "xyz"]
         self._synced = None
-        for s in self.sliders:
+        for a, s in zip("xyz", self.sliders):
+            s.add_class(f"posekit-target-{a}")
             s.observe(self._on_slider, names="value")
         self.controls = w.VBox([w.HBox([self.joint_select, self.drag_mode]), *self.sliders, self.status])
         self.controls.layout.display = None if controls else "none"
