@@ -1,5 +1,6 @@
 # posekit — the two commands of the README:
 #   make lab    set up (virtual environment, packages) and open JupyterLab on the notebooks
+#   (make studio: lesson 06's posing studio served by Voila as a browser app)
 #   make test   set up (and Chromium for the browser test) and run every test: unit tests,
 #               every notebook under nbval, the headless-browser check of the 3D widget
 PYTHON ?= python3
@@ -10,7 +11,7 @@ STAMP := $(VENV)/.posekit-installed
 export POSEKIT_DATA_DIR ?= $(if $(wildcard ../shared/data),$(abspath ../shared/data),)
 ROOT_FLAG := $(if $(filter 0,$(shell id -u)),--allow-root,)
 
-.PHONY: setup lab test browser-deps bench clean
+.PHONY: setup lab studio test browser-deps bench clean
 
 # JupyterLab settings for this environment: no news pop-up, no update check (nothing is fetched)
 LAB_OVERRIDES := $(VENV)/share/jupyter/lab/settings/overrides.json
@@ -34,6 +35,11 @@ browser-deps:
 lab: setup
 	$(VENV)/bin/jupyter lab notebooks/ $(ROOT_FLAG) --LabApp.news_url= \
 	  --LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate $(LAB_ARGS)
+
+# lesson 06's posing studio as a browser app (Voila); Ctrl-C stops it and its kernel
+studio: setup
+	cd notebooks && ../$(VENV)/bin/voila 06_posing_studio.ipynb --port=$(or $(STUDIO_PORT),8866) \
+	  --MappingKernelManager.cull_idle_timeout=600 --MappingKernelManager.cull_interval=60 $(STUDIO_ARGS)
 
 test: setup browser-deps
 	$(PY) -m pytest $(PYTEST_ARGS)
