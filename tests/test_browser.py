@@ -8,7 +8,6 @@ pointed at ``/usr/bin/chromium`` (it cannot download its own browser here).
 
 from __future__ import annotations
 
-import io
 import json
 import os
 import shutil
@@ -21,6 +20,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
+from tests.browser_helpers import foreground as _foreground, pixels as _pixels, wait_for as _wait_for
 
 pytestmark = pytest.mark.browser
 
@@ -40,7 +41,6 @@ FLAGS = ["--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader", "--disa
          "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-quic"]
 SAMPLE_JOINTS = {"root", "chest", "neck", "head"} | {f"{s}_{j}" for s in ("left", "right") for j in (
     "shoulder", "elbow", "wrist", "hip", "knee", "ankle", "toe")}
-BACKGROUND = np.array([0xF7, 0xF7, 0xF2])
 
 
 def _trimmed(src, dst, keep):
@@ -109,26 +109,6 @@ def chromium():
             yield browser
         finally:
             browser.close()
-
-
-def _pixels(locator):
-    from PIL import Image
-
-    return np.asarray(Image.open(io.BytesIO(locator.screenshot())).convert("RGB")).astype(int)
-
-
-def _foreground(img):
-    return np.abs(img - BACKGROUND).sum(-1) > 60
-
-
-def _wait_for(pred, timeout, what):
-    t0 = time.time()
-    while time.time() - t0 < timeout:
-        value = pred()
-        if value is not None and value is not False:
-            return value
-        time.sleep(0.5)
-    pytest.fail(f"timed out after {timeout} s waiting for {what}")
 
 
 # a prompt "[*]:": cells still queued or running

@@ -10,18 +10,16 @@ Needs Debian's ``chromium`` (``make test`` installs it) and Playwright's Python 
 
 from __future__ import annotations
 
-import io
-import time
 
 import numpy as np
 import pytest
 
+from tests.browser_helpers import BACKGROUND, pixels as _pixels, wait_for
 from posekit.bench.studio import (CHROMIUM, choose_solvers, launch_chromium, open_studio, rapid_updates,
                                   serve_voila, update_number)
 
 pytestmark = pytest.mark.browser
 
-BACKGROUND = np.array([0xF7, 0xF7, 0xF2])
 VIEWS = ".posekit-views"
 
 
@@ -47,22 +45,6 @@ def page(server):
             browser.close()
 
 
-def _pixels(locator):
-    from PIL import Image
-
-    return np.asarray(Image.open(io.BytesIO(locator.screenshot())).convert("RGB")).astype(int)
-
-
-def _wait_for(pred, timeout, what):
-    t0 = time.time()
-    while time.time() - t0 < timeout:
-        value = pred()
-        if value is not None and value is not False:
-            return value
-        time.sleep(0.3)
-    pytest.fail(f"timed out after {timeout} s waiting for {what}")
-
-
 def _labels(page):
     return page.locator(f"{VIEWS} .widget-html-content", has_text="time")
 
@@ -84,14 +66,14 @@ def _all_changed(before, after, frac=0.0005):
 
 
 def _wait_update(page, n0, what, timeout=60):
-    _wait_for(lambda: update_number(page) > n0, timeout, what)
+    wait_for(lambda: update_number(page) > n0, timeout, what, every=0.2)
 
 
 def test_studio_loads_and_every_view_shows_a_skeleton(page):
     canvases = _canvases(page)
     assert len(canvases) == 3  # the notebook compares FABRIK, DLS and ProtoRes
     for c in canvases:
-        img = _wait_for(lambda c=c: (lambda im: im if (np.abs(im - BACKGROUND).sum(-1) > 60).mean() > 0.002
+        img = wait_for(lambda c=c: (lambda im: im if (np.abs(im - BACKGROUND).sum(-1) > 60).mean() > 0.002
                                      else None)(_pixels(c)), 60, "a skeleton on every canvas")
         assert (np.abs(img - BACKGROUND).sum(-1) > 60).mean() > 0.002
     texts = _texts(page)
@@ -117,8 +99,8 @@ def test_dragging_a_target_in_3d_resolves_every_view(page, server):
     page.mouse.move(box["x"] + x + 15, box["y"] + y - 45, steps=8)
     page.mouse.up()
     _wait_update(page, n0, "a solve after the drag")
-    _wait_for(lambda: all(a != b for a, b in zip(_texts(page), texts)), 60, "every view's status to change")
-    _wait_for(lambda: _all_changed(before, _images(page)), 30, "every view to re-pose")
+    wait_for(lambda: all(a != b for a, b in zip(_texts(page), texts)), 60, "every view's status to change")
+    wait_for(lambda: _all_changed(before, _images(page)), 30, "every view to re-pose")
     # the target moved up (the sliders show it) and the studio counted the drag as one undo step
     ty = page.locator(".posekit-target-y .widget-readout").inner_text()
     assert float(ty) > 0.949 + 0.02, ty
@@ -153,8 +135,8 @@ def test_rotation_and_look_at_effectors_change_the_pose(page):
     n0 = update_number(page)
     _drag_slider(page, page.locator(VIEWS).locator(".widget-slider", has_text="yaw").locator(".noUi-handle").first, 90)
     _wait_update(page, n0, "a solve after the yaw slider")
-    _wait_for(lambda: all(a != b for a, b in zip(_texts(page)[1:], texts)), 60, "DLS and ProtoRes to follow the yaw")
-    _wait_for(lambda: _all_changed(before, [_pixels(c) for c in _canvases(page)[1:]]), 30, "their views to turn")
+    wait_for(lambda: all(a != b for a, b in zip(_texts(page)[1:], texts)), 60, "DLS and ProtoRes to follow the yaw")
+    wait_for(lambda: _all_changed(before, [_pixels(c) for c in _canvases(page)[1:]]), 30, "their views to turn")
     assert all("°" in t for t in _texts(page)[1:])  # an angular error is reported
     # a look-at on the neck, its target moved with the sliders (the first view's joint list selects it)
     _add(page, "Neck", "look_at")
@@ -164,8 +146,8 @@ def test_rotation_and_look_at_effectors_change_the_pose(page):
     n0 = update_number(page)
     _drag_slider(page, page.locator(".posekit-target-x .noUi-handle").first, 120)
     _wait_update(page, n0, "a solve after moving the look-at target")
-    _wait_for(lambda: all(a != b for a, b in zip(_texts(page)[1:], texts)), 60, "DLS and ProtoRes to look")
-    _wait_for(lambda: _all_changed(before, [_pixels(c) for c in _canvases(page)[1:]]), 30, "their views to turn")
+    wait_for(lambda: all(a != b for a, b in zip(_texts(page)[1:], texts)), 60, "DLS and ProtoRes to look")
+    wait_for(lambda: _all_changed(before, [_pixels(c) for c in _canvases(page)[1:]]), 30, "their views to turn")
 
 
 def test_bvh_export_downloads_a_file_posekit_reads(page, tmp_path):
@@ -174,7 +156,7 @@ def test_bvh_export_downloads_a_file_posekit_reads(page, tmp_path):
     page.locator(".widget-dropdown", has_text="export").locator("select").select_option("dls")
     page.get_by_role("button", name="pose as BVH").click()
     message = page.locator(".posekit-message")
-    _wait_for(lambda: "read back within 0.000 mm" in message.inner_text(), 60, "the export message")
+    wait_for(lambda: "read back within 0.000 mm" in message.inner_text(), 60, "the export message")
     with page.expect_download(timeout=30_000) as dl:
         message.get_by_text("download pose_dls.bvh").click()
     path = tmp_path / "pose.bvh"
@@ -187,7 +169,7 @@ def test_bvh_export_downloads_a_file_posekit_reads(page, tmp_path):
         page.get_by_role("button", name="upload setup / BVH").click()
     chooser.value.set_files(files=[{"name": "bad.json", "mimeType": "application/json",
                                     "buffer": b'{"format": "posekit-effector-setup",\n oops}'}])
-    _wait_for(lambda: "bad.json, line 2, column 2" in message.inner_text(), 30, "the upload's error message")
+    wait_for(lambda: "bad.json, line 2, column 2" in message.inner_text(), 30, "the upload's error message")
     assert page.locator(VIEWS).get_by_role("button", name="remove").count() == n_rows
 
 

@@ -74,7 +74,7 @@ def test_camera_keeps_the_pose_framed(sample):
 
 
 def test_drag_moves_the_target_across_the_camera_facing_plane(sample):
-    from posekit.viz.viewer import drag_point
+    from posekit.viz.drag import drag_point
 
     np.testing.assert_allclose(drag_point([0, 0, 5], [0, 1, 4], [0, 0, 0], [0, 0, 1]), [0, 5, 0])
     assert drag_point([0, 0, 5], [1, 0, 5], [0, 0, 0], [0, 0, 1]) is None  # parallel to the plane

@@ -11,8 +11,8 @@ def check_drag_point(my_drag) -> bool:
     """Check ``my_drag(camera (3,), through (3,), plane_point (3,), plane_normal (3,)) -> (3,) or None``: where
     the ray from the camera through ``through`` meets the plane, ``c + t d`` with ``d = through - c`` and
     ``t = ((p0 - c) . n) / (d . n)``; None when the ray is parallel to the plane or meets it behind the
-    camera (:func:`posekit.viz.viewer.drag_point`)."""
-    from ..viz.viewer import drag_point
+    camera (:func:`posekit.viz.drag.drag_point`)."""
+    from ..viz.drag import drag_point
 
     rng = np.random.default_rng(16)
     cases = []

@@ -31,29 +31,13 @@ import html
 import numpy as np
 
 from ..skeleton import Skeleton
+from .drag import DragTargets
 from .meshes import Bones, Spheres, icosphere
 
-__all__ = ["SkeletonViewer", "icosphere", "drag_point"]
+__all__ = ["SkeletonViewer", "icosphere"]
 
 
-def drag_point(camera, through, plane_point, plane_normal):
-    """Where the ray from ``camera`` through ``through`` meets a plane (all (3,) arrays, one frame).
-
-    The browser reports where the mouse ray hits a large sphere around the scene; the ray is the line
-    from the camera through that point, and the dragged target goes where it crosses the drag plane.
-    Returns None when the ray runs parallel to the plane or meets it behind the camera.
-    """
-    camera, through = np.asarray(camera, float), np.asarray(through, float)
-    n = np.asarray(plane_normal, float)
-    d = through - camera
-    denom = float(d @ n)
-    if abs(denom) < 1e-9 * max(np.linalg.norm(d), 1e-12):
-        return None
-    t = float((np.asarray(plane_point, float) - camera) @ n) / denom
-    return None if t <= 0 else camera + t * d
-
-
-class SkeletonViewer:
+class SkeletonViewer(DragTargets):
     """A pythreejs scene of one skeleton with a ghost, targets, picking, dragging and sliders.
 
     Parameters
@@ -84,7 +68,7 @@ class SkeletonViewer:
     targets, look_targets : dict
         Joint name -> (3,) point, metres.
     dragging : str or None
-        The joint whose target the mouse is dragging.
+        The joint whose target the mouse is dragging (:class:`~posekit.viz.drag.DragTargets`).
     """
 
     SLIDER_STEP = 0.001
@@ -109,11 +93,11 @@ class SkeletonViewer:
         self.pose = np.array(rest_pose(skeleton) if pose is None else pose, dtype=float)
         self._check(self.pose, "pose")
         self.targets, self.look_targets = {}, {}
-        self.selected, self.dragging = None, None
+        self.selected = None
         self.follow = follow
         self.aspect = width / height
         self._select_callbacks, self._target_callbacks, self._look_callbacks = [], [], []
-        self.dragging_look = False  # the drag holds a look-at marker (orange), not a target
+        self._init_drag()
         self._syncing = False
 
         self._bones = Bones(skeleton, radius=0.7 * joint_radius)
@@ -125,15 +109,7 @@ class SkeletonViewer:
         self._target_group = three.Group()
         self._targets_mesh, self._target_key = None, None
         self._selected_marker.mesh.visible = False
-        # what a drag can grab (joints and target markers), and the sphere the mouse ray always meets
-        self._grabbable = three.Group(children=[self._joints.mesh, self._target_group])
-        unit, faces = icosphere(2)
-        self._drag_sphere = three.Mesh(
-            three.BufferGeometry(attributes={
-                "position": three.BufferAttribute((40.0 * unit).astype(np.float32), normalized=False),
-                "index": three.BufferAttribute(faces.reshape(-1).astype(np.uint32), normalized=False)}),
-            three.MeshBasicMaterial(color="#ffffff", transparent=True, opacity=0.0, depthWrite=False,
-                                    side="BackSide"))
+        self._grabbable = three.Group(children=[self._joints.mesh, self._target_group])  # what a drag can grab
 
         # The scene content sits in a group shifted by -centre, so the orbit pivot (the origin,
         # where OrbitControls starts) is the middle of the pose.
@@ -145,21 +121,15 @@ class SkeletonViewer:
         if floor:
             content.append(three.GridHelper(size=6, divisions=24, colorCenterLine="#888888", colorGrid="#cccccc"))
         self._world = three.Group(children=content, position=[float(-c) for c in centre])
-        self.scene = three.Scene(children=[self._world, self._drag_sphere, self.camera,
+        self.scene = three.Scene(children=[self._world, self._drag_surface(), self.camera,
                                            three.AmbientLight(color="#ffffff", intensity=0.55),
                                            three.DirectionalLight(color="#ffffff", position=[3, 5, 4], intensity=0.75)],
                                  background=background)
         self.orbit = three.OrbitControls(controlling=self.camera)
         self.picker = three.Picker(controlling=self._joints.mesh, event="dblclick")
         self.picker.observe(self._on_pick, names=["point"])
-        self._grab = three.Picker(controlling=self._grabbable, event="mousedown")
-        self._grab.observe(self._on_grab, names=["point"])
-        self._move = three.Picker(controlling=self._drag_sphere, event="mousemove")
-        self._move.observe(self._on_drag, names=["point"])
-        self._release = three.Picker(controlling=self._drag_sphere, event="mouseup")
-        self._release.observe(self._on_release, names=["point"])
         self.renderer = three.Renderer(camera=self.camera, scene=self.scene,
-                                       controls=[self.orbit, self.picker, self._grab, self._move, self._release],
+                                       controls=[self.orbit, self.picker, *self._drag_pickers()],
                                        width=width, height=height, antialias=True)
 
         self.status = w.HTML(value="double-click a joint to select it")
@@ -167,10 +137,7 @@ class SkeletonViewer:
         self.joint_select = w.Dropdown(options=[("(none)", "")] + [(n, n) for n in skeleton.names],
                                        value="", description="joint", layout=w.Layout(width="220px"))
         self.joint_select.observe(lambda ch: self.select(ch["new"] or None), names="value")
-        self.drag_mode = w.ToggleButton(value=False, description="drag in 3D", icon="hand-pointer-o",
-                                        tooltip="on: press on a joint or a target and move the mouse to drag "
-                                                "the target (orbiting stops); off: the mouse orbits")
-        self.drag_mode.observe(self._on_drag_mode, names="value")
+        self.drag_mode = self._drag_toggle()
         step = self.SLIDER_STEP
         self.sliders = [w.FloatSlider(value=0.0, min=-step, max=step, step=step, description=f"target {a}",
                                       continuous_update=True, readout_format=".3f", disabled=True, readout=False,
@@ -326,54 +293,6 @@ class SkeletonViewer:
         if p.shape != (3,) or not np.all(np.isfinite(p)) or self.picker.distance is None:
             return  # the double-click hit nothing
         self.select(self._nearest_joint(p + self._offset))  # picked point is in scene coordinates
-
-    # ------------------------------------------------------------------ dragging in 3D
-    def _on_drag_mode(self, change):
-        self.orbit.enabled = not change["new"]
-        self.dragging = None
-
-    def grab(self, point):
-        """Start dragging at ``point`` (world frame, metres): the target marker it is on (within two
-        marker radii), else the nearest joint's target (created on the first move)."""
-        p = np.asarray(point, float).reshape(3)
-        looks = self.look_targets
-        red = [(float(np.linalg.norm(q - p)), n, False) for n, q in self.targets.items()
-               if not (n in looks and np.array_equal(looks[n], q))]
-        orange = [(float(np.linalg.norm(q - p)), n, True) for n, q in looks.items()]
-        near = [c for c in red + orange if c[0] <= 2.6 * self._joints.radius]
-        # on a marker: that target (an orange one: the point the joint looks at); else the nearest joint's
-        _, name, self.dragging_look = min(near) if near else (0.0, self._nearest_joint(p), False)
-        self.dragging = name
-        if self.selected != name:
-            self.select(name)
-        anchor = (self.look_targets[name] if self.dragging_look
-                  else self.targets.get(name, self.pose[self.skeleton.index(name)]))
-        camera = np.asarray(self.camera.position, float) + self._offset  # world frame
-        self._drag_plane = (anchor.copy(), (camera - anchor) / max(np.linalg.norm(camera - anchor), 1e-9))
-
-    def drag_to(self, through):
-        """Move the dragged target to where the mouse ray (camera -> ``through``, world frame) meets the
-        drag plane (through the grabbed point, facing the camera); notifies ``on_target_change``."""
-        if self.dragging is None:
-            return
-        camera = np.asarray(self.camera.position, float) + self._offset
-        p = drag_point(camera, through, *self._drag_plane)
-        if p is not None and np.linalg.norm(p - self._drag_plane[0]) < 10.0:  # not off towards the horizon
-            if self.dragging_look and self._look_callbacks:
-                self.move_look_target(self.dragging, p)
-            else:
-                self.move_target(self.dragging, p)
-
-    def _on_grab(self, change):
-        if self.drag_mode.value and self._grab.distance is not None:
-            self.grab(np.asarray(change["new"], float) + self._offset)
-
-    def _on_drag(self, change):
-        if self.drag_mode.value and self.dragging is not None and self._move.distance is not None:
-            self.drag_to(np.asarray(change["new"], float) + self._offset)
-
-    def _on_release(self, change):
-        self.dragging = None
 
     # ------------------------------------------------------------------ sliders
     def _sync_sliders(self, recentre: bool = False):

@@ -1,0 +1,146 @@
+"""Dragging targets with the mouse in a pythreejs view: a ray from the camera, a plane facing it.
+
+Introduced in ``notebooks/06_posing_studio.ipynb``; a part of :class:`~posekit.viz.SkeletonViewer` (it
+inherits :class:`DragTargets`). With the viewer's **drag in 3D** toggle on, orbiting stops and three
+pickers report mouse events to the kernel:
+
+* *mouse down* on a joint or a marker (:meth:`DragTargets.grab`): that target is held, and a drag plane is
+  fixed through it, facing the camera;
+* *mouse move*: the browser reports where the mouse ray meets a large invisible sphere around the scene;
+  the kernel draws the line from the camera through that point and moves the target to where it crosses
+  the drag plane (:func:`drag_point`, :meth:`DragTargets.drag_to`);
+* *mouse up*: the target is let go.
+
+So the target follows the cursor in the plane of the screen, at the depth it had, and the arithmetic runs
+in the kernel: the browser only reports points. Units: metres; positions in the world frame.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .meshes import icosphere
+
+__all__ = ["drag_point", "DragTargets"]
+
+SURFACE_RADIUS = 40.0
+"""Radius (metres) of the invisible sphere every mouse ray from inside the scene meets."""
+
+
+def drag_point(camera, through, plane_point, plane_normal):
+    """Where the ray from ``camera`` through ``through`` meets a plane (all (3,) arrays, one frame).
+
+    The browser reports where the mouse ray hits a large sphere around the scene; the ray is the line
+    from the camera through that point, and the dragged target goes where it crosses the drag plane.
+    Returns None when the ray runs parallel to the plane or meets it behind the camera.
+    """
+    camera, through = np.asarray(camera, float), np.asarray(through, float)
+    n = np.asarray(plane_normal, float)
+    d = through - camera
+    denom = float(d @ n)
+    if abs(denom) < 1e-9 * max(np.linalg.norm(d), 1e-12):
+        return None
+    t = float((np.asarray(plane_point, float) - camera) @ n) / denom
+    return None if t <= 0 else camera + t * d
+
+
+class DragTargets:
+    """The dragging half of :class:`~posekit.viz.SkeletonViewer` (see the module docstring).
+
+    Expects of the viewer: ``camera``, ``orbit``, ``_offset`` (world position of the scene origin),
+    ``_grabbable`` (the group of joints and markers), ``pose``, ``targets``, ``look_targets``,
+    ``_joints.radius``, ``select``, ``move_target``, ``move_look_target``, ``_look_callbacks``.
+
+    Attributes
+    ----------
+    drag_mode : ipywidgets.ToggleButton
+    dragging : str or None
+        The joint whose target the mouse holds.
+    dragging_look : bool
+        Whether it holds the joint's look-at marker (orange) rather than its target.
+    """
+
+    def _init_drag(self):
+        self.dragging, self.dragging_look = None, False
+        self._drag_plane = None
+
+    def _drag_surface(self):
+        """The invisible sphere (seen from inside) that every mouse ray meets."""
+        import pythreejs as three
+
+        unit, faces = icosphere(2)
+        self._drag_sphere = three.Mesh(
+            three.BufferGeometry(attributes={
+                "position": three.BufferAttribute((SURFACE_RADIUS * unit).astype(np.float32), normalized=False),
+                "index": three.BufferAttribute(faces.reshape(-1).astype(np.uint32), normalized=False)}),
+            three.MeshBasicMaterial(color="#ffffff", transparent=True, opacity=0.0, depthWrite=False,
+                                    side="BackSide"))
+        return self._drag_sphere
+
+    def _drag_pickers(self):
+        """Mouse down on the joints and markers, mouse move and mouse up on the sphere."""
+        import pythreejs as three
+
+        self._grab = three.Picker(controlling=self._grabbable, event="mousedown")
+        self._grab.observe(self._on_grab, names=["point"])
+        self._move = three.Picker(controlling=self._drag_sphere, event="mousemove")
+        self._move.observe(self._on_drag, names=["point"])
+        self._release = three.Picker(controlling=self._drag_sphere, event="mouseup")
+        self._release.observe(self._on_release, names=["point"])
+        return [self._grab, self._move, self._release]
+
+    def _drag_toggle(self):
+        import ipywidgets as w
+
+        toggle = w.ToggleButton(value=False, description="drag in 3D", icon="hand-pointer-o",
+                                tooltip="on: press on a joint or a target and move the mouse to drag the target "
+                                        "(orbiting stops); off: the mouse orbits")
+        toggle.observe(self._on_drag_mode, names="value")
+        return toggle
+
+    def _on_drag_mode(self, change):
+        self.orbit.enabled = not change["new"]
+        self.dragging = None
+
+    def grab(self, point):
+        """Start dragging at ``point`` (world frame, metres): the target marker it is on (within two
+        marker radii), else the nearest joint's target (created on the first move)."""
+        p = np.asarray(point, float).reshape(3)
+        looks = self.look_targets
+        red = [(float(np.linalg.norm(q - p)), n, False) for n, q in self.targets.items()
+               if not (n in looks and np.array_equal(looks[n], q))]
+        orange = [(float(np.linalg.norm(q - p)), n, True) for n, q in looks.items()]
+        near = [c for c in red + orange if c[0] <= 2.6 * self._joints.radius]
+        # on a marker: that target (an orange one: the point the joint looks at); else the nearest joint's
+        _, name, self.dragging_look = min(near) if near else (0.0, self._nearest_joint(p), False)
+        self.dragging = name
+        if self.selected != name:
+            self.select(name)
+        anchor = (self.look_targets[name] if self.dragging_look
+                  else self.targets.get(name, self.pose[self.skeleton.index(name)]))
+        camera = np.asarray(self.camera.position, float) + self._offset  # world frame
+        self._drag_plane = (anchor.copy(), (camera - anchor) / max(np.linalg.norm(camera - anchor), 1e-9))
+
+    def drag_to(self, through):
+        """Move the dragged target to where the mouse ray (camera -> ``through``, world frame) meets the
+        drag plane (through the grabbed point, facing the camera); notifies ``on_target_change``."""
+        if self.dragging is None:
+            return
+        camera = np.asarray(self.camera.position, float) + self._offset
+        p = drag_point(camera, through, *self._drag_plane)
+        if p is not None and np.linalg.norm(p - self._drag_plane[0]) < 10.0:  # not off towards the horizon
+            if self.dragging_look and self._look_callbacks:
+                self.move_look_target(self.dragging, p)
+            else:
+                self.move_target(self.dragging, p)
+
+    def _on_grab(self, change):
+        if self.drag_mode.value and self._grab.distance is not None:
+            self.grab(np.asarray(change["new"], float) + self._offset)
+
+    def _on_drag(self, change):
+        if self.drag_mode.value and self.dragging is not None and self._move.distance is not None:
+            self.drag_to(np.asarray(change["new"], float) + self._offset)
+
+    def _on_release(self, change):
+        self.dragging = None
