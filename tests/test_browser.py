@@ -227,9 +227,12 @@ def test_viewer_renders_and_slider_moves_joint(lab, chromium):
         status = first_viewer.locator(".widget-html-content").first
         assert "double-click a joint" in status.inner_text()
         view.dblclick(position={"x": float(xs[k]), "y": float(ys[k])})
-        _wait_for(lambda: " at (" in status.inner_text(), 30, "the picked joint to be selected")
-        picked = status.inner_text().split(" at (")[0].strip()
+        # the status table's first row is the picked joint: its name, then x, y, z in metres
+        row = status.locator("tr").nth(1)
+        _wait_for(lambda: row.count() == 1, 30, "the picked joint to be selected")
+        picked = row.locator("th").inner_text().strip()
         assert picked in SAMPLE_JOINTS, picked
+        assert len(row.locator("td").all_inner_texts()) >= 3
     finally:
         page.close()
 
