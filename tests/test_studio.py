@@ -247,3 +247,23 @@ def test_studio_solver_choice_and_a_failing_solver(studio, bandai):
         studio.available.remove("broken-test")
         unregister("broken-test")
         studio.set_solvers(["fabrik", "protores"])
+
+
+def test_bench_studio_refuses_bad_configurations_before_starting_anything():
+    from posekit.bench.studio import rapid_updates, run
+
+    with pytest.raises(ValueError, match="give 2-4 registered solvers"):
+        run(updates=10, configs=["fabrik"])
+    with pytest.raises(ValueError, match=r"unknown: nope"):
+        run(updates=10, configs=["fabrik,nope"])
+    with pytest.raises(ValueError, match="at least 1"):
+        rapid_updates(None, 0)
+
+
+def test_skeleton_sides_from_names():
+    from posekit.skeleton import Skeleton
+
+    names = ["Hips", "LeftUpLeg", "RightUpLeg", "Spine", "Hand_L", "Hand_R", "left_foot", "LThumb", "Head"]
+    parents = [-1, 0, 0, 0, 3, 3, 1, 4, 3]
+    s = Skeleton(names, np.array(parents), np.zeros((len(names), 3)))
+    assert list(s.sides()) == [0, 1, -1, 0, 1, -1, 1, 1, 0]
