@@ -96,7 +96,7 @@ def test_a_registered_solver_is_an_ik_benchmark_method(sample, capsys):
 
         assert "test-stay" in resolve_solvers("all")
     finally:
-        registry._REGISTRY.pop("test-stay", None)  # the registry has no unregister yet
+        registry.unregister("test-stay")
 
 
 def test_unknown_names_are_refused(solvers):

@@ -9,7 +9,8 @@ whether the numbers hold on *every* frame of the two full datasets (read by path
    ``split`` for the protocol;
 2. :func:`posekit.models.ae_train.train_ae_solvers` trains the autoencoder, the solvers and the
    chaining-aware copies on its ``train`` frames (validation losses on ``val``), in memory;
-3. the trained model is registered under temporary solver names (``neural-scale``, ...) and
+3. the trained model is registered under temporary solver names (``neural-scale``, ..., unregistered
+   when the run ends) and
    :func:`posekit.bench.ik.run` measures FABRIK and the neural variants on held-out ``test`` cases,
    with the shared metrics of ``posekit bench ik`` (rows are renamed back to ``neural``,
    ``neural-raw``, ``neural-chained``, ``neural-chained-raw``, ``neural-fabrik``).
@@ -227,8 +228,14 @@ def run_scale(protocol: str = "full", n_cases: int = 1000, seed: int = 0, out=No
 
     t2 = time.perf_counter()
     names = _register(model)
-    rows = ik_run(motions, solvers=("fabrik", *names), effector_sets=tuple(effector_sets), n_cases=int(n_cases),
-                  start=tuple(ok), seed=seed, methods="none", progress=progress)
+    try:
+        rows = ik_run(motions, solvers=("fabrik", *names), effector_sets=tuple(effector_sets), n_cases=int(n_cases),
+                      start=tuple(ok), seed=seed, methods="none", progress=progress)
+    finally:  # the in-memory model leaves the registry with the run (else `bench all` would meet it)
+        from ..ik.registry import unregister
+
+        for temp in names:
+            unregister(temp)
     kept = []
     for r in rows:
         r["method"] = names.get(r["method"], r["method"])
