@@ -35,7 +35,7 @@ import numpy as np
 from ..data.cases import START_CONDITIONS, start_condition
 from ..ik.api import EFFECTOR_SETS
 from ..ik.registry import solver_info
-from .ik import TABLE_LABELS, default_data, resolve_solvers
+from .ik import TABLE_LABELS, _group_title, default_data, resolve_solvers
 from .ik import run as run_ik
 from .plugin import arg, register_benchmark
 
@@ -425,10 +425,6 @@ def _header(rows, args) -> str:
             f"targets), effector set {args.effectors}, one thread; {files}\n"
             "errors in mm; MPJPE and natural: body joints, pelvis-relative; effector: the worst of a case; "
             "converged: every effector within 1 mm; sorted by MPJPE")
-
-
-def _group_title(start: str) -> str:
-    return f"Start: {start} ({START_CONDITIONS.get(start, start)})"
 
 
 TABLES = [("Speed and quality (medians over cases; bone error: the worst case)",

@@ -252,16 +252,14 @@ def rapid_updates(page, n: int, kernel=None, timeout_s: float = 30.0, progress: 
             rss_early = kernel.memory_info().rss / 2 ** 20
     rec = page.evaluate("() => window.__posekit")
     keys = np.asarray(rec["keys"], float)
-    ups = rec["updates"]
+    ups = np.sort(np.asarray([u[1] for u in rec["updates"]], float))
     # each key press's latency: the first summary change after it
-    lat = []
-    for t in keys:
-        later = [u[1] for u in ups if u[1] >= t]
-        if later:
-            lat.append(later[0] - t)
+    first = np.searchsorted(ups, keys)  # the first change at or after each press
+    answered = first < len(ups)
+    lat = ups[first[answered]] - keys[answered]
     alive = kernel.is_running() if kernel is not None else None
     rss_end = kernel.memory_info().rss / 2 ** 20 if alive else None
-    return {"latency_ms": np.asarray(lat), "rss_mb_early": rss_early, "rss_mb_end": rss_end, "kernel_alive": alive,
+    return {"latency_ms": lat, "rss_mb_early": rss_early, "rss_mb_end": rss_end, "kernel_alive": alive,
             "updates": arrived}
 
 

@@ -119,10 +119,9 @@ class EffectorEditor:
         kind = kind.replace("-", "_")
         if kind not in KIND_CHOICES:
             raise ValueError(f"unknown effector kind {kind!r}; valid kinds: {', '.join(KIND_CHOICES)}")
-        for r in self.rows:  # the Solver API's rule, said before any solver sees it
-            if r["joint"] == name and (r["kind"] == kind or {r["kind"], kind} == {"rotation", "look_at"}):
-                raise ValueError(f"{name} already has a {r['kind'].replace('_', '-')} effector; remove it first "
-                                 "(one effector of a kind per joint, and a rotation fixes where a joint faces)")
+        clash = _conflict(self.rows, name, kind)  # the Solver API's rule, said before any solver sees it
+        if clash:
+            raise ValueError(clash)
         P, G = self._current()
         row = {"joint": name, "kind": kind, "lam": float(lam), "euler": np.zeros(3)}
         if kind == "position":
@@ -237,7 +236,7 @@ class EffectorEditor:
         """Replace every effector by ``rows`` (the form :meth:`setup` returns) and solve once. Everything is
         checked before anything changes: on a ValueError the editor keeps its effectors."""
         rows = [dict(r) for r in rows]
-        names = set()
+        seen = []
         for k, r in enumerate(rows):
             try:
                 j = self.skeleton.names[self.skeleton.index(r["joint"])]
@@ -246,11 +245,10 @@ class EffectorEditor:
             kind = str(r.get("kind", "")).replace("-", "_")
             if kind not in KIND_CHOICES:
                 raise ValueError(f"effector {k + 1} on {j}: unknown kind {r.get('kind')!r}; valid: {', '.join(KIND_CHOICES)}")
-            clash = [(j, kind)] + ([(j, "rotation-or-look_at")] if kind in ("rotation", "look_at") else [])
-            if names & set(clash):
-                raise ValueError(f"effector {k + 1}: {j} already has a {kind.replace('_', '-')} effector (or a "
-                                 "rotation and a look-at: a rotation fixes where a joint faces)")
-            names |= set(clash)
+            clash = _conflict(seen, j, kind)
+            if clash:
+                raise ValueError(f"effector {k + 1}: {clash}")
+            seen.append({"joint": j, "kind": kind})
             if not 0.0 <= float(r.get("lam", 0.0)) <= 1.0:
                 raise ValueError(f"effector {k + 1} on {j}: tolerance must lie in [0, 1], got {r.get('lam')!r}")
             need = {"position": ("target",), "look_at": ("target", "axis"), "rotation": ("base",)}[kind]
@@ -341,6 +339,16 @@ class EffectorEditor:
             self.results[name], self.times[name] = res, ms
             v.set_pose(res.pose.global_pos)
             self.labels[name].value = status_line(res, ms)
+
+
+def _conflict(rows, joint: str, kind: str) -> str | None:
+    """Why an effector of ``kind`` on ``joint`` cannot join ``rows`` (dicts with ``joint`` and ``kind``), or None:
+    one effector of a kind per joint, and no rotation beside a look-at (a rotation fixes where a joint faces)."""
+    for r in rows:
+        if r["joint"] == joint and (r["kind"] == kind or {r["kind"], kind} == {"rotation", "look_at"}):
+            return (f"{joint} already has a {r['kind'].replace('_', '-')} effector; remove it first "
+                    "(one effector of a kind per joint, and a rotation fixes where a joint faces)")
+    return None
 
 
 def _rotation_of(skeleton, joint, target) -> np.ndarray:

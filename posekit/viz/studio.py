@@ -29,7 +29,7 @@ import numpy as np
 
 from ..ik.api import Effector, Pose
 from ..ik.registry import make_solver, solver_names
-from .compare import status_table
+from .compare import status_table, worst_errors
 from .effector_editor import EffectorEditor
 from .setup_file import SetupError, parse_setup, save_setup
 
@@ -217,13 +217,8 @@ class PosingStudio:
             elif isinstance(res, Exception):
                 rows.append((html.escape(name), _error(f"failed: {res}")))
             else:
-                err = np.asarray(res.effector_error, float)
-                kinds = tuple(getattr(res, "kinds", ()) or ("position",) * len(err))
-                pos = [e for e, k in zip(err, kinds) if k == "position"]
-                ang = [e for e, k in zip(err, kinds) if k != "position"]
-                parts = ([f"{max(pos) * 1000:.1f} mm"] if pos else []) + ([f"{np.degrees(max(ang)):.1f}°"] if ang else [])
                 mark = "✓" if res.converged else "✗"
-                rows.append((html.escape(name), f"{mark} {', '.join(parts)}, {self.editor.times.get(name, 0):.2f} ms"))
+                rows.append((html.escape(name), f"{mark} {worst_errors(res)}, {self.editor.times.get(name, 0):.2f} ms"))
         self.summary.value = status_table(f"update {self.editor.updates}", rows)
         self.undo_button.disabled = getattr(self, "position", 0) == 0
         self.redo_button.disabled = getattr(self, "position", 0) >= len(getattr(self, "history", [None])) - 1
