@@ -36,12 +36,13 @@ from pathlib import Path
 
 import numpy as np
 
+from ..paths import notebooks_dir
 from .plugin import arg, register_benchmark
 
 __all__ = ["serve_voila", "launch_chromium", "update_number", "open_studio", "choose_solvers", "rapid_updates", "kernel_processes", "run", "GOALS",
            "CHROMIUM", "CHROMIUM_FLAGS", "NOTEBOOK"]
 
-NOTEBOOK = Path(__file__).resolve().parents[2] / "notebooks" / "06_posing_studio.ipynb"
+NOTEBOOK = notebooks_dir() / "06_posing_studio.ipynb"
 CHROMIUM = os.environ.get("POSEKIT_CHROMIUM", "/usr/bin/chromium")
 CHROMIUM_FLAGS = ["--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader", "--disable-background-networking",
                   "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-quic"]

@@ -1,0 +1,209 @@
+"""Instructor versions of the lessons: the exercises' reference solutions filled in, from one source.
+
+A lesson's exercises are found in the notebook itself: a markdown cell opening with ``**Exercise N``;
+a *checked* exercise is followed by a code cell holding a stub ``def exercise_...: raise
+NotImplementedError`` and its checker call; an *open* one (``**Exercise N (open).**``) has no checker.
+Their solutions live once, in the package:
+
+* checked: a function of the same name and parameters in ``posekit/exercises/solutions/nbNN.py``,
+  self-contained so that its source can replace the stub;
+* open: a ``## Exercise N`` section of ``posekit/exercises/solutions/nbNN.md``, the instructor's notes.
+
+:func:`instructor_notebook` pastes them in (and makes every checker call an ``assert``), and
+:func:`render` executes the result, so a solution that stops passing its checker fails the build.
+"""
+
+from __future__ import annotations
+
+import ast
+import copy
+import importlib
+import inspect
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+from .lessons import Lesson, find_lesson, read_notebook
+
+__all__ = ["Exercise", "exercises", "solution_function", "notes", "instructor_notebook", "render"]
+
+_EXERCISE = re.compile(r"^\*\*Exercise (\d+)\b([^*]*)\*\*")
+_CHECK = re.compile(r"^(\s*)(\w+)\s*=\s*(check_\w+)\((exercise_\w+)\)\s*$", re.MULTILINE)
+SOLUTIONS = Path(__file__).resolve().parent.parent / "exercises" / "solutions"
+
+
+@dataclass(frozen=True)
+class Exercise:
+    """One exercise of a lesson, as the notebook states it."""
+
+    number: int
+    open: bool
+    text_cell: int
+    """Index of the markdown cell that states it."""
+    code_cell: int | None = None
+    """Index of the code cell with the stub (checked exercises)."""
+    function: str | None = None
+    """The stub's name, ``exercise_...``."""
+    checker: str | None = None
+    """The checker the notebook calls on it, ``check_...``."""
+
+
+def _stub(source: str) -> ast.FunctionDef | None:
+    tree = ast.parse(source)
+    for node in tree.body:
+        if isinstance(node, ast.FunctionDef) and node.name.startswith("exercise_"):
+            last = node.body[-1]
+            if isinstance(last, ast.Raise) and "NotImplementedError" in ast.unparse(last):
+                return node
+    return None
+
+
+def exercises(nb) -> list[Exercise]:
+    """Every exercise stated in notebook ``nb``, in order.
+
+    Raises
+    ------
+    ValueError
+        A checked exercise whose next code cell has no ``exercise_...`` stub or no checker call.
+    """
+    found = []
+    for i, cell in enumerate(nb.cells):
+        m = _EXERCISE.match(cell.source) if cell.cell_type == "markdown" else None
+        if not m:
+            continue
+        number, is_open = int(m.group(1)), "(open)" in m.group(2)
+        if is_open:
+            found.append(Exercise(number, True, i))
+            continue
+        j = next((k for k in range(i + 1, len(nb.cells)) if nb.cells[k].cell_type == "code"), None)
+        stub = _stub(nb.cells[j].source) if j is not None else None
+        calls = [c for c in _CHECK.finditer(nb.cells[j].source) if stub and c.group(4) == stub.name] if stub else []
+        if not stub or not calls:
+            raise ValueError(f"exercise {number} (cell {i}): the next code cell must define a stub "
+                             "`def exercise_...: raise NotImplementedError` and call its checker "
+                             "`done = check_...(exercise_...)`")
+        found.append(Exercise(number, False, i, j, stub.name, calls[0].group(3)))
+    return found
+
+
+def _module(lesson: Lesson):
+    return importlib.import_module(f"posekit.exercises.solutions.nb{lesson.number}")
+
+
+def solution_function(lesson: Lesson, name: str):
+    """The reference solution ``name`` of ``lesson`` (a function of its solutions module)."""
+    fn = getattr(_module(lesson), name, None)
+    if not callable(fn):
+        raise LookupError(f"lesson {lesson.number}: no solution {name!r} in posekit/exercises/solutions/"
+                          f"nb{lesson.number}.py")
+    return fn
+
+
+def notes(lesson: Lesson) -> dict[int, str]:
+    """The instructor's notes on ``lesson``'s open exercises: exercise number → Markdown."""
+    path = SOLUTIONS / f"nb{lesson.number}.md"
+    if not path.is_file():
+        return {}
+    found, current, lines = {}, None, []
+    for line in path.read_text(encoding="utf-8").splitlines() + ["## end"]:
+        m = re.match(r"^## (?:Exercise (\d+)|end)\s*$", line) if line.startswith("## ") else None
+        if line.startswith("## ") and not m:
+            raise ValueError(f"{path}: level-2 headings must read '## Exercise N', not {line!r}")
+        if m:
+            if current is not None:
+                found[current] = "\n".join(lines).strip()
+            current, lines = (int(m.group(1)) if m.group(1) else None), []
+        elif current is not None:
+            lines.append(line)
+    return found
+
+
+def _paste(source: str, stub: ast.FunctionDef, solution) -> str:
+    sol_src = inspect.getsource(solution).rstrip("\n")
+    sol_args = [a.arg for a in ast.parse(sol_src).body[0].args.args]
+    stub_args = [a.arg for a in stub.args.args]
+    if sol_args != stub_args:
+        raise ValueError(f"{solution.__name__}: the solution takes ({', '.join(sol_args)}), the notebook's stub "
+                         f"({', '.join(stub_args)})")
+    lines = source.splitlines()
+    first = stub.lineno - 1 - len(stub.decorator_list)
+    return "\n".join(lines[:first] + sol_src.splitlines() + lines[stub.end_lineno:])
+
+
+BANNER = ("**Instructor version** of lesson {n}: every exercise's reference solution is filled in and was run "
+          "(made by `posekit exercises solutions {n}` from the lesson and `posekit/exercises/solutions/`; "
+          "not for students).")
+
+
+def instructor_notebook(lesson) -> dict:
+    """The lesson with its solutions pasted in, not executed.
+
+    Parameters
+    ----------
+    lesson : Lesson or str
+        A lesson or its number.
+
+    Returns
+    -------
+    nbformat.NotebookNode
+        A banner cell first; each stub replaced by its solution and each checker call followed by
+        ``assert``; each open exercise followed by a markdown cell with the instructor's notes.
+
+    Raises
+    ------
+    LookupError
+        An exercise with no solution (function or notes).
+    """
+    lesson = lesson if isinstance(lesson, Lesson) else find_lesson(lesson)
+    nb = copy.deepcopy(read_notebook(lesson.path))
+    open_notes = notes(lesson)
+    extra = {}
+    for ex in exercises(nb):
+        if ex.open:
+            if not open_notes.get(ex.number):
+                raise LookupError(f"lesson {lesson.number}, exercise {ex.number} (open): no notes in "
+                                  f"posekit/exercises/solutions/nb{lesson.number}.md")
+            extra[ex.text_cell] = f"**Instructor notes — exercise {ex.number}.**\n\n{open_notes[ex.number]}"
+            continue
+        cell = nb.cells[ex.code_cell]
+        src = _paste(cell.source, _stub(cell.source), solution_function(lesson, ex.function))
+        src = _CHECK.sub(lambda m: m.group(0) + f"\n{m.group(1)}assert {m.group(2)}, "
+                         f"\"the reference solution must pass {m.group(3)}\"" if m.group(4) == ex.function
+                         else m.group(0), src)
+        cell.source = src
+        cell.outputs, cell.execution_count = [], None
+    import nbformat
+
+    cells = []
+    for i, cell in enumerate(nb.cells):
+        cells.append(cell)
+        if i in extra:
+            note = nbformat.v4.new_markdown_cell(extra[i])
+            note.metadata["tags"] = ["instructor-notes"]
+            cells.append(note)
+    banner = nbformat.v4.new_markdown_cell(BANNER.format(n=lesson.number))
+    banner.metadata["tags"] = ["instructor-banner"]
+    nb.cells = [cells[0], banner] + cells[1:]
+    nb.metadata.setdefault("posekit", {})["instructor"] = True
+    return nb
+
+
+def render(lesson, out_dir, execute: bool = True, timeout_s: int = 1800) -> Path:
+    """Write ``lesson``'s instructor version to ``out_dir/NN_name.solutions.ipynb``, executed by default.
+
+    The notebook runs in the lessons' folder (the lessons read and write paths relative to it), so it takes
+    as long as the lesson itself (see the course page's "runs in" column). A solution that fails its checker
+    stops the run with the checker's message.
+    """
+    import nbformat
+    from nbconvert.preprocessors import ExecutePreprocessor
+
+    lesson = lesson if isinstance(lesson, Lesson) else find_lesson(lesson)
+    nb = instructor_notebook(lesson)
+    if execute:
+        ExecutePreprocessor(timeout=timeout_s, kernel_name="python3").preprocess(
+            nb, {"metadata": {"path": str(lesson.path.parent)}})
+    out = Path(out_dir) / f"{lesson.stem}.solutions.ipynb"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    nbformat.write(nb, str(out))
+    return out
