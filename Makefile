@@ -3,6 +3,9 @@
 #   (make studio: lesson 06's posing studio served by Voila as a browser app)
 #   make test   set up (and Chromium for the browser test) and run every test: unit tests,
 #               every notebook under nbval, the headless-browser check of the 3D widget
+#   instructors: make slides (reveal.js slides of every lesson), make solutions (the lessons with
+#               their exercise solutions, executed), make course (one static page: lessons, slides,
+#               benchmark report) -- all under build/, openable from disk
 PYTHON ?= python3
 VENV ?= .venv
 PY := $(VENV)/bin/python
@@ -11,7 +14,7 @@ STAMP := $(VENV)/.posekit-installed
 export POSEKIT_DATA_DIR ?= $(if $(wildcard ../shared/data),$(abspath ../shared/data),)
 ROOT_FLAG := $(if $(filter 0,$(shell id -u)),--allow-root,)
 
-.PHONY: setup lab studio test browser-deps bench clean
+.PHONY: setup lab studio test browser-deps bench clean course-assets slides course solutions
 
 # JupyterLab settings for this environment: no news pop-up, no update check (nothing is fetched)
 LAB_OVERRIDES := $(VENV)/share/jupyter/lab/settings/overrides.json
@@ -32,6 +35,26 @@ browser-deps:
 	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq chromium chromium-driver; \
 	fi
 
+# reveal.js and MathJax for the slides and the course page (npm registry; copied next to the pages)
+COURSE_JS := tools/course/node_modules/.package-lock.json
+$(COURSE_JS): tools/course/package.json tools/course/package-lock.json
+	@command -v npm >/dev/null || { echo "npm (Node.js) is needed for reveal.js and MathJax: install nodejs and npm"; exit 1; }
+	cd tools/course && npm ci --no-audit --no-fund --loglevel=error
+	touch $(COURSE_JS)
+
+course-assets: $(COURSE_JS)
+
+COURSE_OUT ?= build/course
+slides: setup course-assets
+	$(VENV)/bin/posekit course slides --out $(COURSE_OUT)
+
+course: setup course-assets
+	$(VENV)/bin/posekit course build --out $(COURSE_OUT)
+
+# every lesson's instructor version, executed (about as long as running all lessons: ~8 min on 2 cores)
+solutions: setup course-assets
+	$(VENV)/bin/posekit exercises solutions $(or $(LESSON),all) --html --out build/instructor
+
 lab: setup
 	$(VENV)/bin/jupyter lab notebooks/ $(ROOT_FLAG) --LabApp.news_url= \
 	  --LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate $(LAB_ARGS)
@@ -41,11 +64,11 @@ studio: setup
 	cd notebooks && ../$(VENV)/bin/voila 06_posing_studio.ipynb --port=$(or $(STUDIO_PORT),8866) \
 	  --MappingKernelManager.cull_idle_timeout=600 --MappingKernelManager.cull_interval=60 $(STUDIO_ARGS)
 
-test: setup browser-deps
+test: setup browser-deps course-assets
 	$(PY) -m pytest $(PYTEST_ARGS)
 
 bench: setup
 	$(VENV)/bin/posekit bench fk
 
 clean:
-	rm -rf $(VENV) .pytest_cache
+	rm -rf $(VENV) .pytest_cache build tools/course/node_modules

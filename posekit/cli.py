@@ -31,6 +31,9 @@
 ``posekit train protores [--arch protores|masked-fcr|transformer] [--no-gpd] [--fixed-weights] ...``
     Makes lesson 05's ProtoRes (or a baseline), ``data_samples/weights/protores*.pt``.
 
+``posekit exercises list|solutions ...`` and ``posekit course slides|build|mark ...``
+    The instructor kit (:mod:`posekit.course.commands`): solutions, slides, the course page.
+
 Errors in input files print ``file:line: message`` and exit with status 2.
 """
 
@@ -446,6 +449,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="(default: 0)")
     p.add_argument("--out", default=None, help="JSON file (default data_samples/results/protores_ablation.json)")
     p.set_defaults(fn=_train_protores_studies)
+    from .course.commands import add_commands
+
+    add_commands(sub)
     return parser
 
 

@@ -88,7 +88,8 @@ def build_pages(out=DEFAULT_OUT, only=None, progress: bool = True) -> list[Path]
     for lesson in _progress(only or lessons(), "pages", progress):
         path = out / "lessons" / f"{lesson.stem}.html"
         path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(slide_rules.export(read_notebook(lesson.path), "page", static="../_static"), encoding="utf-8")
+        path.write_text(slide_rules.export(read_notebook(lesson.path), "page", static="../_static",
+                                                 back="../index.html"), encoding="utf-8")
         paths.append(path)
     return paths
 

@@ -153,15 +153,45 @@ def strip_test_markers(source: str) -> str:
     return "\n".join(ln for ln in source.splitlines() if not ln.strip().startswith("# NBVAL_"))
 
 
+WIDGET_VIEW = "application/vnd.jupyter.widget-view+json"
+WIDGET_NOTE = ('<div class="posekit-widget-note"><p><em>{what} lives in a running kernel: open this lesson in '
+               'JupyterLab (<code>make lab</code>) to use it.</em></p></div>')
+_PROGRESS = re.compile(r"\|.*\[\d\d:\d\d<")
+
+
+def static_outputs(outputs: list) -> list:
+    """A code cell's outputs as a static page can show them.
+
+    A widget has no state in a stored lesson (its view lives in the kernel), so nbconvert would print its
+    Python repr: a 3D view or other widget becomes a short note saying where to use it, and a progress bar
+    (whose stored text is its first, 0 % state) is dropped. Other outputs are kept.
+    """
+    kept = []
+    for o in outputs:
+        data = o.get("data", {})
+        if WIDGET_VIEW not in data:
+            kept.append(o)
+            continue
+        plain = data.get("text/plain", "")
+        plain = plain if isinstance(plain, str) else "".join(plain)
+        if _PROGRESS.search(plain):
+            continue
+        what = "This interactive 3D view" if "Renderer(" in plain else "This interactive widget"
+        kept.append({"output_type": "display_data", "metadata": {},
+                     "data": {"text/html": WIDGET_NOTE.format(what=what)}})
+    return kept
+
+
 def _presentable(nb: dict) -> dict:
     nb = copy.deepcopy(nb)
     for cell in nb["cells"]:
         if cell["cell_type"] == "code":
             cell["source"] = strip_test_markers(_source(cell))
+            cell["outputs"] = static_outputs(cell.get("outputs", []))
     return nb
 
 
-def export(nb: dict, kind: str, static: str = "../_static") -> str:
+def export(nb: dict, kind: str, static: str = "../_static", back: str | None = None) -> str:
     """One lesson as HTML with posekit's templates: ``kind`` ``"slides"`` (reveal.js) or ``"page"``.
 
     Parameters
@@ -171,6 +201,8 @@ def export(nb: dict, kind: str, static: str = "../_static") -> str:
     kind : {"slides", "page"}
     static : str
         Relative URL of the course's ``_static`` folder (reveal.js, MathJax) from the written file.
+    back : str, optional
+        Relative URL of the course page, linked at the top of a page.
     """
     import nbformat
     from nbconvert import HTMLExporter, SlidesExporter
@@ -187,7 +219,7 @@ def export(nb: dict, kind: str, static: str = "../_static") -> str:
     else:
         raise ValueError(f"kind must be 'slides' or 'page', not {kind!r}")
     node = nbformat.from_dict(_presentable(nb))
-    body, _ = exp.from_notebook_node(node, resources={"posekit_static": static})
+    body, _ = exp.from_notebook_node(node, resources={"posekit_static": static, "posekit_back": back})
     return body
 
 

@@ -1,0 +1,273 @@
+"""The instructor kit: the slide convention, the slides and course page (built, then opened in Chromium from
+disk), and the exercises' reference solutions (each passes its own checker; the instructor version runs)."""
+
+from __future__ import annotations
+
+import html
+import importlib
+import inspect
+import re
+import subprocess
+from pathlib import Path
+
+import nbformat
+import pytest
+
+from posekit.cli import main
+from posekit.course import slides as rules
+from posekit.course.build import build_course
+from posekit.course.lessons import find_lesson, lessons, read_notebook
+from posekit.course.solutions import exercises, instructor_notebook, notes, solution_function
+from posekit.paths import notebooks_dir
+
+ROOT = Path(__file__).resolve().parents[1]
+LESSONS = lessons()
+NUMBERS = [le.number for le in LESSONS]
+
+
+def test_the_course_has_every_lesson_in_order():
+    assert NUMBERS == ["00", "01", "02", "03", "04", "05", "06"]
+    for le in LESSONS:
+        assert le.title and le.duration_min > 0
+        assert all(p in NUMBERS and p < le.number for p in le.prerequisites), le.number
+        assert le.paper or le.reading, f"lesson {le.number} names no paper and no reading"
+        assert le.run_s is not None and le.run_s > 0  # read from the stored execution timestamps
+
+
+# ---- the slide convention -------------------------------------------------------------------------------
+
+
+def _cells(*specs):
+    out = []
+    for kind, text, *tags in specs:
+        cell = nbformat.v4.new_markdown_cell(text) if kind == "md" else nbformat.v4.new_code_cell(text)
+        if tags:
+            cell.metadata["tags"] = tags
+        out.append(cell)
+    return out
+
+
+def test_the_convention_types_each_kind_of_cell():
+    cells = _cells(("md", "# 09 — Title\n\n**Aim.** x"), ("code", "import numpy"), ("md", "## 1. Theory"),
+                   ("code", "a = 1"), ("code", "b = 2"), ("md", "A practical step"), ("code", "c = 3", "key-figure"),
+                   ("code", "d = 4", "slide-skip"), ("md", "aside", "slide-notes"), ("md", "## 2. Summary"))
+    assert rules.slide_types(cells) == ["slide", "skip", "slide", "-", "subslide", "subslide", "slide", "skip",
+                                        "notes", "slide"]
+
+
+def test_markdown_is_split_at_headings_and_exercises():
+    cells = _cells(("md", "The end of section 6.\n\n## 7. Exercises\n\nIntro.\n\n**Exercise 1 — FK.** Do it.\n\n"
+                          "**Exercise 2 (open).** Think.\n\n## 8. Summary\n\n- done"))
+    parts = [c.source for c in rules.split_markdown(cells)]
+    assert [p.split("\n")[0] for p in parts] == ["The end of section 6.", "## 7. Exercises",
+                                                 "**Exercise 1 — FK.** Do it.", "**Exercise 2 (open).** Think.",
+                                                 "## 8. Summary"]
+    assert len({c.id for c in rules.split_markdown(cells)}) == 5  # every piece keeps a distinct cell id
+
+
+@pytest.mark.parametrize("name", [le.path.name for le in LESSONS] + ["_template.ipynb"])
+def test_every_notebook_is_stored_under_the_slide_convention(name):
+    nb = read_notebook(notebooks_dir() / name)
+    assert nbformat.from_dict(rules.mark(nb)) == nb, \
+        f"{name} drifted from the slide convention: run `posekit course mark notebooks/{name}`"
+
+
+@pytest.mark.parametrize("number", NUMBERS)
+def test_every_lesson_has_one_key_figure_with_a_figure_or_table(number):
+    nb = read_notebook(find_lesson(number).path)
+    cell = nb.cells[rules.key_figure_cell(nb)]
+    assert cell.metadata.slideshow.slide_type == "slide" and rules.key_outputs(cell)
+
+
+def test_key_figure_errors_say_what_is_expected():
+    nb = nbformat.v4.new_notebook(cells=_cells(("md", "# t"), ("code", "x = 1", "key-figure")))
+    with pytest.raises(ValueError, match="figure .* or a printed table"):
+        rules.key_figure_cell(nb)
+    nb.cells[1].metadata["tags"] = []
+    with pytest.raises(ValueError, match="exactly one cell tagged 'key-figure', found 0"):
+        rules.key_figure_cell(nb)
+
+
+def test_count_slides_counts_leaf_sections():
+    assert rules.count_slides("<section><section>a</section><section>b</section></section><section>c</section>") == 3
+    assert rules.count_slides("<div></div>") == 0
+
+
+def test_mark_command_checks_and_writes(tmp_path, capsys):
+    nb = read_notebook(find_lesson("00").path)
+    nb.cells[2].source += "\n\n## Ninety-nine. A new section"
+    nb.cells[3].metadata.slideshow.slide_type = "fragment"
+    path = tmp_path / "00_edit.ipynb"
+    nbformat.write(nb, str(path))
+    assert main(["course", "mark", "--check", str(path)]) == 1
+    assert "differ from the slide convention" in capsys.readouterr().out
+    assert main(["course", "mark", str(path)]) == 0
+    assert main(["course", "mark", "--check", str(path)]) == 0
+    assert any(c.source == "## Ninety-nine. A new section" for c in read_notebook(path).cells)
+
+
+# ---- slides and the course page --------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def course(tmp_path_factory):
+    out = tmp_path_factory.mktemp("course")
+    build_course(out, progress=False)
+    return out
+
+
+def test_course_build_writes_every_part(course):
+    assert (course / "index.html").is_file() and (course / "report" / "bench_all.html").is_file()
+    assert (course / "report" / "bench_all.png").is_file()
+    for le in LESSONS:
+        for part in ("slides", "lessons"):
+            page = (course / part / f"{le.stem}.html").read_text(encoding="utf-8")
+            assert not re.search(r"""(src|href)=["']https?://""", page), f"{part}/{le.stem} loads from the internet"
+    index = (course / "index.html").read_text(encoding="utf-8")
+    for target in re.findall(r'href="([^"#]+)"', index):
+        assert (course / target).is_file(), f"index.html links to a missing {target}"
+    assert "CC BY-NC 4.0" in index
+
+
+@pytest.mark.parametrize("number", NUMBERS)
+def test_each_lesson_yields_sane_slides_with_its_key_figure(course, number):
+    le = find_lesson(number)
+    page = (course / "slides" / f"{le.stem}.html").read_text(encoding="utf-8")
+    n = rules.count_slides(page)
+    assert 12 <= n <= 60, f"lesson {number}: {n} slides"
+    nb = read_notebook(le.path)
+    key = rules.key_outputs(nb.cells[rules.key_figure_cell(nb)])
+    # the key figure opens a column of slides: its <section> is the first inside a top-level <section>
+    at = [page.find(k) if k in page else page.find(html.escape(k, quote=False)) for k in key]
+    assert min(at) > 0, f"lesson {number}: the key figure's output is not in the slides"
+    inner = page.rfind("<section", 0, min(at))
+    outer = page.rfind("<section", 0, inner)
+    assert page[page.index(">", outer) + 1:inner].strip() == "", f"lesson {number}: the key figure is not a slide"
+    assert "# NBVAL_" not in page  # test markers stay out of the lecture
+
+
+@pytest.mark.browser
+def test_course_opens_from_disk_in_chromium(course):
+    from playwright.sync_api import sync_playwright
+
+    from posekit.bench.studio import launch_chromium
+
+    with sync_playwright() as p:
+        browser = launch_chromium(p)
+        try:
+            page = browser.new_page(viewport={"width": 1280, "height": 800})
+            requests, errors = [], []
+            page.on("request", lambda r: requests.append(r.url))
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto((course / "index.html").as_uri())
+            assert page.locator("table.posekit-lessons tbody tr").count() == len(LESSONS)
+            page.locator("a", has_text="slides").nth(3).click()  # lesson 03's slides, by the index's link
+            page.wait_for_function("() => window.Reveal && Reveal.isReady()", timeout=30_000)
+            html = (course / "slides" / f"{find_lesson('03').stem}.html").read_text(encoding="utf-8")
+            assert page.evaluate("Reveal.getTotalSlides()") == rules.count_slides(html)
+            page.wait_for_function("() => document.querySelectorAll('mjx-container svg').length > 5", timeout=30_000)
+            page.keyboard.press("ArrowRight")
+            assert page.evaluate("Reveal.getIndices().h") == 1
+            page.screenshot(path=str(course / "slides-03.png"))
+            page.goto((course / "lessons" / f"{find_lesson('06').stem}.html").as_uri())
+            img = page.locator("img").last  # the report's scatter, stored in the notebook
+            assert img.evaluate("i => i.complete && i.naturalWidth") > 400
+            assert page.locator(".posekit-widget-note").count() >= 1  # the studio's place, explained
+            page.goto((course / "report" / "bench_all.html").as_uri())
+            assert page.locator("table tbody tr").count() >= 16
+            assert page.evaluate("document.querySelector('img').naturalWidth") > 400
+        finally:
+            browser.close()
+    assert [u for u in requests if not u.startswith(("file:", "data:"))] == []
+    assert errors == []
+
+
+def test_make_course_and_slides_targets(tmp_path):
+    out = tmp_path / "c"
+    r = subprocess.run(["make", "-C", str(ROOT), "slides", f"COURSE_OUT={out}"], capture_output=True, text=True,
+                       timeout=600)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert re.search(r"^06\s+\d+\s+yes", r.stdout, re.MULTILINE)
+    r = subprocess.run(["make", "-C", str(ROOT), "course", f"COURSE_OUT={out}"], capture_output=True, text=True,
+                       timeout=600)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert (out / "index.html").is_file() and len(list((out / "lessons").glob("*.html"))) == len(LESSONS)
+
+
+# ---- solutions ------------------------------------------------------------------------------------------
+
+
+def _checked():
+    for le in LESSONS:
+        for ex in exercises(read_notebook(le.path)):
+            if not ex.open:
+                yield pytest.param(le.number, ex, id=f"{le.number}-{ex.function}")
+
+
+@pytest.mark.parametrize("number, ex", list(_checked()))
+def test_every_checked_exercise_has_a_solution_that_passes_its_checker(number, ex, capsys):
+    fn = solution_function(find_lesson(number), ex.function)
+    namespace = {}
+    exec(inspect.getsource(fn), namespace)  # alone, as pasted into the notebook: it must be self-contained
+    checker = getattr(importlib.import_module("posekit.exercises"), ex.checker)
+    assert checker(namespace[ex.function]) is True
+    assert capsys.readouterr().out.startswith(f"✓ {ex.checker}")
+
+
+@pytest.mark.parametrize("number", NUMBERS)
+def test_every_open_exercise_has_instructor_notes(number):
+    le = find_lesson(number)
+    open_ones = {ex.number for ex in exercises(read_notebook(le.path)) if ex.open}
+    written = notes(le)
+    assert set(written) == open_ones, f"lesson {number}: notes for {sorted(written)}, open exercises {sorted(open_ones)}"
+    assert all(len(text.split()) >= 40 for text in written.values())
+
+
+@pytest.mark.parametrize("number", NUMBERS)
+def test_instructor_notebook_fills_every_exercise(number):
+    le = find_lesson(number)
+    nb = instructor_notebook(le)
+    exs = exercises(read_notebook(le.path))
+    code = "\n".join(c.source for c in nb.cells if c.cell_type == "code")
+    assert "raise NotImplementedError" not in code
+    for ex in exs:
+        if not ex.open:
+            assert f"assert done, \"the reference solution must pass {ex.checker}\"" in code
+    assert sum("instructor-notes" in c.metadata.get("tags", []) for c in nb.cells) == sum(e.open for e in exs)
+    for c in nb.cells:
+        if c.cell_type == "code":
+            compile(c.source.replace("%", "#"), f"lesson {number}", "exec")  # pasted code parses
+
+
+def test_solutions_command_runs_the_instructor_version(tmp_path, capsys):
+    assert main(["exercises", "solutions", "00", "--out", str(tmp_path), "--html"]) == 0
+    out = capsys.readouterr().out
+    for checker in ("check_fk", "check_sixd_to_matrix", "check_bone_lengths"):
+        assert f"✓ {checker}" in out
+    assert "✗" not in out
+    nb = read_notebook(tmp_path / "00_skeletons_and_poses.solutions.ipynb")
+    assert "Instructor version" in nb.cells[1].source
+    assert (tmp_path / "00_skeletons_and_poses.solutions.html").is_file()
+
+
+def test_a_solution_that_fails_its_checker_fails_the_run(tmp_path, monkeypatch, capsys):
+    module = importlib.import_module("posekit.exercises.solutions.nb00")
+
+    def exercise_bone_lengths(parents, global_pos):
+        import numpy as np
+        return np.ones(len(parents))
+    monkeypatch.setattr(module, "exercise_bone_lengths", exercise_bone_lengths)
+    assert main(["exercises", "solutions", "00", "--out", str(tmp_path)]) == 1
+    err = capsys.readouterr().err
+    assert "the reference solution must pass check_bone_lengths" in err
+
+
+def test_solutions_refuse_an_unknown_lesson_or_a_missing_solution(monkeypatch, capsys):
+    assert main(["exercises", "solutions", "9"]) == 2
+    assert "no lesson '9': expected one of 00, 01" in capsys.readouterr().err
+    module = importlib.import_module("posekit.exercises.solutions.nb06")
+    monkeypatch.delattr(module, "exercise_slerp")
+    with pytest.raises(LookupError, match="no solution 'exercise_slerp' in posekit/exercises/solutions/nb06.py"):
+        instructor_notebook("06")
+    assert main(["exercises", "list"]) == 1
+    assert re.search(r"06\s+2\s+checked exercise_slerp\s+check_slerp\s+MISSING", capsys.readouterr().out)
