@@ -20,6 +20,7 @@ import copy
 import importlib
 import inspect
 import re
+import textwrap
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -119,7 +120,7 @@ def notes(lesson: Lesson) -> dict[int, str]:
 
 
 def _paste(source: str, stub: ast.FunctionDef, solution) -> str:
-    sol_src = inspect.getsource(solution).rstrip("\n")
+    sol_src = textwrap.dedent(inspect.getsource(solution)).rstrip("\n")
     sol_args = [a.arg for a in ast.parse(sol_src).body[0].args.args]
     stub_args = [a.arg for a in stub.args.args]
     if sol_args != stub_args:
