@@ -38,7 +38,11 @@ browser-deps:
 # reveal.js and MathJax for the slides and the course page (npm registry; copied next to the pages)
 COURSE_JS := tools/course/node_modules/.package-lock.json
 $(COURSE_JS): tools/course/package.json tools/course/package-lock.json
-	@command -v npm >/dev/null || { echo "npm (Node.js) is needed for reveal.js and MathJax: install nodejs and npm"; exit 1; }
+	@if ! command -v npm >/dev/null; then \
+	  SUDO=$$([ "$$(id -u)" = 0 ] || echo sudo); \
+	  echo "installing Debian's nodejs and npm for reveal.js and MathJax"; \
+	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq nodejs npm; \
+	fi
 	cd tools/course && npm ci --no-audit --no-fund --loglevel=error
 	touch $(COURSE_JS)
 
@@ -51,7 +55,7 @@ slides: setup course-assets
 course: setup course-assets
 	$(VENV)/bin/posekit course build --out $(COURSE_OUT)
 
-# every lesson's instructor version, executed (about as long as running all lessons: ~8 min on 2 cores)
+# every lesson's instructor version, executed (about as long as running all lessons: ~6 min on 2 cores)
 solutions: setup course-assets
 	$(VENV)/bin/posekit exercises solutions $(or $(LESSON),all) --html --out build/instructor
 

@@ -202,7 +202,7 @@ def render(lesson, out_dir, execute: bool = True, timeout_s: int = 1800) -> Path
     lesson = lesson if isinstance(lesson, Lesson) else find_lesson(lesson)
     nb = instructor_notebook(lesson)
     if execute:
-        ExecutePreprocessor(timeout=timeout_s, kernel_name="python3").preprocess(
+        ExecutePreprocessor(timeout=timeout_s, kernel_name="python3", store_widget_state=False).preprocess(
             nb, {"metadata": {"path": str(lesson.path.parent)}})
     out = Path(out_dir) / f"{lesson.stem}.solutions.ipynb"
     out.parent.mkdir(parents=True, exist_ok=True)
