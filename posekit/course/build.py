@@ -27,17 +27,25 @@ _REVEAL = ("dist", "plugin/notes")
 _MATHJAX = "es5/tex-svg-full.js"
 
 
+def _copy_if_changed(src: Path, dst: Path) -> None:
+    if not dst.is_file() or dst.stat().st_size != src.stat().st_size:
+        dst.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy(src, dst)
+
+
 def copy_assets(out) -> Path:
-    """Copy reveal.js (``dist/``, the notes plugin) and MathJax's SVG build into ``out/_static``."""
+    """Copy reveal.js (``dist/``, the notes plugin) and MathJax's SVG build into ``out/_static``.
+
+    Files already there with the same size are left alone, so every builder may call it.
+    """
     src, static = course_assets_dir(), Path(out) / "_static"
     for part in _REVEAL:
         dst = static / "reveal.js" / part
         if not dst.exists():
             shutil.copytree(src / "reveal.js" / part, dst, ignore=shutil.ignore_patterns("*.map", "*.esm.js"))
-    (static / "mathjax").mkdir(parents=True, exist_ok=True)
-    shutil.copy(src / "mathjax" / _MATHJAX, static / "mathjax" / Path(_MATHJAX).name)
+    _copy_if_changed(src / "mathjax" / _MATHJAX, static / "mathjax" / Path(_MATHJAX).name)
     for pkg in ("reveal.js", "mathjax"):  # their licences travel with them
-        shutil.copy(src / pkg / "LICENSE", static / f"{pkg.replace('.js', '')}-LICENSE.txt")
+        _copy_if_changed(src / pkg / "LICENSE", static / f"{pkg.replace('.js', '')}-LICENSE.txt")
     return static
 
 

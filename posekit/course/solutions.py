@@ -78,7 +78,7 @@ def exercises(nb) -> list[Exercise]:
             continue
         j = next((k for k in range(i + 1, len(nb.cells)) if nb.cells[k].cell_type == "code"), None)
         stub = _stub(nb.cells[j].source) if j is not None else None
-        calls = [c for c in _CHECK.finditer(nb.cells[j].source) if stub and c.group(4) == stub.name] if stub else []
+        calls = [c for c in _CHECK.finditer(nb.cells[j].source) if c.group(4) == stub.name] if stub else []
         if not stub or not calls:
             raise ValueError(f"exercise {number} (cell {i}): the next code cell must define a stub "
                              "`def exercise_...: raise NotImplementedError` and call its checker "
@@ -131,6 +131,14 @@ def _paste(source: str, stub: ast.FunctionDef, solution) -> str:
     return "\n".join(lines[:first] + sol_src.splitlines() + lines[stub.end_lineno:])
 
 
+def _asserted(call: re.Match, function: str) -> str:
+    """A checker call ``done = check_x(exercise_x)`` followed by ``assert done`` when it checks ``function``."""
+    indent, result, checker, checked = call.groups()
+    if checked != function:
+        return call.group(0)
+    return f"{call.group(0)}\n{indent}assert {result}, \"the reference solution must pass {checker}\""
+
+
 BANNER = ("**Instructor version** of lesson {n}: every exercise's reference solution is filled in and was run "
           "(made by `posekit exercises solutions {n}` from the lesson and `posekit/exercises/solutions/`; "
           "not for students).")
@@ -168,10 +176,7 @@ def instructor_notebook(lesson) -> dict:
             continue
         cell = nb.cells[ex.code_cell]
         src = _paste(cell.source, _stub(cell.source), solution_function(lesson, ex.function))
-        src = _CHECK.sub(lambda m: m.group(0) + f"\n{m.group(1)}assert {m.group(2)}, "
-                         f"\"the reference solution must pass {m.group(3)}\"" if m.group(4) == ex.function
-                         else m.group(0), src)
-        cell.source = src
+        cell.source = _CHECK.sub(lambda m: _asserted(m, ex.function), src)
         cell.outputs, cell.execution_count = [], None
     import nbformat
 
