@@ -2,7 +2,9 @@
 #   make lab    set up (virtual environment, packages) and open JupyterLab on the notebooks
 #   (make studio: lesson 06's posing studio served by Voila as a browser app)
 #   make test   set up (and Chromium for the browser test) and run every test: unit tests,
-#               every notebook under nbval, the headless-browser check of the 3D widget
+#               every notebook under nbval, the headless-browser check of the 3D widget (both cores)
+#   make test-unit        the inner loop: the unit tests only (no notebook, no browser)
+#   make test-portable    every notebook under nbval as other CPUs would run it (tools/test_portable.py)
 #   instructors: make slides (reveal.js slides of every lesson), make solutions (the lessons with
 #               their exercise solutions, executed), make course (one static page: lessons, slides,
 #               benchmark report) -- all under build/, openable from disk
@@ -14,7 +16,7 @@ STAMP := $(VENV)/.posekit-installed
 export POSEKIT_DATA_DIR ?= $(if $(wildcard ../shared/data),$(abspath ../shared/data),)
 ROOT_FLAG := $(if $(filter 0,$(shell id -u)),--allow-root,)
 
-.PHONY: setup lab studio test browser-deps bench clean course-assets slides course solutions
+.PHONY: setup lab studio test test-unit test-portable browser-deps bench clean course-assets slides course solutions
 
 # JupyterLab settings for this environment: no news pop-up, no update check (nothing is fetched)
 LAB_OVERRIDES := $(VENV)/share/jupyter/lab/settings/overrides.json
@@ -68,8 +70,19 @@ studio: setup
 	cd notebooks && ../$(VENV)/bin/voila 06_posing_studio.ipynb --port=$(or $(STUDIO_PORT),8866) \
 	  --MappingKernelManager.cull_idle_timeout=600 --MappingKernelManager.cull_interval=60 $(STUDIO_ARGS)
 
+# both cores: tests grouped by module, each notebook on one worker, the browser tests together
+# (tests/conftest.py); PYTEST_WORKERS=0 runs everything in one process
+PYTEST_WORKERS ?= 2
+XDIST = $(if $(filter 0,$(PYTEST_WORKERS)),,-n $(PYTEST_WORKERS) --dist loadgroup)
 test: setup browser-deps course-assets
-	$(PY) -m pytest $(PYTEST_ARGS)
+	$(PY) -m pytest $(XDIST) $(PYTEST_ARGS)
+
+test-unit: setup
+	$(PY) -m pytest tests -m "not browser" $(XDIST) $(PYTEST_ARGS)
+
+# PORTABLE_VARIANTS: a subset of `python tools/test_portable.py --list`
+test-portable: setup
+	$(PY) tools/test_portable.py $(PORTABLE_VARIANTS)
 
 bench: setup
 	$(VENV)/bin/posekit bench fk

@@ -29,3 +29,26 @@ def shared_data():
 @pytest.fixture
 def rng():
     return np.random.default_rng(0)
+
+
+# ---- running on both cores (pytest-xdist, `make test` passes -n 2 --dist loadgroup) --------------------
+# A notebook's cells share one kernel and must run in order on one worker; the tests that start a
+# JupyterLab, a Voila server or Chromium share one worker too, so two servers and two browsers never
+# compete for the same two cores; every other test module stays on one worker with its module fixtures.
+# The longest groups are handed out first, so neither worker waits on a late long one.
+_BROWSER_MODULES = {"test_browser.py", "test_studio_browser.py", "test_course.py"}
+# measured minutes on 2 cores, heaviest first; groups not listed come after, in collection order
+_FIRST = ["browser", "04_aegan_latent_space.ipynb", "05_protores.ipynb", "02_inverse_rig_mapping.ipynb",
+          "03_autoencoder_solvers.ipynb", "01_fabrik.ipynb"]
+
+
+def _group(item) -> str:
+    name = item.path.name
+    return "browser" if name in _BROWSER_MODULES else name
+
+
+def pytest_collection_modifyitems(config, items):
+    rank = {g: k for k, g in enumerate(_FIRST)}
+    for item in items:
+        item.add_marker(pytest.mark.xdist_group(_group(item)))
+    items.sort(key=lambda it: rank.get(_group(it), len(rank)))  # stable: cells keep their order
