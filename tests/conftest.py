@@ -1,4 +1,6 @@
 
+import os
+
 import numpy as np
 import pytest
 
@@ -40,6 +42,14 @@ _BROWSER_MODULES = {"test_browser.py", "test_studio_browser.py", "test_course.py
 # measured minutes on 2 cores, heaviest first; groups not listed come after, in collection order
 _FIRST = ["browser", "04_aegan_latent_space.ipynb", "05_protores.ipynb", "02_inverse_rig_mapping.ipynb",
           "03_autoencoder_solvers.ipynb", "01_fabrik.ipynb"]
+
+
+def pytest_configure(config):
+    # two workers on two cores: one torch thread each, not two each fighting for the same cores
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        import torch
+
+        torch.set_num_threads(1)
 
 
 def _group(item) -> str:
