@@ -73,7 +73,7 @@ studio: setup
 # both cores: tests grouped by module, each notebook on one worker, the browser tests together
 # (tests/conftest.py); PYTEST_WORKERS=0 runs everything in one process
 PYTEST_WORKERS ?= 2
-XDIST = $(if $(filter 0,$(PYTEST_WORKERS)),,-n $(PYTEST_WORKERS) --dist loadgroup)
+XDIST = $(if $(filter 0,$(PYTEST_WORKERS)),,-n $(PYTEST_WORKERS) --dist loadfile)
 test: setup browser-deps course-assets
 	$(PY) -m pytest $(XDIST) $(PYTEST_ARGS)
 

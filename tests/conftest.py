@@ -33,15 +33,22 @@ def rng():
     return np.random.default_rng(0)
 
 
-# ---- running on both cores (pytest-xdist, `make test` passes -n 2 --dist loadgroup) --------------------
+# ---- running on both cores (pytest-xdist: `make test` passes -n 2 --dist loadfile) ------------------------
 # A notebook's cells share one kernel and must run in order on one worker; the tests that start a
 # JupyterLab, a Voila server or Chromium share one worker too, so two servers and two browsers never
-# compete for the same two cores; every other test module stays on one worker with its module fixtures.
-# The longest groups are handed out first, so neither worker waits on a late long one.
+# compete for the same two cores. Every other test module stays whole on one worker with its module
+# fixtures. The longest groups are handed out first, so neither worker waits on a late long one.
+# (A scheduler rather than xdist_group marks: pytest 9 no longer reads the node ids those marks rewrite.
+# Without this file -- `pytest notebooks/...` -- plain loadfile still keeps each notebook on one worker.)
 _BROWSER_MODULES = {"test_browser.py", "test_studio_browser.py", "test_course.py"}
-# measured minutes on 2 cores, heaviest first; groups not listed come after, in collection order
+# measured on 2 cores, longest first; groups not listed come after, in collection order
 _FIRST = ["browser", "04_aegan_latent_space.ipynb", "05_protores.ipynb", "02_inverse_rig_mapping.ipynb",
           "03_autoencoder_solvers.ipynb", "01_fabrik.ipynb"]
+
+
+def _group(path: str) -> str:
+    name = path.split("::", 1)[0].rsplit("/", 1)[-1]
+    return "browser" if name in _BROWSER_MODULES else name
 
 
 def pytest_configure(config):
@@ -52,13 +59,24 @@ def pytest_configure(config):
         torch.set_num_threads(1)
 
 
-def _group(item) -> str:
-    name = item.path.name
-    return "browser" if name in _BROWSER_MODULES else name
+def pytest_xdist_make_scheduler(config, log):
+    if config.getvalue("dist") != "loadfile":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class GroupedFiles(LoadScopeScheduling):
+        """loadfile, with the browser modules as one unit and the units in the collection's order."""
+
+        def __init__(self, config, log=None):
+            super().__init__(config, log)
+            config.option.loadscopereorder = False  # keep pytest_collection_modifyitems' order
+
+        def _split_scope(self, nodeid: str) -> str:
+            return _group(nodeid)
+
+    return GroupedFiles(config, log)
 
 
 def pytest_collection_modifyitems(config, items):
     rank = {g: k for k, g in enumerate(_FIRST)}
-    for item in items:
-        item.add_marker(pytest.mark.xdist_group(_group(item)))
-    items.sort(key=lambda it: rank.get(_group(it), len(rank)))  # stable: cells keep their order
+    items.sort(key=lambda it: rank.get(_group(it.nodeid), len(rank)))  # stable: cells keep their order
