@@ -34,13 +34,13 @@ def rng():
 
 
 # ---- running on both cores (pytest-xdist: `make test` passes -n 2 --dist loadfile) ------------------------
-# A notebook's cells share one kernel and must run in order on one worker; the tests that start a
-# JupyterLab, a Voila server or Chromium share one worker too, so two servers and two browsers never
+# A notebook's cells share one kernel and must run in order on one worker; the tests that serve
+# notebooks (JupyterLab, Voila) to Chromium share one worker too, so two servers and two browsers never
 # compete for the same two cores. Every other test module stays whole on one worker with its module
 # fixtures. The longest groups are handed out first, so neither worker waits on a late long one.
 # (A scheduler rather than xdist_group marks: pytest 9 no longer reads the node ids those marks rewrite.
 # Without this file -- `pytest notebooks/...` -- plain loadfile still keeps each notebook on one worker.)
-_BROWSER_MODULES = {"test_browser.py", "test_studio_browser.py", "test_course.py"}
+_BROWSER_MODULES = {"test_browser.py", "test_studio_browser.py"}
 # measured on 2 cores, longest first; groups not listed come after, in collection order
 _FIRST = ["browser", "04_aegan_latent_space.ipynb", "05_protores.ipynb", "02_inverse_rig_mapping.ipynb",
           "03_autoencoder_solvers.ipynb", "01_fabrik.ipynb"]

@@ -29,6 +29,13 @@ ROOT = Path(__file__).resolve().parent.parent
 NOTEBOOK = "00_skeletons_and_poses.ipynb"
 PANEL_NOTEBOOK = "01_fabrik.ipynb"
 NEURAL_NOTEBOOK = "03_autoencoder_solvers.ipynb"
+PANEL_CELLS = ("motions = load_sample()", "cases = build_cases(", 'solvers = {"fabrik": fabrik', "SolverPanel(")
+"""Lesson 01's cells the browser test runs: set-up, the held-out case, the three solvers, the panel (nbval runs
+the whole lesson already; its benchmark and iteration studies take a minute)."""
+NEURAL_CELLS = ("motions = load_bandai_mini()", "data = pose_data(motions, train)", "midpoint by", "cases = build_cases(",
+                "SolverPanel(")
+"""Lesson 03's cells the browser test runs: set-up, pose vectors, the shipped model, the cases, the panel (its
+training demos and benchmark take a minute)."""
 LATENT_NOTEBOOK = "04_aegan_latent_space.ipynb"
 LATENT_CELLS = ("motions = load_bandai_mini()", "cases = build_cases(", "SolverPanel(")
 """Lesson 04's cells the browser test runs: set-up, the cases, the panel (its benchmark takes minutes)."""
@@ -63,8 +70,9 @@ def lab(tmp_path_factory):
     if not Path(CHROMIUM).exists():
         pytest.fail(f"{CHROMIUM} not found: install Debian's chromium and chromium-driver (make test does)")
     work = tmp_path_factory.mktemp("lab")
-    for nb in (NOTEBOOK, PANEL_NOTEBOOK, NEURAL_NOTEBOOK):  # copies: never let autosave touch the repo's notebooks
-        shutil.copy(ROOT / "notebooks" / nb, work / nb)
+    shutil.copy(ROOT / "notebooks" / NOTEBOOK, work / NOTEBOOK)  # copies: autosave never touches the repo's notebooks
+    _trimmed(ROOT / "notebooks" / PANEL_NOTEBOOK, work / PANEL_NOTEBOOK, PANEL_CELLS)
+    _trimmed(ROOT / "notebooks" / NEURAL_NOTEBOOK, work / NEURAL_NOTEBOOK, NEURAL_CELLS)
     _trimmed(ROOT / "notebooks" / LATENT_NOTEBOOK, work / LATENT_NOTEBOOK, LATENT_CELLS)
     _trimmed(ROOT / "notebooks" / PROTORES_NOTEBOOK, work / PROTORES_NOTEBOOK, PROTORES_CELLS)
     port, token = _free_port(), "posekit-test"
