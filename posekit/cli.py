@@ -115,7 +115,7 @@ def _convert(args) -> int:
 
 
 def _build_benchmark(args) -> int:
-    from .models.protores_benchmarks import BENCHMARKS, build_benchmark, save_benchmark
+    from .bench.effector_cases import BENCHMARKS, build_benchmark, save_benchmark
 
     for name in BENCHMARKS:
         b = build_benchmark(name, n_cases=args.cases, seed=args.seed)
@@ -228,7 +228,7 @@ def _train_invrig(args) -> int:
 
 def _train_ae_solvers(args) -> int:
     from .data.sources import open_dataset
-    from .models.ae_train import DEFAULTS, train_ae_solvers
+    from .models.pose_autoencoder.train import DEFAULTS, train_ae_solvers
 
     settings = {k: getattr(args, k) for k in DEFAULTS if getattr(args, k) != DEFAULTS[k]}
     motions = open_dataset(args.data, progress=sys.stderr.isatty())
@@ -238,7 +238,7 @@ def _train_ae_solvers(args) -> int:
     with single_thread():  # these small layers gain little from a second thread, and one thread repeats exactly
         model, report = train_ae_solvers(motions, seed=args.seed, out=out, tied=args.tied, latent=args.latent,
                                          progress=sys.stderr.isatty(), **settings)
-    from .models.ae_train import weights_path
+    from .models.pose_autoencoder.train import weights_path
 
     path = out or weights_path()
     sec = report["seconds"]
@@ -251,7 +251,7 @@ def _train_ae_solvers(args) -> int:
 
 
 def _train_ae_studies(args) -> int:
-    from .models.ae_studies import run_studies, studies_path
+    from .models.pose_autoencoder.studies import run_studies, studies_path
 
     from .learn.threads import single_thread
 
@@ -266,8 +266,8 @@ def _train_ae_studies(args) -> int:
 
 def _train_aegan(args) -> int:
     from .data.sources import open_dataset
-    from .models.aegan import AEGANConfig
-    from .models.aegan_train import DEFAULTS, train_aegan, weights_path
+    from .models.aegan.networks import AEGANConfig
+    from .models.aegan.train import DEFAULTS, train_aegan, weights_path
 
     settings = {k: getattr(args, k) for k in DEFAULTS if getattr(args, k) != DEFAULTS[k]}
     motions = open_dataset(args.data, progress=sys.stderr.isatty())
@@ -289,8 +289,8 @@ def _train_aegan(args) -> int:
 def _train_protores(args) -> int:
     from .data.metrics import body_joints
     from .data.bandai_mini import load_bandai_mini
-    from .models.protores import ProtoResConfig
-    from .models.protores_train import DEFAULTS, train_protores, weights_path
+    from .models.protores.networks import ProtoResConfig
+    from .models.protores.train import DEFAULTS, train_protores, weights_path
 
     settings = {k: getattr(args, k) for k in DEFAULTS if hasattr(args, k) and getattr(args, k) != DEFAULTS[k]}
     if args.fixed_weights:
@@ -310,7 +310,7 @@ def _train_protores(args) -> int:
 
 
 def _train_protores_studies(args) -> int:
-    from .models.protores_studies import run_studies, studies_path
+    from .models.protores.studies import run_studies, studies_path
 
     out = Path(args.out) if args.out else studies_path()
     res = run_studies(seed=args.seed, out=out, workers=args.workers, progress=sys.stderr.isatty())
@@ -380,7 +380,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="(default: 0)")
     p.add_argument("--out", default=None, help="folder (default data_samples/weights)")
     p.set_defaults(fn=_train_invrig)
-    from .models.ae_train import DEFAULTS as AE
+    from .models.pose_autoencoder.train import DEFAULTS as AE
 
     p = tsub.add_parser("ae-solvers", help="pose autoencoder + latent-space solvers (lesson 03, Victor & Meyer 2020)")
     p.add_argument("--data", default="bandai-mini", help="training data: bandai-mini (default, its own split), "
@@ -406,7 +406,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="(default: 0)")
     p.add_argument("--out", default=None, help="JSON file (default data_samples/weights/ae_solvers_studies.json)")
     p.set_defaults(fn=_train_ae_studies)
-    from .models.aegan_train import DEFAULTS as GAN
+    from .models.aegan.train import DEFAULTS as GAN
 
     p = tsub.add_parser("aegan", help="AE-GAN pose latent space with SPL layers (lesson 04, Victor & Meyer, JFIG 2020)")
     p.add_argument("--data", default="bandai-mini", help="training data: bandai-mini (default, its own split), "
@@ -423,8 +423,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="(default: 0)")
     p.add_argument("--out", default=None, help="checkpoint file (default data_samples/weights/aegan.pt)")
     p.set_defaults(fn=_train_aegan)
-    from .models.protores import ARCHS
-    from .models.protores_train import DEFAULTS as PR, STEPS
+    from .models.protores.networks import ARCHS
+    from .models.protores.train import DEFAULTS as PR, STEPS
 
     p = tsub.add_parser("protores", help="ProtoRes or one of its baselines: effectors -> pose (lesson 05, Oreshkin "
                         "et al. 2021)")

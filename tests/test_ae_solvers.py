@@ -8,11 +8,11 @@ from posekit.data import load_bandai_mini, load_sample
 from posekit.data.cases import build_cases, case_split
 from posekit.data.metrics import body_joints, bone_length_error, mpjpe
 from posekit.ik import EFFECTOR_SETS, Effector, effector_set, make_solver
-from posekit.models.ae_data import (STD_FLOOR, feature_columns, pose_data, pose_vectors, poses_from_vectors,
-                                    training_pairs)
-from posekit.models.ae_solvers import CHAIN, GROUPS, AESolvers, PoseAutoencoder
-from posekit.models.ae_train import LICENCE, solver_loss, train_ae_solvers, weights_path
-from posekit.models.neural_ik import NeuralIKSolver
+from posekit.data.pose_vectors import STD_FLOOR, feature_columns, pose_data, pose_vectors, poses_from_vectors
+from posekit.models.pose_autoencoder.data import training_pairs
+from posekit.models.pose_autoencoder.networks import CHAIN, GROUPS, AESolvers, PoseAutoencoder
+from posekit.models.pose_autoencoder.train import LICENCE, solver_loss, train_ae_solvers, weights_path
+from posekit.models.pose_autoencoder.solver import NeuralIKSolver
 
 
 @pytest.fixture(scope="module")

@@ -9,12 +9,12 @@ from posekit.data import load_bandai_mini, load_sample
 from posekit.data.cases import build_cases, case_split
 from posekit.data.metrics import body_joints, bone_length_error
 from posekit.ik import EFFECTOR_SETS, Effector, make_solver
-from posekit.models.ae_data import pose_data
-from posekit.models.aegan import AEGAN, body_parents
-from posekit.models.aegan_train import LOSSES, train_aegan, weights_path
-from posekit.models.latent_ik import LatentOptSolver
-from posekit.models.latent_opt import adam, lbfgs
-from posekit.models.spl import NumpySPL, StructuredPrediction, dense_twin, tree_levels
+from posekit.data.pose_vectors import pose_data
+from posekit.models.aegan.networks import AEGAN, body_parents
+from posekit.models.aegan.train import LOSSES, train_aegan, weights_path
+from posekit.models.aegan.solver import LatentOptSolver
+from posekit.models.aegan.latent_opt import adam, lbfgs
+from posekit.models.aegan.spl import NumpySPL, StructuredPrediction, dense_twin, tree_levels
 
 
 @pytest.fixture(scope="module")
@@ -122,7 +122,7 @@ def test_weights_for_another_skeleton_are_refused(mini, shipped):
 
 def test_shipped_space_is_invertible_and_its_prior_decodes_to_poses(mini, shipped):
     from posekit.data.metrics import NaturalnessIndex
-    from posekit.models.latent_space import AEGANSpace, compare_spaces
+    from posekit.models.aegan.latent_space import AEGANSpace, compare_spaces
 
     train, _, test, _ = case_split(mini)
     x = pose_data(mini, test[::20], mirror=False, norm=shipped.norm).normalized()
@@ -201,7 +201,7 @@ def test_compiled_path_matches_numpy(mini, shipped):
     """The numba kernels of one problem compute what the batched numpy path computes: Eq. (6) and its
     gradient to float32 rounding; the optimisers' iterations and results agree in distribution (an
     iterative solve amplifies rounding, so a rare problem may settle in another local minimum)."""
-    from posekit.models import latent_kernel as LK
+    from posekit.models.aegan import fast as LK
 
     solver = LatentOptSolver(mini.skeleton, model=shipped, post="none")
     cases = build_cases(mini, 40, 0, "other-clip")

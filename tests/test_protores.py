@@ -11,12 +11,12 @@ from posekit.data.metrics import body_joints
 from posekit.ik import Effector, make_solver
 from posekit.ik.bone_rotations import check_roundtrip, rotations_from_positions, shortest_rotation
 from posekit.kinematics import bone_lengths_of, fk
-from posekit.models.protores import (ARCHS, KIND_IDS, PosingNet, ProtoResConfig, ProtoResEncoder, centroid,
-                                     sigma_to_tolerance, tolerance_to_sigma)
-from posekit.models.protores_benchmarks import FIVE_POINT, ZONES, build_benchmark, load_benchmark
-from posekit.models.protores_data import PoseBank, draw_batch
-from posekit.models.protores_ik import MAX_EFFECTORS, ProtoResSolver
-from posekit.models.protores_train import LOSSES, geodesic, losses, train_protores, weights_path
+from posekit.models.protores.networks import (ARCHS, KIND_IDS, PosingNet, ProtoResConfig, ProtoResEncoder, centroid,
+                                              sigma_to_tolerance, tolerance_to_sigma)
+from posekit.bench.effector_cases import FIVE_POINT, ZONES, build_benchmark, load_benchmark
+from posekit.models.protores.data import PoseBank, draw_batch
+from posekit.models.protores.solver import MAX_EFFECTORS, ProtoResSolver
+from posekit.models.protores.train import LOSSES, geodesic, losses, train_protores, weights_path
 from posekit.rotations import quat_to_matrix
 from posekit.transforms import mirror_frame_signs, mirror_positions, mirror_rotation_matrices
 
@@ -134,7 +134,7 @@ def test_every_encoder_gives_a_pose_that_keeps_bone_lengths(mini, arch):
 @pytest.mark.parametrize("arch", ["protores", "masked-fcr"])
 @pytest.mark.parametrize("gpd", [True, False])
 def test_numpy_pass_equals_torch(mini, arch, gpd):
-    from posekit.models.protores_numpy import NumpyPosingNet
+    from posekit.models.protores.fast import NumpyPosingNet
 
     torch.manual_seed(1)
     net = PosingNet(mini.skeleton, ProtoResConfig(21, arch=arch, width=24, gpd=gpd)).eval()
@@ -233,7 +233,7 @@ def test_rotations_from_positions_put_bones_on_new_positions(mini):
 def test_shipped_weights_are_small_marked_and_beat_the_rest_pose(mini, five):
     total = sum(weights_path(a).stat().st_size for a in ARCHS)
     assert total <= 10 * 2 ** 20
-    from posekit.models.protores_eval import rest_starts, run_learned, scores
+    from posekit.bench.effector_scores import rest_starts, run_learned, scores
 
     q, root = rest_starts(five, mini)
     rest_mm = np.linalg.norm(fk(mini.skeleton, q, root)[0] - five.global_pos, axis=-1).mean() * 1000
@@ -258,7 +258,7 @@ def test_solver_api_and_batch_agree(mini, solver, random_bench):
 
 
 def test_tighter_tolerance_gives_smaller_effector_error(solver, random_bench):
-    from posekit.models.protores_eval import run_learned, scores
+    from posekit.bench.effector_scores import run_learned, scores
 
     errs = []
     for lam in (0.0, 1.0):

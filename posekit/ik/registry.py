@@ -203,9 +203,9 @@ def solver_names() -> list[str]:
 
 def _load_builtin():
     # the classical solvers register themselves when posekit.ik is imported; the learned ones when
-    # their module is (lesson 03's neural solvers: posekit.models.neural_ik; lesson 04's latent
-    # optimisation: posekit.models.latent_ik; lesson 05's ProtoRes: posekit.models.protores_ik)
+    # their module is (lesson 03's neural solvers: posekit.models.pose_autoencoder.solver; lesson 04's latent
+    # optimisation: posekit.models.aegan.solver; lesson 05's ProtoRes: posekit.models.protores.solver)
     from . import ccd, dls, fabrik  # noqa: F401
-    from ..models import neural_ik  # noqa: F401  (lesson order: 03 before 04)
-    from ..models import latent_ik  # noqa: F401
-    from ..models import protores_ik  # noqa: F401
+    from ..models.pose_autoencoder import solver as neural_ik  # noqa: F401  (lesson order: 03 before 04)
+    from ..models.aegan import solver as latent_ik  # noqa: F401
+    from ..models.protores import solver as protores_ik  # noqa: F401

@@ -2,7 +2,7 @@
 
 Introduced in ``notebooks/05_protores.ipynb``; ``posekit train protores`` runs :func:`train_protores`.
 
-Losses, on a batch from :func:`~posekit.models.protores_data.draw_batch` (B poses, body joints j)::
+Losses, on a batch from :func:`~posekit.models.protores.data.draw_batch` (B poses, body joints j)::
 
     L_gpd-L2  = sum_j w_j mean_xyz (p^gpd_j - p_j)^2 / sum_j w_j      GPD positions      (Eq. 7)
     L_ikd-L2  = the same for the FK positions p^fk                     the final pose     (Eq. 7)
@@ -34,10 +34,10 @@ import time
 import numpy as np
 import torch
 
-from ..learn import limit_threads, merge_settings
-from .ae_train import LICENCE
-from .protores import ARCHS, PosingNet, ProtoResConfig
-from .protores_data import PoseBank, draw_batch
+from ...learn import limit_threads, merge_settings
+from ..pose_autoencoder.train import LICENCE
+from .networks import ARCHS, PosingNet, ProtoResConfig
+from .data import PoseBank, draw_batch
 
 __all__ = ["DEFAULTS", "STEPS", "WEIGHTS", "LOSSES", "geodesic", "losses", "train_protores", "weights_path",
            "validation_batches", "evaluate_batches", "command"]
@@ -59,7 +59,7 @@ LOSSES = ("total", "gpd_l2", "ikd_l2", "loc_geo", "glob_geo", "look_at")
 def weights_path(arch: str = "protores", folder=None):
     from pathlib import Path
 
-    from ..paths import samples_dir
+    from ...paths import samples_dir
 
     if arch not in WEIGHTS:
         raise ValueError(f"arch must be one of {', '.join(WEIGHTS)}, got {arch!r}")
@@ -162,14 +162,14 @@ def _lr_factor(step: int, steps: int, warmup: int) -> float:
 def train_protores(motions=None, *, arch: str = "protores", seed: int = 0, out=None, progress: bool = True,
                    config: ProtoResConfig | None = None, seconds: float | None = None, data_label: str | None = None,
                    **settings):
-    """Train a :class:`~posekit.models.protores.PosingNet` on the training poses (mirrored) of ``motions``.
+    """Train a :class:`~posekit.models.protores.networks.PosingNet` on the training poses (mirrored) of ``motions``.
 
     Parameters
     ----------
     motions : MotionSet, optional
         Default the Bandai mini set (its own train/val split; the test clips stay unseen).
     arch : str
-        One of :data:`~posekit.models.protores.ARCHS`.
+        One of :data:`~posekit.models.protores.networks.ARCHS`.
     seed : int
     out : str or Path, optional
         Checkpoint to write (default :func:`weights_path` of ``arch``); ``False``: none.
@@ -187,9 +187,9 @@ def train_protores(motions=None, *, arch: str = "protores", seed: int = 0, out=N
         ``curves`` (:data:`LOSSES` averaged per ``log_every`` steps, ``step``, ``seconds`` and the validation
         metrics of :func:`evaluate_batches`), settings, steps done, seconds, seconds per step.
     """
-    from ..data.bandai_mini import load_bandai_mini
-    from ..data.cases import case_split
-    from ..data.metrics import body_joints
+    from ...data.bandai_mini import load_bandai_mini
+    from ...data.cases import case_split
+    from ...data.metrics import body_joints
 
     st = merge_settings("train_protores", settings, DEFAULTS)
     if arch not in ARCHS:

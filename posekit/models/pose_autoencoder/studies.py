@@ -24,18 +24,19 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from ..data.cases import build_cases, case_split
-from ..data.metrics import NaturalnessIndex, score_poses
-from ..ik.api import EFFECTOR_SETS, effector_set
-from .ae_data import pose_data, training_pairs
-from .ae_solvers import GROUPS, AEConfig, AESolvers
-from .ae_train import DEFAULTS, train_autoencoder, train_solver
+from ...data.cases import build_cases, case_split
+from ...data.metrics import NaturalnessIndex, score_poses
+from ...ik.api import EFFECTOR_SETS, effector_set
+from ...data.pose_vectors import pose_data
+from .data import training_pairs
+from .networks import GROUPS, AEConfig, AESolvers
+from .train import DEFAULTS, train_autoencoder, train_solver
 
 __all__ = ["autoencoder_study", "k_study", "chain_study", "run_studies", "studies_path", "reconstruction_mm"]
 
 
 def studies_path(folder=None) -> Path:
-    from ..paths import samples_dir
+    from ...paths import samples_dir
 
     return Path(folder or samples_dir() / "weights") / "ae_solvers_studies.json"
 
@@ -78,7 +79,7 @@ def k_study(model: AESolvers, motions, ks=(0.0, 0.01, 0.1, 1.0), group: str = "h
             pairs: int | None = None, n_cases: int = 300, seed: int = 0, progress: bool = True) -> list[dict]:
     """The ``group`` solver retrained with each ``k`` on ``model``'s autoencoder, scored before
     post-processing on held-out cases from a same-clip and another clip's start."""
-    from .neural_ik import NeuralIKSolver
+    from .solver import NeuralIKSolver
 
     epochs = DEFAULTS["solver_epochs"] if epochs is None else epochs
     pairs = DEFAULTS["pairs"] if pairs is None else pairs
@@ -107,7 +108,7 @@ def k_study(model: AESolvers, motions, ks=(0.0, 0.01, 0.1, 1.0), group: str = "h
 
 def chain_study(model: AESolvers, motions, n_cases: int = 300, seed: int = 0) -> list[dict]:
     """Five effectors by the all-five solver, by naive chaining and by chaining-aware chaining."""
-    from .neural_ik import NeuralIKSolver
+    from .solver import NeuralIKSolver
 
     train, _, _, _ = case_split(motions, seed)
     natural = NaturalnessIndex(motions.skeleton, motions.global_pos[train], seed=seed)
@@ -125,8 +126,8 @@ def chain_study(model: AESolvers, motions, n_cases: int = 300, seed: int = 0) ->
 def run_studies(motions=None, model: AESolvers | None = None, out=None, seed: int = 0, progress: bool = True,
                 ae_epochs: int = 40) -> dict:
     """All three studies; written as JSON to ``out`` (default :func:`studies_path`) unless ``out=False``."""
-    from ..data.bandai_mini import load_bandai_mini
-    from .neural_ik import load_model
+    from ...data.bandai_mini import load_bandai_mini
+    from .solver import load_model
 
     motions = load_bandai_mini() if motions is None else motions
     model = load_model(skeleton=motions.skeleton) if model is None else model

@@ -15,7 +15,7 @@ makes one training batch the way the paper's Algorithm 1 does:
   and a rotation effector at once;
 * a tolerance ``Lambda ~ U[0, 1]`` per effector, noise of scale ``sigma = sigma_M Lambda^eta`` added to
   its target by the kind's **noise model** (:func:`add_noise`) and a loss weight ``min(W_M, 1 / sigma)``
-  on its joint (:mod:`posekit.models.protores_train`);
+  on its joint (:mod:`posekit.models.protores.train`);
 * a look-at effector: a random unit direction ``v`` in the joint's frame, its target
   ``p + d R v`` at distance ``d = 1 mm + 5 |N(0, 1)|`` m (the authors' code).
 """
@@ -27,10 +27,10 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from ..data.metrics import body_joints
-from ..rotations import matrix_to_sixd, quat_to_matrix
-from ..transforms import mirror_frame_signs, mirror_rotation_matrices
-from .protores import KIND_IDS, SIGMA_M, ETA
+from ...data.metrics import body_joints
+from ...rotations import matrix_to_sixd, quat_to_matrix
+from ...transforms import mirror_frame_signs, mirror_rotation_matrices
+from .networks import KIND_IDS, SIGMA_M, ETA
 
 __all__ = ["PoseBank", "Batch", "draw_batch", "add_noise", "axis_angle_matrix", "LOOK_AT_SCALE"]
 
@@ -76,7 +76,7 @@ class PoseBank:
     """
 
     def __init__(self, motions, frames, mirror: bool = False):
-        from ..kinematics import fk
+        from ...kinematics import fk
 
         s = motions.skeleton
         frames = np.asarray(frames, dtype=np.int64)
@@ -106,7 +106,7 @@ class PoseBank:
 class Batch:
     """One batch of poses and effectors (tensors; B poses, N effectors, J skeleton joints).
 
-    ``joint`` (B, N) body-joint index; ``kind`` (B, N) :data:`~posekit.models.protores.KIND_IDS`;
+    ``joint`` (B, N) body-joint index; ``kind`` (B, N) :data:`~posekit.models.protores.networks.KIND_IDS`;
     ``value`` (B, N, 6) the network's input values (noisy targets); ``tol`` (B, N) Lambda; ``sigma``
     (B, N) noise scale; ``axis`` (B, N, 3) look-at direction (local); ``target`` (B, N, 3) look-at
     target; ``local_rot`` (B, J, 3, 3), ``global_rot`` (B, J, 3, 3), ``global_pos`` (B, J, 3) the true pose.

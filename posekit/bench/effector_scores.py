@@ -1,7 +1,7 @@
 """Scoring solvers on ProtoRes's effector benchmarks (Oreshkin et al. 2021, Sec. 4), learned and classical alike.
 
 Introduced in ``notebooks/05_protores.ipynb``; ``posekit bench protores`` prints these numbers. Every
-method is scored by :func:`scores` on the same cases (:mod:`posekit.models.protores_benchmarks`):
+method is scored by :func:`scores` on the same cases (:mod:`posekit.bench.effector_cases`):
 
 * ``ikd_l2`` — the paper's L_ikd-L2: mean squared error of the final pose's positions over every body
   joint's coordinates, m^2 (world frame, nothing aligned);
@@ -26,7 +26,7 @@ import numpy as np
 from ..data.metrics import body_joints
 from ..ik.effectors import errors_of, resolve_effectors
 from ..rotations import geodesic_distance, quat_to_matrix
-from .protores import KIND_IDS, sigma_to_tolerance
+from ..models.protores.networks import KIND_IDS, sigma_to_tolerance
 
 __all__ = ["scores", "run_learned", "run_classical", "rest_starts", "effector_error_table"]
 
@@ -69,7 +69,7 @@ def scores(bench, global_pos, local_rot, global_rot, gpd_pos=None) -> dict:
 
 
 def run_learned(solver, bench, tolerance=None) -> dict:
-    """Predict every case of ``bench`` with a :class:`~posekit.models.protores_ik.ProtoResSolver`'s array path
+    """Predict every case of ``bench`` with a :class:`~posekit.models.protores.solver.ProtoResSolver`'s array path
     (one pass per effector count). ``tolerance``: a Lambda for every effector instead of the cases' own
     (their metres/radians turned into Lambda). Returns the arrays ``global_pos``, ``local_rot``,
     ``global_rot``, ``gpd_pos`` (C, ...) and ``out_of_range`` (count)."""

@@ -1,6 +1,7 @@
-"""Lesson 03's data: poses as root-relative feature vectors, and (start, target) training pairs.
+"""Poses as root-relative feature vectors: what every learned pose model of lessons 03-04 reads and writes.
 
-Introduced in ``notebooks/03_autoencoder_solvers.ipynb`` (Victor & Meyer 2020, Sec. 3.2). Units and
+Introduced in ``notebooks/03_autoencoder_solvers.ipynb`` (Victor & Meyer 2020, Sec. 3.2) and reused by
+lesson 04's AE-GAN (:mod:`posekit.models.aegan.networks`). Units and
 axes: :mod:`posekit.conventions` (metres, Y up, facing +Z).
 
 A pose becomes one vector ``x`` of ``3 B`` numbers: the positions of its *body joints*
@@ -10,9 +11,6 @@ projected on the floor is the origin, the character faces +Z (:func:`posekit.tra
 The pelvis's x and z are therefore exactly 0; z-scoring (:class:`~posekit.data.dataset.NormStats`)
 floors every standard deviation at :data:`STD_FLOOR` so those constant features do not divide by zero.
 
-Training pairs are two frames of one clip at most :data:`PAIR_MAX_S` seconds apart: the solver learns
-to move the *start* pose so chosen joints reach the *target* pose's positions. Pairs much further apart
-teach a solver to ignore its start (measured for the issue: errors of 170-250 mm), so they stay close.
 Mirroring (:func:`posekit.transforms.mirror_positions`) doubles the training poses.
 """
 
@@ -22,20 +20,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..data.dataset import NormStats
-from ..data.metrics import body_joints
-from ..data.motion import MotionSet
+from .dataset import NormStats
+from .metrics import body_joints
+from .motion import MotionSet
 from ..transforms import from_root_space, mirror_positions, rotate_y_positions, to_root_space
 
-__all__ = ["STD_FLOOR", "PAIR_MAX_S", "pose_vectors", "poses_from_vectors", "targets_in_root_frame",
-           "feature_columns", "PoseData", "pose_data", "split_pose_data", "training_pairs"]
+__all__ = ["STD_FLOOR", "pose_vectors", "poses_from_vectors", "targets_in_root_frame",
+           "feature_columns", "PoseData", "pose_data", "split_pose_data"]
 
 STD_FLOOR = 0.01
 """Smallest standard deviation of a feature in the z-score, metres (the pelvis x/z are exactly 0)."""
-
-PAIR_MAX_S = 1.0
-"""Largest time between the start and the target frame of a training pair, seconds (the
-benchmark's same-clip cases use the same limit, :data:`posekit.data.cases.SAME_CLIP_MAX_S`)."""
 
 
 def pose_vectors(skeleton, global_pos):
@@ -164,43 +158,12 @@ def split_pose_data(motions: MotionSet | None = None, seed: int = 0):
     how : str
         How the split was made.
     """
-    from ..data.cases import case_split
+    from .cases import case_split
 
     if motions is None:
-        from ..data.bandai_mini import load_bandai_mini
+        from .bandai_mini import load_bandai_mini
 
         motions = load_bandai_mini()
     train, val, _, how = case_split(motions, seed)
     td = pose_data(motions, train, mirror=True)
     return motions, td, pose_data(motions, val, mirror=False, norm=td.norm), how
-
-
-def training_pairs(motions: MotionSet, data: PoseData, n: int, seed: int = 0, max_s: float = PAIR_MAX_S):
-    """``n`` (start, target) row pairs of ``data``: two frames of one clip at most ``max_s`` apart
-    (never the same frame), each pair mirrored with probability 1/2 when ``data`` is mirrored.
-
-    Returns
-    -------
-    start, target : ndarray of int, shape (n,)
-        Rows of ``data.x``.
-    """
-    rng = np.random.default_rng(seed)
-    frames = data.frames
-    clip = motions.clip_id[frames]
-    lo = np.searchsorted(clip, clip, side="left")
-    hi = np.searchsorted(clip, clip, side="right")
-    if np.all(hi - lo < 2):
-        raise ValueError(f"training_pairs: every clip of {motions.source!r} in this split has a single frame")
-    gap = np.maximum(1, np.floor(max_s / motions.frame_time[clip] + 1e-9)).astype(np.int64)
-    ok = np.nonzero(hi - lo >= 2)[0]
-    a = ok[rng.integers(0, len(ok), n)]
-    first = np.maximum(lo[a], a - gap[a])
-    last = np.minimum(hi[a] - 1, a + gap[a])
-    # a uniform other frame in [first, last] \ {a}
-    b = first + (rng.random(n) * (last - first)).astype(np.int64)
-    b = b + (b >= a)
-    if data.mirrored:
-        flip = rng.random(n) < 0.5
-        a = a + flip * data.n
-        b = b + flip * data.n
-    return a.astype(np.int64), b.astype(np.int64)

@@ -1,13 +1,13 @@
 """The two baselines of ProtoRes's Table 1 (Oreshkin et al. 2021, Sec. 4): other encoders, the same decoders.
 
 Introduced in ``notebooks/05_protores.ipynb``. Each maps the same effector inputs as
-:class:`~posekit.models.protores.ProtoResEncoder` to a pose code; :class:`~posekit.models.protores.PosingNet`
+:class:`~posekit.models.protores.networks.ProtoResEncoder` to a pose code; :class:`~posekit.models.protores.networks.PosingNet`
 puts the shared GPD, IKD and FK after it, so the comparison isolates the encoder.
 
 * **Masked-FCR** (:class:`MaskedFCREncoder`) — a fixed-size input: three tables (position, rotation,
   look-at) of one 7-number slot per body joint (6 values + tolerance), a learned placeholder in every
   slot that has no effector, flattened (3 x B x 7) into a fully connected residual network
-  (:class:`~posekit.models.protores_blocks.FCR`). It must learn every combination of present and missing
+  (:class:`~posekit.models.protores.blocks.FCR`). It must learn every combination of present and missing
   slots separately; that is what the prototype avoids.
 * **Transformer** (:class:`TransformerEncoder`) — torch's own ``nn.Transformer``: the effector tokens
   (values, tolerance, joint and type embeddings, projected to ``d_model``) are the source sequence, one
@@ -22,7 +22,7 @@ from __future__ import annotations
 import torch
 from torch import nn
 
-from .protores_blocks import FCR, KIND_IDS, ProtoResConfig, Tokens
+from .blocks import FCR, KIND_IDS, ProtoResConfig, Tokens
 
 __all__ = ["MaskedFCREncoder", "TransformerEncoder"]
 
@@ -31,7 +31,7 @@ class MaskedFCREncoder(nn.Module):
     """Masked-FCR: effectors scattered into a (3, B, 7) table with learned placeholders -> FCR -> code.
 
     ``forward(joint, kind, value, tol)`` with the shapes of :meth:`PosingNet.forward
-    <posekit.models.protores.PosingNet.forward>` (values re-referenced); returns (B, width).
+    <posekit.models.protores.networks.PosingNet.forward>` (values re-referenced); returns (B, width).
     """
 
     def __init__(self, cfg: ProtoResConfig):
@@ -52,7 +52,7 @@ class MaskedFCREncoder(nn.Module):
 class TransformerEncoder(nn.Module):
     """The Transformer baseline: effector tokens -> ``nn.Transformer`` with one query per body joint -> code.
 
-    ``forward(tokens)`` with tokens (B, N, 7 + 2 embed) from :class:`~posekit.models.protores_blocks.Tokens`;
+    ``forward(tokens)`` with tokens (B, N, 7 + 2 embed) from :class:`~posekit.models.protores.blocks.Tokens`;
     returns (B, width).
     """
 

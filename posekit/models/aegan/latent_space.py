@@ -24,8 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from ..data.metrics import bone_length_error
-from .ae_data import poses_from_vectors
+from ...data.metrics import bone_length_error
+from ...data.pose_vectors import poses_from_vectors
 
 __all__ = ["AEGANSpace", "AutoencoderSpace", "invertibility", "decoded_scores", "spread_mm", "compare_spaces"]
 
@@ -47,7 +47,7 @@ class AEGANSpace:
 
 
 class AutoencoderSpace:
-    """Lesson 03's autoencoder (:class:`~posekit.models.ae_solvers.AESolvers`) as a space; its prior is the
+    """Lesson 03's autoencoder (:class:`~posekit.models.pose_autoencoder.networks.AESolvers`) as a space; its prior is the
     Gaussian of the codes of ``x_train`` (z-scored training poses)."""
 
     def __init__(self, ae_solvers, x_train):
@@ -117,7 +117,7 @@ def decoded_scores(x_decoded, skeleton, norm, natural, reference_pos, judge=None
 def spread_mm(skeleton, global_pos) -> float:
     """Mean per-joint distance between consecutive poses of ``global_pos`` (N, J, 3), each in its own root
     frame and pelvis-relative (:func:`posekit.data.metrics.pose_features`), median over pairs, mm."""
-    from ..data.metrics import pose_features
+    from ...data.metrics import pose_features
 
     f = pose_features(skeleton, global_pos)
     d = (f[1:] - f[:-1]).reshape(len(f) - 1, -1, 3)

@@ -3,7 +3,7 @@
 Introduced in ``notebooks/04_aegan_latent_space.ipynb``; ``posekit train aegan`` runs :func:`train_aegan`.
 
 Losses (Eq. 1-5 of the paper, after Lazarou 2020), on z-scored pose vectors ``x`` and codes ``z`` drawn
-from the prior (uniform on ``[-1, 1]^d``, :func:`~posekit.models.aegan.sample_prior`)::
+from the prior (uniform on ``[-1, 1]^d``, :func:`~posekit.models.aegan.networks.sample_prior`)::
 
     L_x   = MSE(G(E(x)), x)                                  (1)  pose reconstruction
     L_z   = MSE(E(G(z)), z)                                  (2)  code reconstruction
@@ -34,10 +34,10 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from ..learn import limit_threads, merge_settings
-from .ae_data import split_pose_data
-from .ae_train import LICENCE
-from .aegan import AEGAN, AEGANConfig, sample_prior
+from ...learn import limit_threads, merge_settings
+from ...data.pose_vectors import split_pose_data
+from ..pose_autoencoder.train import LICENCE
+from .networks import AEGAN, AEGANConfig, sample_prior
 
 __all__ = ["WEIGHTS", "DEFAULTS", "LOSSES", "train_aegan", "command", "weights_path", "recon_mm"]
 
@@ -57,7 +57,7 @@ the discriminators' losses (3), (4); the adversarial terms of (5); each discrimi
 def weights_path(folder=None):
     from pathlib import Path
 
-    from ..paths import samples_dir
+    from ...paths import samples_dir
 
     return Path(folder or samples_dir() / "weights") / WEIGHTS
 

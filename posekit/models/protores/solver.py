@@ -8,7 +8,7 @@ network's arrays (body-joint ids, kind ids, 6 values, ``Lambda`` in [0, 1]) on t
 Tolerance
 ---------
 An effector's tolerance ``t`` (metres or radians) becomes ``Lambda = (t / sigma_M)^(1/eta)``, the
-tolerance whose training noise has scale ``t`` (:func:`~posekit.models.protores.sigma_to_tolerance`):
+tolerance whose training noise has scale ``t`` (:func:`~posekit.models.protores.networks.sigma_to_tolerance`):
 1 mm -> 0.70, 1 degree -> 0.87, 1 cm -> 0.84. Tolerances above ``sigma_M`` (0.1 m, 0.1 rad) have no
 meaning to the network and are refused. :meth:`ProtoResSolver.predict` takes ``Lambda`` itself.
 
@@ -24,21 +24,21 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from ..data.metrics import body_joints
-from ..ik.api import Pose, SolverBase
-from ..ik.effectors import KINDS
-from ..ik.registry import register
-from ..kinematics import fk
-from ..learn import load_cached, require_skeleton
-from ..rotations import matrix_to_quat, matrix_to_sixd
-from .protores import ARCHS, KIND_IDS, SIGMA_M, PosingNet, sigma_to_tolerance
-from .protores_numpy import NumpyPosingNet
-from .protores_train import weights_path
+from ...data.metrics import body_joints
+from ...ik.api import Pose, SolverBase
+from ...ik.effectors import KINDS
+from ...ik.registry import register
+from ...kinematics import fk
+from ...learn import load_cached, require_skeleton
+from ...rotations import matrix_to_quat, matrix_to_sixd
+from .networks import ARCHS, KIND_IDS, SIGMA_M, PosingNet, sigma_to_tolerance
+from .fast import NumpyPosingNet
+from .train import weights_path
 
 __all__ = ["ProtoResSolver", "load_protores", "skeleton_span", "MAX_EFFECTORS"]
 
 NUMPY_BATCH = 8
-"""Up to this many requests go through :class:`~posekit.models.protores_numpy.NumpyPosingNet` (no torch
+"""Up to this many requests go through :class:`~posekit.models.protores.fast.NumpyPosingNet` (no torch
 overhead); larger batches through torch."""
 
 MAX_EFFECTORS = 64
@@ -109,7 +109,7 @@ class ProtoResSolver(SolverBase):
         joint : array of int, shape (B, N) or (N,)
             Skeleton joint indices (body joints only).
         kind : array of int, shape (B, N) or (N,)
-            :data:`~posekit.models.protores.KIND_IDS`.
+            :data:`~posekit.models.protores.networks.KIND_IDS`.
         value : array, shape (B, N, 6) or (N, 6)
             Position + zeros; 6D world rotation; look-at target + local direction (metres, world frame).
         tol : array, shape (B, N) or (N,)

@@ -6,10 +6,10 @@ Introduced in ``notebooks/03_autoencoder_solvers.ipynb``; ``posekit train ae-sol
 1. the autoencoder on the training poses (mirrored), ``MSE(D(E(x)), x)`` on z-scored vectors, Adam;
    then its weights are rounded to float16, as the checkpoint stores them, so that the solvers are
    trained against the decoder exactly as shipped (the solvers' own float16 rounding is harmless);
-2. one solver per joint set of :data:`~posekit.models.ae_solvers.GROUPS`, autoencoder frozen, on
-   (start, target) pairs of one clip at most 1 s apart (:func:`~posekit.models.ae_data.training_pairs`),
+2. one solver per joint set of :data:`~posekit.models.pose_autoencoder.networks.GROUPS`, autoencoder frozen, on
+   (start, target) pairs of one clip at most 1 s apart (:func:`~posekit.models.pose_autoencoder.data.training_pairs`),
    loss Eq. (1) with ``k`` (:func:`solver_loss`);
-3. chaining-aware copies (Sec. 3.5): each solver after the first of :data:`~posekit.models.ae_solvers.CHAIN`
+3. chaining-aware copies (Sec. 3.5): each solver after the first of :data:`~posekit.models.pose_autoencoder.networks.CHAIN`
    fine-tuned on the codes the earlier solvers produce, its target joints being every joint the chain
    has been asked for so far (so a later stage learns not to undo an earlier one).
 
@@ -24,9 +24,10 @@ import time
 import numpy as np
 import torch
 
-from ..learn import fit, merge_settings
-from .ae_data import split_pose_data, training_pairs
-from .ae_solvers import CHAIN, GROUPS, AEConfig, AESolvers
+from ...learn import fit, merge_settings
+from ...data.pose_vectors import split_pose_data
+from .data import training_pairs
+from .networks import CHAIN, GROUPS, AEConfig, AESolvers
 
 __all__ = ["LICENCE", "WEIGHTS", "DEFAULTS", "solver_loss", "train_autoencoder", "train_solver", "train_chained",
            "train_ae_solvers", "command", "weights_path"]
@@ -47,7 +48,7 @@ DEFAULTS = dict(ae_epochs=80, ae_lr=1e-3, solver_epochs=12, solver_lr=1e-3, chai
 def weights_path(folder=None):
     from pathlib import Path
 
-    from ..paths import samples_dir
+    from ...paths import samples_dir
 
     return Path(folder or samples_dir() / "weights") / WEIGHTS
 
@@ -154,7 +155,7 @@ def train_ae_solvers(motions=None, *, seed: int = 0, out=None, groups=tuple(GROU
     out : str or Path, optional
         The checkpoint file to write (default ``data_samples/weights/ae_solvers.pt``); ``False``: none.
     groups : sequence of str
-    tied, latent : the autoencoder's decoder and code size (:class:`~posekit.models.ae_solvers.AEConfig`).
+    tied, latent : the autoencoder's decoder and code size (:class:`~posekit.models.pose_autoencoder.networks.AEConfig`).
         Default untied: on the mini set an untied decoder reconstructs held-out poses better than the
         authors' tied one (the lesson measures both, ``posekit train ae-studies``).
     **settings

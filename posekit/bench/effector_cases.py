@@ -27,7 +27,7 @@ from ..ik.effectors import DEFAULT_TOLERANCE, Effector
 from ..kinematics import fk
 from ..paths import samples_dir
 from ..rotations import matrix_to_sixd, quat_to_matrix
-from .protores import KIND_IDS
+from ..models.protores.networks import KIND_IDS
 
 __all__ = ["BENCHMARKS", "FIVE_POINT", "ZONES", "EffectorBenchmark", "build_benchmark", "load_benchmark",
            "benchmark_path", "MAX_EFFECTORS"]
@@ -69,7 +69,7 @@ class EffectorBenchmark:
     joint : ndarray of int, shape (C, K)
         Skeleton joint index; -1 past ``n``.
     kind : ndarray of int, shape (C, K)
-        :data:`~posekit.models.protores.KIND_IDS`.
+        :data:`~posekit.models.protores.networks.KIND_IDS`.
     value : ndarray, shape (C, K, 6)
         Position + zeros; 6D world rotation; look-at target + local direction (metres, world frame).
     tolerance : ndarray, shape (C, K)

@@ -4,7 +4,7 @@ decode, restore bone lengths.
 Introduced in ``notebooks/03_autoencoder_solvers.ipynb``; registered as ``"neural"`` and variants
 (below), so the benchmark, the viewer and the studio use it by name. This wrapper is the only place
 that knows both worlds: effectors and :class:`~posekit.ik.api.Pose` on one side, z-scored root-frame
-vectors and latent codes (:mod:`posekit.models.ae_solvers`) on the other.
+vectors and latent codes (:mod:`posekit.models.pose_autoencoder.networks`) on the other.
 
 One solve
 ---------
@@ -28,15 +28,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..data.metrics import body_joints
-from ..ik.api import Pose, SolverBase
-from ..ik.fix_bones import fix_bone_lengths
-from ..ik.registry import make_solver, register
-from ..learn import load_cached, require_skeleton
-from . import ae_kernel as K
-from .ae_data import feature_columns, pose_vectors, poses_from_vectors, targets_in_root_frame
-from .ae_solvers import GROUPS, AESolvers, chain_groups, stages
-from .ae_train import weights_path
+from ...data.metrics import body_joints
+from ...ik.api import Pose, SolverBase
+from ...ik.fix_bones import fix_bone_lengths
+from ...ik.registry import make_solver, register
+from ...learn import load_cached, require_skeleton
+from . import fast as K
+from ...data.pose_vectors import feature_columns, pose_vectors, poses_from_vectors, targets_in_root_frame
+from .networks import GROUPS, AESolvers, chain_groups, stages
+from .train import weights_path
 
 __all__ = ["NeuralIKSolver", "POSTS", "load_model"]
 
@@ -102,7 +102,7 @@ class NeuralIKSolver(SolverBase):
         self._compile_single()
 
     def _compile_single(self):
-        """Arrays of the compiled single-pose path (:mod:`posekit.models.ae_kernel`)."""
+        """Arrays of the compiled single-pose path (:mod:`posekit.models.pose_autoencoder.fast`)."""
         s = self.skeleton
         roles = s.roles
         sh = ("left_shoulder" in roles and "right_shoulder" in roles)
@@ -134,7 +134,7 @@ class NeuralIKSolver(SolverBase):
 
     def predict_one(self, start_pos, joints, targets):
         """:meth:`predict` of one problem — start (J, 3), joints (K,), targets (K, 3), metres — by the compiled
-        kernels of :mod:`posekit.models.ae_kernel` (what ``solve`` runs for a single problem); returns
+        kernels of :mod:`posekit.models.pose_autoencoder.fast` (what ``solve`` runs for a single problem); returns
         ``(pos (J, 3), raw (J, 3), clamped (K,))``."""
         start_pos = np.ascontiguousarray(start_pos, dtype=float)
         targets = np.ascontiguousarray(targets, dtype=float)
@@ -157,7 +157,7 @@ class NeuralIKSolver(SolverBase):
         return self._post(raw, joints, targets), raw, clamped
 
     def _stages(self, plan) -> list:
-        """``[(group, use its chaining-aware copy)]`` of a plan (:func:`posekit.models.ae_solvers.stages`)."""
+        """``[(group, use its chaining-aware copy)]`` of a plan (:func:`posekit.models.pose_autoencoder.networks.stages`)."""
         return stages([g for g, _ in plan], chain=[g for g, _ in plan] if self.chain else None,
                       chain_aware=self.chain_aware, chained=self.model.chained)
 

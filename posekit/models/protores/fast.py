@@ -1,10 +1,10 @@
 """ProtoRes's forward pass in numpy: the same network, for one request at a time without torch's per-call cost.
 
 Introduced in ``notebooks/05_protores.ipynb`` (the speed table). A pass through a
-:class:`~posekit.models.protores.PosingNet` is some 300 small tensor operations; for one pose torch's fixed
+:class:`~posekit.models.protores.networks.PosingNet` is some 300 small tensor operations; for one pose torch's fixed
 cost per operation, not arithmetic, sets the time. :class:`NumpyPosingNet` holds the trained weights as
 float32 arrays and runs Eq. 2-6 with plain matrix products (and FK joint by joint), which is what
-:meth:`ProtoResSolver.solve <posekit.models.protores_ik.ProtoResSolver>` uses for the ProtoRes and
+:meth:`ProtoResSolver.solve <posekit.models.protores.solver.ProtoResSolver>` uses for the ProtoRes and
 Masked-FCR encoders; batches, and the Transformer, go through torch. Tested equal to the torch pass to
 float32 rounding.
 """
@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..rotations import sixd_to_matrix
+from ...rotations import sixd_to_matrix
 
 __all__ = ["NumpyPosingNet"]
 
@@ -45,7 +45,7 @@ def _run_fcr(blocks, x):
 
 
 class NumpyPosingNet:
-    """A :class:`~posekit.models.protores.PosingNet` (ProtoRes or Masked-FCR encoder) in numpy.
+    """A :class:`~posekit.models.protores.networks.PosingNet` (ProtoRes or Masked-FCR encoder) in numpy.
 
     ``forward(joint, kind, value, tol)`` takes the arrays of ``PosingNet.forward`` (body-joint ids, kind ids,
     values (B, N, 6), Lambda) and returns ``global_pos`` (B, J, 3), ``global_rot`` (B, J, 3, 3),
@@ -54,7 +54,7 @@ class NumpyPosingNet:
     """
 
     def __init__(self, net):
-        from .protores import centroid  # noqa: F401  (the same centroid rule, written below in numpy)
+        from .networks import centroid  # noqa: F401  (the same centroid rule, written below in numpy)
 
         cfg = net.config
         if cfg.arch == "transformer":

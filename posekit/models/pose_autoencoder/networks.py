@@ -1,7 +1,7 @@
 """Victor & Meyer 2020, "Learning-based IK with a pose autoencoder": the networks, top to bottom.
 
 Introduced in ``notebooks/03_autoencoder_solvers.ipynb``. Poses are z-scored root-frame vectors
-``x`` (:mod:`posekit.models.ae_data`); every network works on those.
+``x`` (:mod:`posekit.data.pose_vectors`); every network works on those.
 
 * **Autoencoder** (Sec. 3.3.1) — :class:`PoseAutoencoder`. Encoder ``E``: two 200-unit ReLU layers and
   a linear layer to the latent code ``z`` (d = 64). Decoder ``D``: the mirrored network. With
@@ -32,9 +32,9 @@ import numpy as np
 import torch
 from torch import nn
 
-from ..data.dataset import NormStats
-from ..learn import load_checkpoint, save_checkpoint
-from .ae_data import feature_columns
+from ...data.dataset import NormStats
+from ...learn import load_checkpoint, save_checkpoint
+from ...data.pose_vectors import feature_columns
 
 __all__ = ["KIND", "GROUPS", "CHAIN", "chain_groups", "stages", "AEConfig", "PoseAutoencoder", "LatentSolver", "AESolvers", "NumpyAESolvers"]
 

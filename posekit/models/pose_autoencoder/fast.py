@@ -1,10 +1,10 @@
-"""Compiled single-pose path of the neural solver (:mod:`posekit.models.neural_ik`).
+"""Compiled single-pose path of the neural solver (:mod:`posekit.models.pose_autoencoder.solver`).
 
 Introduced in ``notebooks/03_autoencoder_solvers.ipynb``. For one pose the networks are a dozen
 small matrix-vector products; numpy's and torch's per-call overhead would cost several times the
 arithmetic, so one solve runs in these numba kernels instead. They compute exactly what the batched
-numpy path computes (:func:`posekit.models.ae_data.pose_vectors`, the networks of
-:class:`posekit.models.ae_solvers.NumpyAESolvers`, :func:`posekit.models.ae_data.poses_from_vectors`);
+numpy path computes (:func:`posekit.data.pose_vectors.pose_vectors`, the networks of
+:class:`posekit.models.pose_autoencoder.networks.NumpyAESolvers`, :func:`posekit.data.pose_vectors.poses_from_vectors`);
 ``tests/test_ae_solvers.py`` checks that they agree.
 """
 
@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from .._jit import njit
+from ..._jit import njit
 
 __all__ = ["root_frame", "features", "mlp", "pose_from_features"]
 

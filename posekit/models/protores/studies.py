@@ -30,17 +30,17 @@ STEPS = 2000
 
 
 def studies_path():
-    from ..paths import samples_dir
+    from ...paths import samples_dir
 
     return samples_dir() / "results" / "protores_ablation.json"
 
 
 def score_net(net, motions=None) -> dict:
     """Both benchmarks' L_ikd-L2 (1e-3 m^2), L_loc-geo (rad) and MPJPE (mm) of a network, and its one-pose time."""
-    from ..learn.threads import limit_threads
-    from .protores_benchmarks import BENCHMARKS, load_benchmark
-    from .protores_eval import run_learned, scores
-    from .protores_ik import ProtoResSolver
+    from ...learn.threads import limit_threads
+    from ...bench.effector_cases import BENCHMARKS, load_benchmark
+    from ...bench.effector_scores import run_learned, scores
+    from .solver import ProtoResSolver
 
     solver = ProtoResSolver(net.skeleton, net=net)
     out = {}
@@ -65,10 +65,10 @@ def score_net(net, motions=None) -> dict:
 
 
 def _job(job):
-    from ..data.bandai_mini import load_bandai_mini
-    from ..data.metrics import body_joints
-    from .protores import ProtoResConfig
-    from .protores_train import train_protores
+    from ...data.bandai_mini import load_bandai_mini
+    from ...data.metrics import body_joints
+    from .networks import ProtoResConfig
+    from .train import train_protores
 
     label, cfg_kw, settings, seed = job
     motions = load_bandai_mini()
@@ -81,8 +81,8 @@ def _job(job):
 
 def run_studies(seed: int = 0, out=None, workers: int = 2, progress: bool = True) -> dict:
     """Train and score the studies of the module docstring; write the JSON (``out=False``: none)."""
-    from ..data.bandai_mini import load_bandai_mini
-    from .protores_ik import load_protores
+    from ...data.bandai_mini import load_bandai_mini
+    from .solver import load_protores
 
     t0 = time.perf_counter()
     jobs = [(f"width {w}", {"width": w}, {"steps": STEPS}, seed) for w in (256, 64, 128)]  # longest first

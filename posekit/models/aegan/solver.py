@@ -7,7 +7,7 @@ Introduced in ``notebooks/04_aegan_latent_space.ipynb``; registered as ``"latent
 1. the start pose in its root frame -> z-scored ``x`` -> ``z_0 = E(x)``;
 2. the targets in the same frame, z-scored like the features (a target beyond the training poses'
    range by more than :data:`RANGE_MARGIN` is still used, and ``info["out_of_range"]`` names it);
-3. Eq. (6) from ``z_0`` (:mod:`posekit.models.latent_opt`, Adam or L-BFGS, the stopping rule there);
+3. Eq. (6) from ``z_0`` (:mod:`posekit.models.aegan.latent_opt`, Adam or L-BFGS, the stopping rule there);
 4. ``x' = G(z*)`` back to the world;
 5. ``post="bones"`` (default): the effectors set on their targets and every bone given its length
    back by the FABRIK backward-forward pass (:func:`posekit.ik.fix_bone_lengths`, as in lesson 03);
@@ -22,14 +22,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..ik.api import Pose, SolverBase
-from ..ik.fix_bones import fix_bone_lengths
-from ..ik.registry import register
-from ..learn import load_cached, require_skeleton
-from . import latent_kernel as LK
-from .ae_data import feature_columns, pose_vectors, poses_from_vectors, targets_in_root_frame
-from .aegan import AEGAN
-from .aegan_train import weights_path
+from ...ik.api import Pose, SolverBase
+from ...ik.fix_bones import fix_bone_lengths
+from ...ik.registry import register
+from ...learn import load_cached, require_skeleton
+from . import fast as LK
+from ...data.pose_vectors import feature_columns, pose_vectors, poses_from_vectors, targets_in_root_frame
+from .networks import AEGAN
+from .train import weights_path
 from .latent_opt import OPTIMIZERS, Problem, optimize
 
 __all__ = ["LatentOptSolver", "load_aegan", "RANGE_MARGIN", "SETTINGS"]
@@ -124,7 +124,7 @@ class LatentOptSolver(SolverBase):
 
     def predict_one(self, start_pos, joints, targets, tol=1e-3):
         """:meth:`predict` of one problem — start (J, 3), joints (K,), targets (K, 3), tolerances (K,) —
-        with the optimiser compiled (:mod:`posekit.models.latent_kernel`): what ``solve`` runs. Returns
+        with the optimiser compiled (:mod:`posekit.models.aegan.fast`): what ``solve`` runs. Returns
         ``(pos (J, 3), raw (J, 3), iterations, out_of_range (K,))``."""
         tol = np.asarray(tol, float)[None] if np.ndim(tol) else tol
         if self._gen is None:  # an all-ancestors SPL: the numpy path

@@ -1,9 +1,9 @@
-"""Compiled single-problem path of latent optimisation (:mod:`posekit.models.latent_opt`).
+"""Compiled single-problem path of latent optimisation (:mod:`posekit.models.aegan.latent_opt`).
 
 Introduced in ``notebooks/04_aegan_latent_space.ipynb``. One iteration on one pose is a few small
 matrix-vector products through the generator and back; numpy's per-call overhead would cost several
 times that arithmetic, so a single solve runs in these numba kernels: the generator's forward and
-backward pass (:class:`posekit.models.aegan.NumpyAEGAN`, parent-only SPL) and the same optimisers —
+backward pass (:class:`posekit.models.aegan.networks.NumpyAEGAN`, parent-only SPL) and the same optimisers —
 projected L-BFGS and Adam with the same stopping rule — for one problem. ``tests/test_aegan.py``
 checks them against the batched numpy path.
 
@@ -16,13 +16,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._jit import njit
+from ..._jit import njit
 
 __all__ = ["flatten_generator", "loss_grad", "lbfgs_one", "adam_one"]
 
 
 def flatten_generator(net) -> tuple:
-    """The arrays the kernels read, from a :class:`~posekit.models.aegan.NumpyAEGAN` (parent-only SPL)."""
+    """The arrays the kernels read, from a :class:`~posekit.models.aegan.networks.NumpyAEGAN` (parent-only SPL)."""
     spl = net.g_spl
     J, h, o = spl.J, spl.hidden, spl.out
     A = np.zeros((J, o, h), np.float32)
@@ -145,7 +145,7 @@ def _done(err, tol):
 @njit
 def lbfgs_one(z0, cols, target, scale, tol, W, b, U, c, order, par, A, V, bo, work, max_iter, memory, patience,
               stall, c1, backtracks):
-    """:func:`posekit.models.latent_opt.lbfgs` for one problem: ``(best z (d,), iterations, errors (K,))``."""
+    """:func:`posekit.models.aegan.latent_opt.lbfgs` for one problem: ``(best z (d,), iterations, errors (K,))``."""
     d = len(z0)
     K = len(tol)
     z = np.minimum(np.maximum(z0.astype(np.float32), -1.0), 1.0)
@@ -243,7 +243,7 @@ def lbfgs_one(z0, cols, target, scale, tol, W, b, U, c, order, par, A, V, bo, wo
 @njit
 def adam_one(z0, cols, target, scale, tol, W, b, U, c, order, par, A, V, bo, work, max_iter, lr, patience, stall,
              b1, b2):
-    """:func:`posekit.models.latent_opt.adam` for one problem: ``(best z (d,), iterations, errors (K,))``."""
+    """:func:`posekit.models.aegan.latent_opt.adam` for one problem: ``(best z (d,), iterations, errors (K,))``."""
     d = len(z0)
     K = len(tol)
     z = np.minimum(np.maximum(z0.astype(np.float32), -1.0), 1.0)

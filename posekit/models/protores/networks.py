@@ -23,9 +23,9 @@ The network reads N effectors, each of one of three kinds on one body joint, and
 * **Forward kinematics** (Eq. 6) — :func:`posekit.kinematics.fk` in torch, rooted at the GPD's pelvis,
   so the final pose keeps every bone length.
 
-The two baselines of the paper's Table 1 (:mod:`posekit.models.protores_baselines`: Masked-FCR and a
+The two baselines of the paper's Table 1 (:mod:`posekit.models.protores.baselines`: Masked-FCR and a
 Transformer) swap the encoder and keep the decoders and FK; :class:`PosingNet` holds any of the three.
-The inputs, the fully connected blocks and the config they share are in :mod:`posekit.models.protores_blocks`
+The inputs, the fully connected blocks and the config they share are in :mod:`posekit.models.protores.blocks`
 (and importable from here).
 A :class:`PosingNet` saves to one :mod:`posekit.learn.checkpoint` (kind ``"protores"``).
 """
@@ -36,13 +36,13 @@ import numpy as np
 import torch
 from torch import nn
 
-from ..data.metrics import body_joints
-from ..kinematics import fk
-from ..learn import load_checkpoint, save_checkpoint
-from ..rotations import sixd_to_matrix
-from .protores_baselines import MaskedFCREncoder, TransformerEncoder
-from .protores_blocks import (ARCHS, ETA, KIND_IDS, SIGMA_M, FCBlock, FCR, ProtoResConfig, Tokens, centroid,
-                              effector_inputs, sigma_to_tolerance, tolerance_to_sigma)
+from ...data.metrics import body_joints
+from ...kinematics import fk
+from ...learn import load_checkpoint, save_checkpoint
+from ...rotations import sixd_to_matrix
+from .baselines import MaskedFCREncoder, TransformerEncoder
+from .blocks import (ARCHS, ETA, KIND_IDS, SIGMA_M, FCBlock, FCR, ProtoResConfig, Tokens, centroid, effector_inputs,
+                     sigma_to_tolerance, tolerance_to_sigma)
 
 __all__ = ["KIND", "ARCHS", "KIND_IDS", "SIGMA_M", "ETA", "ProtoResConfig", "centroid", "effector_inputs",
            "Tokens", "FCBlock", "FCR", "ProtoResEncoder", "PosingNet", "tolerance_to_sigma", "sigma_to_tolerance"]

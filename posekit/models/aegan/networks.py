@@ -1,10 +1,10 @@
 """Victor & Meyer, JFIG 2020, Sec. 3.2: an AE-GAN latent space of poses, top to bottom.
 
 Introduced in ``notebooks/04_aegan_latent_space.ipynb``. Poses are lesson 03's z-scored root-frame
-vectors ``x`` (:mod:`posekit.models.ae_data`, ``3 B`` numbers for ``B`` body joints); the code ``z``
+vectors ``x`` (:mod:`posekit.data.pose_vectors`, ``3 B`` numbers for ``B`` body joints); the code ``z``
 has ``d = 32`` numbers in ``[-1, 1]`` (the encoder ends in tanh; the prior is uniform on that cube).
 
-* **Encoder** ``E: x -> z`` — an SPL (:class:`~posekit.models.spl.StructuredPrediction`, 12 numbers
+* **Encoder** ``E: x -> z`` — an SPL (:class:`~posekit.models.aegan.spl.StructuredPrediction`, 12 numbers
   per joint: 252 units on 21 joints, the paper's size) and a dense layer to ``d`` with tanh.
 * **Generator** ``G: z -> x`` — a dense layer of ``12 B`` ReLU units (252) and an SPL to 3 numbers per joint.
 * **Pose discriminator** ``D_x: x -> [0, 1]`` — the encoder's shape, its last layer one sigmoid unit.
@@ -24,9 +24,9 @@ import numpy as np
 import torch
 from torch import nn
 
-from ..data.dataset import NormStats
-from ..data.metrics import body_joints
-from ..learn import load_checkpoint, save_checkpoint
+from ...data.dataset import NormStats
+from ...data.metrics import body_joints
+from ...learn import load_checkpoint, save_checkpoint
 from .spl import NumpySPL, StructuredPrediction, dense_twin
 
 __all__ = ["KIND", "AEGANConfig", "body_parents", "Encoder", "Generator", "PoseDiscriminator", "LatentDiscriminator",
@@ -63,7 +63,7 @@ class AEGANConfig:
     dz_hidden, dz_layers : int
         The latent discriminator (4 x 256).
     structured : bool
-        SPL layers (True) or their dense twins of equal width (:func:`~posekit.models.spl.dense_twin`).
+        SPL layers (True) or their dense twins of equal width (:func:`~posekit.models.aegan.spl.dense_twin`).
     """
 
     n_joints: int

@@ -11,7 +11,7 @@ radians, Y up, facing +Z); 6D rotations are the first two columns of a matrix.
   :class:`FCR` (blocks in a row, forecasts summed): the decoders of Eq. 3-4 and the Masked-FCR encoder;
 * the tolerance <-> noise scale of Appendix B (:func:`tolerance_to_sigma`).
 
-The model itself — the proto-residual encoder, the decoders' use and FK — is :mod:`posekit.models.protores`.
+The model itself — the proto-residual encoder, the decoders' use and FK — is :mod:`posekit.models.protores.networks`.
 """
 
 from __future__ import annotations
