@@ -4,20 +4,17 @@ import numpy as np
 import pytest
 import torch
 
-from posekit.data import load_bandai_mini, load_sample
+from posekit.data import load_sample
 from posekit.data.cases import build_cases, case_split
 from posekit.data.metrics import body_joints, bone_length_error, mpjpe
 from posekit.ik import EFFECTOR_SETS, Effector, effector_set, make_solver
 from posekit.data.pose_vectors import STD_FLOOR, feature_columns, pose_data, pose_vectors, poses_from_vectors
 from posekit.models.pose_autoencoder.data import training_pairs
 from posekit.models.pose_autoencoder.networks import CHAIN, GROUPS, AESolvers, PoseAutoencoder
-from posekit.models.pose_autoencoder.train import LICENCE, solver_loss, train_ae_solvers, weights_path
+from posekit.data.bandai_mini import LICENCE
+from posekit.models.pose_autoencoder.networks import weights_path
+from posekit.models.pose_autoencoder.train import solver_loss, train_ae_solvers
 from posekit.models.pose_autoencoder.solver import NeuralIKSolver
-
-
-@pytest.fixture(scope="module")
-def mini():
-    return load_bandai_mini()
 
 
 @pytest.fixture(scope="module")

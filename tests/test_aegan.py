@@ -5,21 +5,16 @@ import numpy as np
 import pytest
 import torch
 
-from posekit.data import load_bandai_mini, load_sample
+from posekit.data import load_sample
 from posekit.data.cases import build_cases, case_split
 from posekit.data.metrics import body_joints, bone_length_error
 from posekit.ik import EFFECTOR_SETS, Effector, make_solver
 from posekit.data.pose_vectors import pose_data
-from posekit.models.aegan.networks import AEGAN, body_parents
-from posekit.models.aegan.train import LOSSES, train_aegan, weights_path
+from posekit.models.aegan.networks import AEGAN, body_parents, weights_path
+from posekit.models.aegan.train import LOSSES, train_aegan
 from posekit.models.aegan.solver import LatentOptSolver
 from posekit.models.aegan.latent_opt import adam, lbfgs
 from posekit.models.aegan.spl import NumpySPL, StructuredPrediction, dense_twin, tree_levels
-
-
-@pytest.fixture(scope="module")
-def mini():
-    return load_bandai_mini()
 
 
 @pytest.fixture(scope="module")

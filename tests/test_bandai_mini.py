@@ -9,12 +9,7 @@ import pytest
 from posekit.cli import build_parser, main
 from posekit.data import bandai_mini_split, build_bandai_mini, load_bandai_mini, open_dataset
 from posekit.data.bandai_mini import JOINTS, MINI_FILE, MULTI_STYLE_1, held_out_split, mini_path, parse_clip_name
-from posekit.kinematics import bone_lengths_of
-
-
-@pytest.fixture(scope="module")
-def mini():
-    return load_bandai_mini()
+from posekit.kinematics import bone_lengths_of, fk
 
 
 @pytest.fixture(scope="module")
@@ -49,6 +44,8 @@ def test_open_dataset_by_name(mini):
 
 
 def test_positions_are_fk_with_constant_bone_lengths(mini):
+    np.testing.assert_allclose(fk(mini.skeleton, mini.local_rot, mini.root_pos, mini.local_pos)[0], mini.global_pos,
+                               atol=1e-9)
     lengths = bone_lengths_of(mini.skeleton, mini.global_pos)
     np.testing.assert_allclose(lengths, np.broadcast_to(mini.skeleton.bone_lengths(), lengths.shape), atol=1e-9)
     # the Hips sit ROOT_TO_HIPS above joint_Root, in world axes

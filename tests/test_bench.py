@@ -7,7 +7,7 @@ import pytest
 
 from posekit.bench.plugin import arg, register_benchmark, unregister_benchmark
 from posekit.cli import main
-from posekit.data import MotionSet, load_bandai_mini, split_by_clip
+from posekit.data import MotionSet, split_by_clip
 from posekit.data.cases import build_cases, case_split, placement_joints
 from posekit.data.metrics import (NaturalnessIndex, body_joints, bone_length_error, effector_errors, mpjpe,
                                   rotation_error)
@@ -33,11 +33,6 @@ def ensure_classical_solvers():
 @pytest.fixture(scope="module")
 def solvers():
     ensure_classical_solvers()
-
-
-@pytest.fixture(scope="module")
-def mini():
-    return load_bandai_mini()
 
 
 # ------------------------------------------------------------------------------- plug-in registry

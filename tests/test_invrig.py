@@ -9,7 +9,7 @@ from posekit.kinematics import bone_lengths_of
 from posekit.invrig import (GPR, KERNELS, METHODS, LearnedJacobian, greedy_subsample, line_search_theta0,
                                 refine, sample_controls)
 from posekit.invrig.nn import load_inverse_net, train_inverse_net
-from posekit.invrig.train import weights_path
+from posekit.invrig.nn import weights_path
 from posekit.invrig import HumanoidRig, animate, heuristic_inverse, standard_sets
 
 

@@ -242,7 +242,7 @@ def test_single_thread_restores_the_thread_count():
 
 def test_shipped_invrig_weights_carry_their_provenance(sample):
     from posekit.invrig.nn import load_inverse_net
-    from posekit.invrig.train import weights_path
+    from posekit.invrig.nn import weights_path
     from posekit.invrig import HumanoidRig
 
     skel = sample.skeleton

@@ -6,24 +6,18 @@ import numpy as np
 import pytest
 import torch
 
-from posekit.data import load_bandai_mini
 from posekit.data.metrics import body_joints
 from posekit.ik import Effector, make_solver
 from posekit.ik.bone_rotations import check_roundtrip, rotations_from_positions, shortest_rotation
 from posekit.kinematics import bone_lengths_of, fk
 from posekit.models.protores.networks import (ARCHS, KIND_IDS, PosingNet, ProtoResConfig, ProtoResEncoder, centroid,
-                                              sigma_to_tolerance, tolerance_to_sigma)
+                                              sigma_to_tolerance, tolerance_to_sigma, weights_path)
 from posekit.bench.effector_cases import FIVE_POINT, ZONES, build_benchmark, load_benchmark
 from posekit.models.protores.data import PoseBank, draw_batch
 from posekit.models.protores.solver import MAX_EFFECTORS, ProtoResSolver
-from posekit.models.protores.train import LOSSES, geodesic, losses, train_protores, weights_path
+from posekit.models.protores.train import LOSSES, geodesic, losses, train_protores
 from posekit.rotations import quat_to_matrix
 from posekit.transforms import mirror_frame_signs, mirror_positions, mirror_rotation_matrices
-
-
-@pytest.fixture(scope="module")
-def mini():
-    return load_bandai_mini()
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,4 @@
-"""Rigs in the wild: role guessing, unit detection, per-subject offsets (posekit.data.rigs)."""
+"""Rigs in the wild: role guessing, unit detection, per-subject offsets (posekit.io.rigs)."""
 
 import json
 import warnings
@@ -8,9 +8,9 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from posekit.data import load_sample, open_dataset
-from posekit.data.rigs import (CMU_SCALE, detect_rig, guess_roles, guess_units, missing_roles, rig_report,
+from posekit.io.rigs import (CMU_SCALE, detect_rig, guess_roles, guess_units, missing_roles, rig_report,
                                standing_height)
-from posekit.data.sources import BANDAI_ROLES
+from posekit.data.bandai import BANDAI_ROLES
 from posekit.io.bvh import read_bvh, write_bvh
 from posekit.skeleton import ROLES, Skeleton
 

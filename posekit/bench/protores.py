@@ -124,7 +124,7 @@ def _speed_rows(solvers, five) -> list[dict]:
 
 
 def _training_rows(solvers) -> list[dict]:
-    from ..models.protores.train import weights_path
+    from ..models.protores.networks import weights_path
 
     rows = []
     for arch, solver in solvers.items():

@@ -49,12 +49,12 @@ from ..kinematics import fk
 from ..paths import require_shared_data, samples_dir
 from ..skeleton import Skeleton
 from .motion import MotionSet
-from .sources import BANDAI_FOLDERS, BANDAI_ROLES
+from .bandai import BANDAI_FOLDERS, BANDAI_ROLES
 
 __all__ = [
     "MINI_DIR", "MINI_FILE", "STEP", "ROOT_TO_HIPS", "JOINTS", "CONTENTS_1", "STYLES_1",
     "BandaiMiniSplit", "held_out_split", "build_bandai_mini", "load_bandai_mini", "bandai_mini_split",
-    "mini_path",
+    "mini_path", "LICENCE",
 ]
 
 MINI_DIR = "bandai_mini"
@@ -62,6 +62,11 @@ MINI_DIR = "bandai_mini"
 
 MINI_FILE = "bandai_mini.npz"
 """File name of the set inside :data:`MINI_DIR`."""
+
+LICENCE = ("CC BY-NC 4.0 (non-commercial): trained on the Bandai mini set (data_samples/bandai_mini/), "
+           "frames subsampled from the Bandai Namco Research Motion Datasets 1 and 2, (c) Bandai Namco "
+           "Research Inc., CC BY-NC 4.0 (Kobayashi et al. 2023, arXiv 2306.08861).")
+"""Licence recorded in weights trained on the Bandai mini set."""
 
 FORMAT_VERSION = 1
 

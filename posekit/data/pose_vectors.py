@@ -8,7 +8,7 @@ A pose becomes one vector ``x`` of ``3 B`` numbers: the positions of its *body j
 (:func:`posekit.data.metrics.body_joints`: every joint but a helper root such as Bandai's
 ``joint_Root``, which only carries the world position) in the pose's **root frame** — the pelvis
 projected on the floor is the origin, the character faces +Z (:func:`posekit.transforms.to_root_space`).
-The pelvis's x and z are therefore exactly 0; z-scoring (:class:`~posekit.data.dataset.NormStats`)
+The pelvis's x and z are therefore exactly 0; z-scoring (:class:`~posekit.records.NormStats`)
 floors every standard deviation at :data:`STD_FLOOR` so those constant features do not divide by zero.
 
 Mirroring (:func:`posekit.transforms.mirror_positions`) doubles the training poses.
@@ -20,9 +20,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .dataset import NormStats
 from .metrics import body_joints
 from .motion import MotionSet
+from ..records import NormStats
 from ..transforms import from_root_space, mirror_positions, rotate_y_positions, to_root_space
 
 __all__ = ["STD_FLOOR", "pose_vectors", "poses_from_vectors", "targets_in_root_frame",

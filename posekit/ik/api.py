@@ -32,7 +32,7 @@ from typing import Protocol, Sequence, runtime_checkable
 
 import numpy as np
 
-from ..kinematics import fk
+from ..records import Pose
 from ..skeleton import Skeleton
 from .effectors import (DEFAULT_TOLERANCE, KINDS, Effector, ResolvedEffectors, check_look_at, effector_errors,
                         effector_errors_batch, errors_of, resolve_effectors)
@@ -47,39 +47,6 @@ EFFECTOR_SETS = {
     "5point": ("chest", "left_hand", "right_hand", "left_foot", "right_foot"),  # Oreshkin et al. 2021
 }
 """Named effector sets, as joint roles."""
-
-
-@dataclass
-class Pose:
-    """A posed skeleton. ``global_pos`` is always there; rotation-based solvers also fill
-    ``local_rot`` and ``root_pos``.
-
-    Attributes
-    ----------
-    global_pos : ndarray, shape (J, 3), metres
-    local_rot : ndarray, shape (J, 4), optional
-        Local quaternions ``(x, y, z, w)``.
-    root_pos : ndarray, shape (3,), optional
-    local_pos : ndarray, shape (J, 3), optional
-        Per-joint translations when they differ from the skeleton's offsets (BVH position channels).
-    """
-
-    global_pos: np.ndarray
-    local_rot: np.ndarray | None = None
-    root_pos: np.ndarray | None = None
-    local_pos: np.ndarray | None = None
-
-    @classmethod
-    def from_rotations(cls, skeleton: Skeleton, local_rot, root_pos, local_pos=None) -> "Pose":
-        """Pose from local quaternions (J, 4) and root position (3,), positions by FK."""
-        local_rot = np.asarray(local_rot, dtype=float)
-        root_pos = np.asarray(root_pos, dtype=float)
-        lp = None if local_pos is None else np.asarray(local_pos, dtype=float)
-        return cls(fk(skeleton, local_rot, root_pos, lp)[0], local_rot, root_pos, lp)
-
-    def copy(self) -> "Pose":
-        c = lambda a: None if a is None else np.array(a, copy=True)  # noqa: E731
-        return Pose(self.global_pos.copy(), c(self.local_rot), c(self.root_pos), c(self.local_pos))
 
 
 @dataclass

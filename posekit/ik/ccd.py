@@ -84,6 +84,6 @@ class CCDSolver(SolverBase):
         return self.result(pose_from(Rl, root, Pg, start.local_pos), res, it, global_rot=Rg)
 
 
-register("ccd", CCDSolver, kinds=CCDSolver.kinds, needs_start=True, replace=True,
+register("ccd", CCDSolver, kinds=CCDSolver.kinds, needs_start=True,
          description="Cyclic Coordinate Descent: turn each joint towards its target, sweep after sweep",
          lesson="notebooks/01_fabrik.ipynb")

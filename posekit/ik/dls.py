@@ -222,6 +222,6 @@ class DLSSolver(SolverBase):
         return self.result(pose_from(Rl, root, Pg, start.local_pos), res, it, global_rot=Rg)
 
 
-register("dls", DLSSolver, kinds=DLSSolver.kinds, needs_start=True, replace=True,
+register("dls", DLSSolver, kinds=DLSSolver.kinds, needs_start=True,
          description="Damped least squares on the Jacobian; position, rotation and look-at effectors",
          lesson="notebooks/01_fabrik.ipynb")

@@ -19,7 +19,7 @@ Units and axes: :mod:`posekit.conventions` (metres, Y up, facing +Z).
   of Victor & Meyer 2020, Sec. 3.4): :func:`posekit.ik.fix_bones.fix_bone_lengths`.
 
 FABRIK moves positions only: it honours position effectors (``kinds = ("position",)``) and returns a
-:class:`~posekit.ik.api.Pose` without rotations. Zero-length bones (CMU's ``LHipJoint``, ``LowerBack``,
+:class:`~posekit.records.Pose` without rotations. Zero-length bones (CMU's ``LHipJoint``, ``LowerBack``,
 ``Neck``, ``LeftShoulder``, ...) are rigid attachments: such a joint sits on its parent, and its
 children hang from the parent (:func:`collapse_zero_bones`).
 """
@@ -310,9 +310,9 @@ def reduced_effectors(skeleton, rep, joints) -> np.ndarray:
     return eff
 
 
-register("fabrik", FabrikSolver, kinds=FabrikSolver.kinds, needs_start=True, replace=True,
+register("fabrik", FabrikSolver, kinds=FabrikSolver.kinds, needs_start=True,
          description="Full-body FABRIK (Aristidou & Lasenby 2011) with near-extended chains straightened",
          lesson="notebooks/01_fabrik.ipynb")
-register("fabrik-constrained", FabrikSolver, kinds=FabrikSolver.kinds, needs_start=True, replace=True,
+register("fabrik-constrained", FabrikSolver, kinds=FabrikSolver.kinds, needs_start=True,
          description="FABRIK with joint limits: cones at shoulders, hips, elbows and knees; knees fold backwards",
          lesson="notebooks/01_fabrik.ipynb", constraints=True)

@@ -19,20 +19,31 @@ gradient (:class:`NumpyAEGAN`) for latent optimisation.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 import torch
 from torch import nn
 
-from ...data.dataset import NormStats
+from ... import paths
+from ...records import NormStats
 from ...data.metrics import body_joints
 from ...learn import load_checkpoint, save_checkpoint
 from .spl import NumpySPL, StructuredPrediction, dense_twin
 
-__all__ = ["KIND", "AEGANConfig", "body_parents", "Encoder", "Generator", "PoseDiscriminator", "LatentDiscriminator",
+__all__ = ["KIND", "WEIGHTS", "weights_path", "AEGANConfig", "body_parents", "Encoder", "Generator", "PoseDiscriminator", "LatentDiscriminator",
            "AEGAN", "NumpyAEGAN", "sample_prior"]
 
 KIND = "aegan"
+
+WEIGHTS = "aegan.pt"
+"""File name of the shipped weights in ``data_samples/weights/``."""
+
+
+def weights_path(folder=None) -> Path:
+    """The weights' file, :data:`WEIGHTS` in ``folder`` or the shipped weights' folder
+    (:func:`posekit.paths.weights_path`)."""
+    return paths.weights_path(WEIGHTS, folder)
 
 
 def body_parents(skeleton) -> np.ndarray:

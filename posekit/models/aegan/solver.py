@@ -28,8 +28,7 @@ from ...ik.registry import register
 from ...learn import load_cached, require_skeleton
 from . import fast as LK
 from ...data.pose_vectors import feature_columns, pose_vectors, poses_from_vectors, targets_in_root_frame
-from .networks import AEGAN
-from .train import weights_path
+from .networks import AEGAN, weights_path
 from .latent_opt import OPTIMIZERS, Problem, optimize
 
 __all__ = ["LatentOptSolver", "load_aegan", "RANGE_MARGIN", "SETTINGS"]
@@ -190,11 +189,11 @@ def _variant(**fixed):
 
 
 _LESSON = "notebooks/04_aegan_latent_space.ipynb"
-register("latent-opt", LatentOptSolver, lesson=_LESSON, data="bandai-mini", replace=True,
+register("latent-opt", LatentOptSolver, lesson=_LESSON, data="bandai-mini",
          description="L-BFGS on the AE-GAN's code (Victor & Meyer, JFIG 2020), bone lengths restored")
-register("latent-opt-raw", _variant(post="none"), lesson=_LESSON, data="bandai-mini", replace=True,
+register("latent-opt-raw", _variant(post="none"), lesson=_LESSON, data="bandai-mini",
          description="latent optimisation (L-BFGS), the generator's pose, no post-processing")
-register("latent-opt-adam", _variant(optimizer="adam"), lesson=_LESSON, data="bandai-mini", replace=True,
+register("latent-opt-adam", _variant(optimizer="adam"), lesson=_LESSON, data="bandai-mini",
          description="latent optimisation with Adam, bone lengths restored")
 register("latent-opt-adam-raw", _variant(optimizer="adam", post="none"), lesson=_LESSON, data="bandai-mini",
-         replace=True, description="latent optimisation with Adam, no post-processing")
+         description="latent optimisation with Adam, no post-processing")

@@ -35,14 +35,13 @@ import torch
 import torch.nn.functional as F
 
 from ...learn import limit_threads, merge_settings
+from ...learn.trainers import register_trainer
+from ...plugins import arg
 from ...data.pose_vectors import split_pose_data
-from ..pose_autoencoder.train import LICENCE
-from .networks import AEGAN, AEGANConfig, sample_prior
+from ...data.bandai_mini import LICENCE
+from .networks import AEGAN, AEGANConfig, sample_prior, weights_path
 
-__all__ = ["WEIGHTS", "DEFAULTS", "LOSSES", "train_aegan", "command", "weights_path", "recon_mm"]
-
-WEIGHTS = "aegan.pt"
-"""File name of the shipped weights in ``data_samples/weights/``."""
+__all__ = ["DEFAULTS", "LOSSES", "train_aegan", "command", "recon_mm"]
 
 DEFAULTS = dict(steps=9000, batch=128, lr_dx=1e-3, lr=2e-4, w_x=50.0, w_z=10.0, smooth=0.9, beta1=0.5,
                 log_every=250)
@@ -52,14 +51,6 @@ LOSSES = ("rec_x", "rec_z", "d_x", "d_z", "adv_x", "adv_z", "acc_x", "acc_z")
 """What the curves record, averaged over each ``log_every`` steps: the reconstruction losses (1), (2);
 the discriminators' losses (3), (4); the adversarial terms of (5); each discriminator's accuracy
 (real called real and fake called fake, at 0.5)."""
-
-
-def weights_path(folder=None):
-    from pathlib import Path
-
-    from ...paths import samples_dir
-
-    return Path(folder or samples_dir() / "weights") / WEIGHTS
 
 
 def command(seed: int = 0, data: str = "bandai-mini", structured: bool = True, **settings) -> str:
@@ -213,3 +204,49 @@ def train_aegan(motions=None, *, seed: int = 0, out=None, progress: bool = True,
                    data=data, licence=LICENCE if "bandai" in label.lower() else "see the data's licence",
                    extra={"report": report})
     return model, report
+
+
+def _cli(args) -> int:
+    """``posekit train aegan``."""
+    import sys
+    from pathlib import Path
+
+    from ...data.metrics import body_joints
+    from ...data.sources import open_dataset
+
+    settings = {k: getattr(args, k) for k in DEFAULTS if getattr(args, k) != DEFAULTS[k]}
+    motions = open_dataset(args.data, progress=sys.stderr.isatty())
+    out = Path(args.out) if args.out else None
+    config = AEGANConfig(len(body_joints(motions.skeleton)), structured=not args.dense)
+    model, report = train_aegan(motions, seed=args.seed, out=out, config=config, progress=sys.stderr.isatty(),
+                                **settings)
+    path = out or weights_path()
+    c = report["curves"]
+    print(f"trained {report['steps']} steps in {report['seconds']:.0f} s; held-out reconstruction "
+          f"{report['val_rec_mm']:.1f} mm; last interval: pose discriminator accuracy {c['acc_x'][-1]:.2f}, "
+          f"latent discriminator accuracy {c['acc_z'][-1]:.2f}")
+    print(f"wrote {path} ({path.stat().st_size / 1e3:.0f} kB)")
+    return 0
+
+
+_WHAT = (("steps", "training steps"), ("batch", "pose discriminator samples per step (encoder/"
+         "generator see 2x, the latent discriminator 3x)"),
+         ("lr_dx", "pose discriminator learning rate (Adam)"), ("lr", "the other networks' learning rate"),
+         ("w_x", "weight of the pose reconstruction loss"), ("w_z", "weight of the code reconstruction "
+         "loss"), ("smooth", "label of real samples (one-sided label smoothing)"),
+         ("beta1", "Adam beta1"), ("log_every", "steps per point of the loss curves"))
+
+register_trainer(
+    "aegan", _cli, help="AE-GAN pose latent space with SPL layers (lesson 04, Victor & Meyer, JFIG 2020)",
+    makes="data_samples/weights/aegan.pt (CC BY-NC 4.0, like the Bandai mini set it is trained on)",
+    what="AE-GAN pose latent space with structured prediction layers (Victor & Meyer, JFIG 2020)",
+    used_by="lesson 04 (04_aegan_latent_space.ipynb), the latent-opt solvers, posekit bench ik",
+    takes="about 9-11 minutes on one core (it trains on one thread: 8 min 35 s measured idle, 11 min "
+          "beside another training)",
+    args=[arg("--data", default="bandai-mini", help="training data: bandai-mini (default, its own split), "
+              "or any posekit data set name / path (split by clip)")]
+         + [arg("--" + key.replace("_", "-"), dest=key, type=type(DEFAULTS[key]), default=DEFAULTS[key],
+                help=f"{what} (default: {DEFAULTS[key]})") for key, what in _WHAT]
+         + [arg("--dense", action="store_true", help="dense layers of equal width instead of SPLs (a comparison)"),
+            arg("--seed", type=int, default=0, help="(default: 0)"),
+            arg("--out", default=None, help="checkpoint file (default data_samples/weights/aegan.pt)")])

@@ -27,18 +27,30 @@ single poses (:meth:`AESolvers.compile`), where torch's per-call overhead would 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 import torch
 from torch import nn
 
-from ...data.dataset import NormStats
+from ... import paths
+from ...records import NormStats
 from ...learn import load_checkpoint, save_checkpoint
 from ...data.pose_vectors import feature_columns
 
-__all__ = ["KIND", "GROUPS", "CHAIN", "chain_groups", "stages", "AEConfig", "PoseAutoencoder", "LatentSolver", "AESolvers", "NumpyAESolvers"]
+__all__ = ["KIND", "WEIGHTS", "weights_path", "GROUPS", "CHAIN", "chain_groups", "stages", "AEConfig", "PoseAutoencoder", "LatentSolver", "AESolvers", "NumpyAESolvers"]
 
 KIND = "ae_solvers"
+
+WEIGHTS = "ae_solvers.pt"
+"""File name of the shipped weights in ``data_samples/weights/``."""
+
+
+def weights_path(folder=None) -> Path:
+    """The weights' file, :data:`WEIGHTS` in ``folder`` or the shipped weights' folder
+    (:func:`posekit.paths.weights_path`)."""
+    return paths.weights_path(WEIGHTS, folder)
+
 
 GROUPS = {
     "hands": ("left_hand", "right_hand"),

@@ -3,7 +3,7 @@ decode, restore bone lengths.
 
 Introduced in ``notebooks/03_autoencoder_solvers.ipynb``; registered as ``"neural"`` and variants
 (below), so the benchmark, the viewer and the studio use it by name. This wrapper is the only place
-that knows both worlds: effectors and :class:`~posekit.ik.api.Pose` on one side, z-scored root-frame
+that knows both worlds: effectors and :class:`~posekit.records.Pose` on one side, z-scored root-frame
 vectors and latent codes (:mod:`posekit.models.pose_autoencoder.networks`) on the other.
 
 One solve
@@ -35,8 +35,7 @@ from ...ik.registry import make_solver, register
 from ...learn import load_cached, require_skeleton
 from . import fast as K
 from ...data.pose_vectors import feature_columns, pose_vectors, poses_from_vectors, targets_in_root_frame
-from .networks import GROUPS, AESolvers, chain_groups, stages
-from .train import weights_path
+from .networks import GROUPS, AESolvers, chain_groups, stages, weights_path
 
 __all__ = ["NeuralIKSolver", "POSTS", "load_model"]
 
@@ -285,13 +284,13 @@ def _variant(**fixed):
 
 
 _LESSON = "notebooks/03_autoencoder_solvers.ipynb"
-register("neural", NeuralIKSolver, lesson=_LESSON, data="bandai-mini", replace=True,
+register("neural", NeuralIKSolver, lesson=_LESSON, data="bandai-mini",
          description="pose autoencoder + latent solver (Victor & Meyer 2020), bone lengths restored")
-register("neural-raw", _variant(post="none"), lesson=_LESSON, data="bandai-mini", replace=True,
+register("neural-raw", _variant(post="none"), lesson=_LESSON, data="bandai-mini",
          description="the neural solver's decoded pose, no post-processing")
-register("neural-chained", _variant(chain=True), lesson=_LESSON, data="bandai-mini", replace=True,
+register("neural-chained", _variant(chain=True), lesson=_LESSON, data="bandai-mini",
          description="chained neural solvers hands -> feet -> head (Sec. 3.5), bone lengths restored")
-register("neural-chained-raw", _variant(chain=True, post="none"), lesson=_LESSON, data="bandai-mini", replace=True,
+register("neural-chained-raw", _variant(chain=True, post="none"), lesson=_LESSON, data="bandai-mini",
          description="chained neural solvers, no post-processing")
-register("neural-fabrik", _variant(post="fabrik"), lesson=_LESSON, data="bandai-mini", replace=True,
+register("neural-fabrik", _variant(post="fabrik"), lesson=_LESSON, data="bandai-mini",
          description="the neural pose as FABRIK's start: learned pose, effectors met by FABRIK")

@@ -27,6 +27,8 @@ import torch
 from ...data.cases import build_cases, case_split
 from ...data.metrics import NaturalnessIndex, score_poses
 from ...ik.api import EFFECTOR_SETS, effector_set
+from ...learn.trainers import register_trainer
+from ...plugins import arg
 from ...data.pose_vectors import pose_data
 from .data import training_pairs
 from .networks import GROUPS, AEConfig, AESolvers
@@ -144,3 +146,28 @@ def run_studies(motions=None, model: AESolvers | None = None, out=None, seed: in
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(json.dumps(result, indent=1) + "\n")
     return result
+
+
+def _cli(args) -> int:
+    """``posekit train ae-studies``."""
+    import sys
+
+    from ...learn.threads import single_thread
+
+    out = Path(args.out) if args.out else studies_path()
+    with single_thread():
+        res = run_studies(seed=args.seed, out=out, progress=sys.stderr.isatty(), ae_epochs=args.ae_epochs)
+    for r in res["autoencoder"]:
+        print(f"autoencoder d={r['latent']:<3} {r['decoder']:<7} held-out reconstruction {r['test_mm']:.1f} mm")
+    print(f"wrote {out} in {res['seconds']:.0f} s")
+    return 0
+
+
+register_trainer(
+    "ae-studies", _cli, help="lesson 03's studies on the shipped autoencoder (d, tied/untied, k, chaining)",
+    makes="data_samples/weights/ae_solvers_studies.json",
+    what="lesson 03's measured choices: autoencoder size and decoder, the loss weight k, chaining",
+    used_by="lesson 03 (03_autoencoder_solvers.ipynb)", takes="about 9 minutes on one core (9 min 22 s measured)",
+    args=[arg("--ae-epochs", type=int, default=40, help="epochs of each autoencoder of the size study (default: 40)"),
+          arg("--seed", type=int, default=0, help="(default: 0)"),
+          arg("--out", default=None, help="JSON file (default data_samples/weights/ae_solvers_studies.json)")])

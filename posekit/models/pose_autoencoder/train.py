@@ -24,33 +24,20 @@ import time
 import numpy as np
 import torch
 
+from ...data.bandai_mini import LICENCE
 from ...learn import fit, merge_settings
+from ...learn.trainers import register_trainer
+from ...plugins import arg
 from ...data.pose_vectors import split_pose_data
 from .data import training_pairs
-from .networks import CHAIN, GROUPS, AEConfig, AESolvers
+from .networks import CHAIN, GROUPS, AEConfig, AESolvers, weights_path
 
-__all__ = ["LICENCE", "WEIGHTS", "DEFAULTS", "solver_loss", "train_autoencoder", "train_solver", "train_chained",
-           "train_ae_solvers", "command", "weights_path"]
-
-WEIGHTS = "ae_solvers.pt"
-"""File name of the shipped weights in ``data_samples/weights/``."""
-
-LICENCE = ("CC BY-NC 4.0 (non-commercial): trained on the Bandai mini set (data_samples/bandai_mini/), "
-           "frames subsampled from the Bandai Namco Research Motion Datasets 1 and 2, (c) Bandai Namco "
-           "Research Inc., CC BY-NC 4.0 (Kobayashi et al. 2023, arXiv 2306.08861).")
-"""Licence recorded in weights trained on the Bandai mini set."""
+__all__ = ["DEFAULTS", "solver_loss", "train_autoencoder", "train_solver", "train_chained",
+           "train_ae_solvers", "command"]
 
 DEFAULTS = dict(ae_epochs=80, ae_lr=1e-3, solver_epochs=12, solver_lr=1e-3, chain_epochs=6, pairs=300_000,
                 batch=256, k=0.01)
 """Training settings of the shipped weights (``posekit train ae-solvers``)."""
-
-
-def weights_path(folder=None):
-    from pathlib import Path
-
-    from ...paths import samples_dir
-
-    return Path(folder or samples_dir() / "weights") / WEIGHTS
 
 
 def command(seed: int = 0, latent: int = 64, tied: bool = False, data: str = "bandai-mini", **settings) -> str:
@@ -208,3 +195,52 @@ def train_ae_solvers(motions=None, *, seed: int = 0, out=None, groups=tuple(GROU
                    data=data, licence=LICENCE if "bandai" in label.lower() else "see the data's licence",
                    extra={"report": report})
     return model, report
+
+
+def _cli(args) -> int:
+    """``posekit train ae-solvers``."""
+    import sys
+    from pathlib import Path
+
+    from ...data.sources import open_dataset
+    from ...learn.threads import single_thread
+
+    settings = {k: getattr(args, k) for k in DEFAULTS if getattr(args, k) != DEFAULTS[k]}
+    motions = open_dataset(args.data, progress=sys.stderr.isatty())
+    out = Path(args.out) if args.out else None
+    with single_thread():  # these small layers gain little from a second thread, and one thread repeats exactly
+        model, report = train_ae_solvers(motions, seed=args.seed, out=out, tied=args.tied, latent=args.latent,
+                                         progress=sys.stderr.isatty(), **settings)
+    path = out or weights_path()
+    sec = report["seconds"]
+    print(f"trained in {sec['total']:.0f} s (" + ", ".join(f"{k} {v:.0f} s" for k, v in sec.items() if k != "total")
+          + ")")
+    print(f"autoencoder validation MSE {report['autoencoder']['val'][-1]:.5f} (z-scored units); solvers: "
+          + ", ".join(f"{g} {c['val'][-1]:.5f}" for g, c in report["solvers"].items()))
+    print(f"wrote {path} ({path.stat().st_size / 1e3:.0f} kB)")
+    return 0
+
+
+_WHAT = (("ae_epochs", "autoencoder epochs"), ("ae_lr", "autoencoder learning rate (Adam)"),
+         ("solver_epochs", "epochs per solver"), ("solver_lr", "solver learning rate (Adam)"),
+         ("chain_epochs", "epochs of each chaining-aware fine-tuning"),
+         ("pairs", "training (start, target) pairs, at most 1 s apart"), ("batch", "mini-batch size"),
+         ("k", "weight of the non-target joints in the solver loss, Eq. (1)"))
+
+register_trainer(
+    "ae-solvers", _cli, help="pose autoencoder + latent-space solvers (lesson 03, Victor & Meyer 2020)",
+    makes="data_samples/weights/ae_solvers.pt (CC BY-NC 4.0, like the Bandai mini set it is trained on)",
+    what="pose autoencoder + latent-space solvers hands, feet, head, all five, chaining-aware copies "
+         "(Victor & Meyer 2020)",
+    used_by="lesson 03 (03_autoencoder_solvers.ipynb), the neural solvers, posekit bench ik",
+    takes="about 7 minutes on one core (it trains on one thread: 7 min 13 s measured)",
+    args=[arg("--data", default="bandai-mini", help="training data: bandai-mini (default, its own split), "
+              "or any posekit data set name / path (split by clip)")]
+         + [arg("--" + key.replace("_", "-"), dest=key, type=type(DEFAULTS[key]), default=DEFAULTS[key],
+                help=f"{what} (default: {DEFAULTS[key]})") for key, what in _WHAT]
+         + [arg("--latent", type=int, default=64, help="size d of the latent code (default: 64)"),
+            arg("--tied", action="store_true", help="the decoder reuses the transposed encoder weights, no biases, "
+                "as in the authors' code (default: untied, its own weights and biases: measured better in "
+                "lesson 03)"),
+            arg("--seed", type=int, default=0, help="(default: 0)"),
+            arg("--out", default=None, help="checkpoint file (default data_samples/weights/ae_solvers.pt)")])

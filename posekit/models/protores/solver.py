@@ -31,9 +31,8 @@ from ...ik.registry import register
 from ...kinematics import fk
 from ...learn import load_cached, require_skeleton
 from ...rotations import matrix_to_quat, matrix_to_sixd
-from .networks import ARCHS, KIND_IDS, SIGMA_M, PosingNet, sigma_to_tolerance
+from .networks import ARCHS, KIND_IDS, SIGMA_M, PosingNet, sigma_to_tolerance, weights_path
 from .fast import NumpyPosingNet
-from .train import weights_path
 
 __all__ = ["ProtoResSolver", "load_protores", "skeleton_span", "MAX_EFFECTORS"]
 
@@ -235,7 +234,7 @@ def _variant(arch):
 
 
 _LESSON = "notebooks/05_protores.ipynb"
-_COMMON = dict(kinds=KINDS, needs_start=False, lesson=_LESSON, data="bandai-mini", replace=True)
+_COMMON = dict(kinds=KINDS, needs_start=False, lesson=_LESSON, data="bandai-mini")
 register("protores", _variant("protores"), **_COMMON,
          description="ProtoRes (Oreshkin et al. 2021): any effectors -> a full pose in one pass")
 register("protores-masked-fcr", _variant("masked-fcr"), **_COMMON,

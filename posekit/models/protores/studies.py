@@ -22,6 +22,9 @@ from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
+from ...learn.trainers import register_trainer
+from ...plugins import arg
+
 __all__ = ["ABLATIONS", "WIDTHS", "STEPS", "run_studies", "studies_path", "score_net"]
 
 ABLATIONS = {"no GPD": {"gpd": False}, "fixed weights": {"weighted": False}}
@@ -108,3 +111,29 @@ def run_studies(seed: int = 0, out=None, workers: int = 2, progress: bool = True
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(json.dumps(res, indent=1) + "\n")
     return res
+
+
+def _cli(args) -> int:
+    """``posekit train protores-studies``."""
+    import sys
+    from pathlib import Path
+
+    out = Path(args.out) if args.out else studies_path()
+    res = run_studies(seed=args.seed, out=out, workers=args.workers, progress=sys.stderr.isatty())
+    for r in res["rows"] + res["width"]:
+        print(f"{r['method']:<28} random L_ikd-L2 {r['random_ikd_l2_e3']:.3f}e-3 m^2, "
+              f"L_loc-geo {r['random_loc_geo']:.3f}; "
+              f"5-point {r['5point_ikd_l2_e3']:.3f}e-3, {r['5point_loc_geo']:.3f}; {r['train_min']} min")
+    print(f"wrote {out} in {res['seconds']} s")
+    return 0
+
+
+register_trainer(
+    "protores-studies", _cli, help="lesson 05's ablations (no GPD, fixed weights) and width study",
+    makes="data_samples/results/protores_ablation.json",
+    what="lesson 05's Table 2 ablations (no GPD, fixed weights) and the width study",
+    used_by="lesson 05 (05_protores.ipynb), posekit bench protores",
+    takes="about 15 minutes on 2 cores (five 2,000-step runs, two side by side)",
+    args=[arg("--workers", type=int, default=2, help="runs side by side, one thread each (default: 2)"),
+          arg("--seed", type=int, default=0, help="(default: 0)"),
+          arg("--out", default=None, help="JSON file (default data_samples/results/protores_ablation.json)")])

@@ -35,11 +35,13 @@ import numpy as np
 import torch
 
 from ...learn import limit_threads, merge_settings
-from ..pose_autoencoder.train import LICENCE
-from .networks import ARCHS, PosingNet, ProtoResConfig
+from ...learn.trainers import register_trainer
+from ...plugins import arg
+from ...data.bandai_mini import LICENCE
+from .networks import ARCHS, PosingNet, ProtoResConfig, weights_path
 from .data import PoseBank, draw_batch
 
-__all__ = ["DEFAULTS", "STEPS", "WEIGHTS", "LOSSES", "geodesic", "losses", "train_protores", "weights_path",
+__all__ = ["DEFAULTS", "STEPS", "LOSSES", "geodesic", "losses", "train_protores", 
            "validation_batches", "evaluate_batches", "command"]
 
 DEFAULTS = dict(steps=None, batch=256, lr=5e-4, warmup=200, w_pos=100.0, w_max=1000.0, n_min=3, n_max=16,
@@ -50,20 +52,7 @@ STEPS = {"protores": 8000, "masked-fcr": 8000, "transformer": 1500}
 """Steps per encoder at the shipped sizes: ProtoRes and Masked-FCR the same number, the Transformer
 (six times slower per step) about the same wall-clock time as ProtoRes, 11-12 minutes of one core."""
 
-WEIGHTS = {"protores": "protores.pt", "masked-fcr": "protores_masked_fcr.pt", "transformer": "protores_transformer.pt"}
-"""File names of the shipped weights in ``data_samples/weights/``."""
-
 LOSSES = ("total", "gpd_l2", "ikd_l2", "loc_geo", "glob_geo", "look_at")
-
-
-def weights_path(arch: str = "protores", folder=None):
-    from pathlib import Path
-
-    from ...paths import samples_dir
-
-    if arch not in WEIGHTS:
-        raise ValueError(f"arch must be one of {', '.join(WEIGHTS)}, got {arch!r}")
-    return Path(folder or samples_dir() / "weights") / WEIGHTS[arch]
 
 
 def command(arch: str = "protores", seed: int = 0, config: dict | None = None, **settings) -> str:
@@ -268,3 +257,53 @@ def train_protores(motions=None, *, arch: str = "protores", seed: int = 0, out=N
                  command=command(arch, seed, cfg.to_dict(), **settings), seed=seed, data=data,
                  licence=LICENCE if "bandai" in label.lower() else "see the data's licence", extra={"report": report})
     return net, report
+
+
+def _cli(args) -> int:
+    """``posekit train protores``."""
+    import sys
+    from pathlib import Path
+
+    from ...data.bandai_mini import load_bandai_mini
+    from ...data.metrics import body_joints
+
+    settings = {k: getattr(args, k) for k in DEFAULTS if hasattr(args, k) and getattr(args, k) != DEFAULTS[k]}
+    if args.fixed_weights:
+        settings["weighted"] = False
+    motions = load_bandai_mini()
+    config = ProtoResConfig(len(body_joints(motions.skeleton)), arch=args.arch, width=args.width, gpd=not args.no_gpd)
+    out = Path(args.out) if args.out else None
+    net, report = train_protores(motions, arch=args.arch, seed=args.seed, out=out, config=config,
+                                 progress=sys.stderr.isatty(), **settings)
+    v = report["val"]
+    print(f"trained {args.arch} ({report['parameters']} parameters) {report['steps']} steps in "
+          f"{report['seconds']:.0f} s ({report['seconds_per_step'] * 1000:.0f} ms/step); validation: L_ikd-L2 "
+          f"{v['ikd_l2'] * 1000:.2f}e-3 m^2, L_loc-geo {v['loc_geo']:.3f} rad, MPJPE {v['mpjpe_mm']:.1f} mm")
+    path = out or weights_path(args.arch)
+    print(f"wrote {path} ({path.stat().st_size / 1e3:.0f} kB)")
+    return 0
+
+
+_WHAT = (("batch", "poses per step"), ("lr", "learning rate (Adam)"), ("warmup", "warm-up steps"),
+         ("w_pos", "W_pos, weight of the two position losses"), ("w_max", "W_M, largest effector weight"),
+         ("log_every", "steps per point of the curves"))
+
+register_trainer(
+    "protores", _cli, help="ProtoRes or one of its baselines: effectors -> pose (lesson 05, Oreshkin et al. 2021)",
+    makes="data_samples/weights/protores.pt, protores_masked_fcr.pt, protores_transformer.pt (CC BY-NC 4.0, "
+          "like the Bandai mini set they are trained on); one per --arch",
+    what="ProtoRes and its Masked-FCR and Transformer baselines (Oreshkin et al. 2021)",
+    used_by="lesson 05 (05_protores.ipynb), the protores solvers, posekit bench protores",
+    takes="about 11-12 minutes each on one core (it trains on one thread)",
+    args=[arg("--arch", choices=ARCHS, default="protores",
+              help="encoder: protores (default), masked-fcr or transformer (the paper's baselines)"),
+          arg("--steps", type=int, default=None,
+              help="training steps (default: " + ", ".join(f"{k} {v}" for k, v in STEPS.items()) + ")")]
+         + [arg("--" + key.replace("_", "-"), dest=key, type=type(DEFAULTS[key]), default=DEFAULTS[key],
+                help=f"{what} (default: {DEFAULTS[key]})") for key, what in _WHAT]
+         + [arg("--width", type=int, default=128, help="units per layer (default: 128; the paper: 1024)"),
+            arg("--no-gpd", action="store_true", help="no global position decoder (Table 2's ablation)"),
+            arg("--fixed-weights", action="store_true",
+                help="every joint weighted 1 instead of the randomized min(W_M, 1/sigma) (Table 2's ablation)"),
+            arg("--seed", type=int, default=0, help="(default: 0)"),
+            arg("--out", default=None, help="checkpoint file (default data_samples/weights/protores*.pt)")])
