@@ -4,8 +4,9 @@
     A BVH file, a folder of them, a ``.npz`` or a dataset name (``sample``, ``bandai1``, ``bandai2``):
     joints, parents, frame count, frame time, clip count.
 ``posekit data convert IN.bvh OUT.npz [--scale S]``
-    Writes ``names`` (J), ``parents`` (J), ``positions`` (F, J, 3: global joint positions in file
-    units times S) and ``frame_time``.
+    Writes ``names`` (J), ``parents`` (J), ``positions`` (F, J, 3: global joint positions in metres, like
+    every loader: the file's unit detected from the skeleton's height unless ``--scale`` gives metres per
+    file unit) and ``frame_time``.
 ``posekit data build-sample [--pybullet-data DIR] [--out FILE]``
     Rebuilds ``data_samples/deepmimic_humanoid.npz`` from pybullet's wheel (extra ``build-data``).
 ``posekit bench fk [--poses N] [--repeats R] [--json]``
@@ -30,7 +31,8 @@
 ``posekit exercises list|solutions ...`` and ``posekit course slides|build|mark ...``
     The instructor kit (:mod:`posekit.course.commands`): solutions, slides, the course page.
 
-Errors in input files print ``file:line: message`` and exit with status 2.
+Errors in input files print ``file:line: message`` and exit with status 2; warnings print as one line,
+``posekit: warning: message``.
 """
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -96,8 +99,8 @@ def _inspect(args) -> int:
 def _convert(args) -> int:
     from .io.bvh import read_bvh
 
-    m = read_bvh(args.input)
-    positions = m.global_positions() * args.scale
+    m = read_bvh(args.input, scale=args.scale)  # metres, like every loader: the unit detected unless --scale
+    positions = m.global_positions()
     out = Path(args.output)
     np.savez_compressed(
         out,
@@ -106,7 +109,8 @@ def _convert(args) -> int:
         positions=positions,
         frame_time=np.array(m.frame_time),
     )
-    print(f"wrote {out}: {positions.shape[0]} frames, {positions.shape[1]} joints, positions x {args.scale:g}")
+    print(f"wrote {out}: {positions.shape[0]} frames, {positions.shape[1]} joints, positions in metres "
+          f"({m.units.describe()})")
     return 0
 
 
@@ -126,7 +130,7 @@ def _build_sample(args) -> int:
     from .paths import samples_dir
 
     if getattr(args, "which", "deepmimic") == "bandai":
-        from .data.bandai_mini import build_bandai_mini
+        from .data.bandai_mini_build import build_bandai_mini
 
         try:
             r = build_bandai_mini(args.data_dir, out=args.out, workers=args.workers, progress=sys.stderr.isatty())
@@ -206,7 +210,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = dsub.add_parser("convert", help="BVH -> .npz of global joint positions")
     p.add_argument("input")
     p.add_argument("output")
-    p.add_argument("--scale", type=float, default=1.0, help="multiply positions by S (0.01: cm -> m)")
+    p.add_argument("--scale", type=float, default=None,
+                   help="file units to metres (0.01: cm -> m; default: detected from the skeleton's height)")
     p.set_defaults(fn=_convert)
     p = dsub.add_parser("build-sample", help="rebuild data_samples/deepmimic_humanoid.npz from pybullet "
                         "(default) or data_samples/bandai_mini/bandai_mini.npz from the Bandai Namco datasets")
@@ -255,13 +260,21 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _one_line(message, category, filename, lineno, line=None) -> str:
+    """A warning as one line a person reads, without the Python source line beneath it."""
+    return f"posekit: warning: {message}\n"
+
+
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
+    shown, warnings.formatwarning = warnings.formatwarning, _one_line  # how a warning is printed, not whether
     try:
         return args.fn(args)
     except (ValueError, FileNotFoundError, OSError) as e:
         print(f"posekit: error: {e}", file=sys.stderr)
         return 2
+    finally:
+        warnings.formatwarning = shown
 
 
 if __name__ == "__main__":

@@ -10,7 +10,7 @@ method is scored by :func:`scores` on the same cases (:mod:`posekit.bench.effect
   body joints, radians;
 * ``mpjpe_mm`` — mean per-joint distance, millimetres (the same error as ``ikd_l2``, easier to picture);
 * effector errors per kind (medians: position mm, rotation and look-at degrees), by the one definition
-  every solver shares (:func:`posekit.ik.effectors.errors_into`).
+  every solver shares (:func:`posekit.ik.effector_errors.errors_into`).
 
 Classical methods (the paper's FinalIK stand-ins) start from the rest pose of :func:`posekit.data.cases.rest_start`
 placed by the rigid motion (vertical turn + translation) that best fits its joints onto the position
@@ -24,7 +24,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..data.metrics import body_joints
-from ..ik.effectors import errors_of, resolve_effectors
+from ..ik.effector_errors import errors_of
+from ..ik.effectors import resolve_effectors
 from ..rotations import geodesic_distance, quat_to_matrix
 from ..models.protores.networks import KIND_IDS, sigma_to_tolerance
 
@@ -33,7 +34,7 @@ __all__ = ["scores", "run_learned", "run_classical", "rest_starts", "effector_er
 
 def effector_error_table(bench, global_pos, global_rot) -> np.ndarray:
     """Every effector's error, shape (C, K) (NaN past each case's ``n``): metres or radians by kind, by the
-    solvers' own definition (:func:`posekit.ik.effectors.errors_of`)."""
+    solvers' own definition (:func:`posekit.ik.effector_errors.errors_of`)."""
     C, K = bench.joint.shape
     out = np.full((C, K), np.nan)
     for i in range(C):

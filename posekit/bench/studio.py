@@ -16,7 +16,7 @@ Introduced in ``notebooks/06_posing_studio.ipynb``. One run:
    whether the kernel process survived.
 
 Goals (issue: the posing studio): p95 <= 100 ms with FABRIK, <= 150 ms with the learned solvers. These are
-measured and printed, never asserted: ``tests/test_studio_browser.py`` asserts only that 1,000 rapid
+measured and printed, never asserted: ``tests/viz/test_studio_browser.py`` asserts only that 1,000 rapid
 updates all arrive, the kernel survives and its memory does not grow.
 """
 

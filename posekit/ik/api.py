@@ -17,7 +17,7 @@ The contract (version 2)
   B poses (or None), ``effectors`` one effector list shared by every problem or B lists; result ``b``
   equals ``solve(starts[b], effectors[b])`` (FABRIK solves a batch vectorised, to rounding).
 * ``IKResult.effector_error`` and ``IKResult.converged`` always come from
-  :func:`~posekit.ik.effectors.effector_errors`, the one definition of every kind's error.
+  :func:`~posekit.ik.effector_errors.effector_errors`, the one definition of every kind's error.
 
 :class:`SolverBase` holds the shared checks and the default batch loop; a solver subclasses it and
 writes ``_solve(start, resolved) -> IKResult``.
@@ -34,8 +34,8 @@ import numpy as np
 
 from ..records import Pose
 from ..skeleton import Skeleton
-from .effectors import (DEFAULT_TOLERANCE, KINDS, Effector, ResolvedEffectors, check_look_at, effector_errors,
-                        effector_errors_batch, errors_of, resolve_effectors)
+from .effector_errors import effector_errors, effector_errors_batch, errors_of
+from .effectors import DEFAULT_TOLERANCE, KINDS, Effector, ResolvedEffectors, check_look_at, resolve_effectors
 
 __all__ = ["Effector", "Pose", "IKResult", "Solver", "SolverBase", "EFFECTOR_SETS", "effector_set",
            "resolve_effectors", "effector_errors", "effector_errors_batch", "KINDS", "DEFAULT_TOLERANCE",
@@ -60,7 +60,7 @@ class IKResult:
         Every effector within its tolerance.
     iterations : int
     effector_error : ndarray, shape (K,)
-        Each effector's error (:func:`~posekit.ik.effectors.effector_errors`): metres for position
+        Each effector's error (:func:`~posekit.ik.effector_errors.effector_errors`): metres for position
         effectors, radians for rotation and look-at effectors.
     info : dict
         Solver-specific extras.
@@ -79,7 +79,7 @@ class IKResult:
 @runtime_checkable
 class Solver(Protocol):
     """Anything that poses a skeleton to meet effectors (the contract in the module docstring).
-    ``isinstance(x, Solver)`` only checks attribute names; ``tests/test_ik.py`` checks behaviour."""
+    ``isinstance(x, Solver)`` only checks attribute names; ``tests/ik/test_ik.py`` checks behaviour."""
 
     name: str
     skeleton: Skeleton

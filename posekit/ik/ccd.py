@@ -21,7 +21,7 @@ from .._jit import njit
 from ..skeleton import Skeleton
 from ._rigid import fk_one, pose_from, rotatable, rotate_joint, rotation_between, rotations_of
 from .api import IKResult, SolverBase, base_index
-from .effectors import errors_into
+from .effector_errors import errors_into
 from .registry import register
 
 __all__ = ["CCDSolver"]

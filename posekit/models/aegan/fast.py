@@ -4,7 +4,7 @@ Introduced in ``notebooks/04_aegan_latent_space.ipynb``. One iteration on one po
 matrix-vector products through the generator and back; numpy's per-call overhead would cost several
 times that arithmetic, so a single solve runs in these numba kernels: the generator's forward and
 backward pass (:class:`posekit.models.aegan.networks.NumpyAEGAN`, parent-only SPL) and the same optimisers —
-projected L-BFGS and Adam with the same stopping rule — for one problem. ``tests/test_aegan.py``
+projected L-BFGS and Adam with the same stopping rule — for one problem. ``tests/models/test_aegan.py``
 checks them against the batched numpy path.
 
 The SPL is flattened joint by joint: ``order`` (joints by depth), ``par`` (parent or -1), ``A`` (J, 3, h)

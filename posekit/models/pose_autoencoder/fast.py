@@ -5,7 +5,7 @@ small matrix-vector products; numpy's and torch's per-call overhead would cost s
 arithmetic, so one solve runs in these numba kernels instead. They compute exactly what the batched
 numpy path computes (:func:`posekit.data.pose_vectors.pose_vectors`, the networks of
 :class:`posekit.models.pose_autoencoder.networks.NumpyAESolvers`, :func:`posekit.data.pose_vectors.poses_from_vectors`);
-``tests/test_ae_solvers.py`` checks that they agree.
+``tests/models/test_pose_autoencoder.py`` checks that they agree.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The posing studio's Python side (the Voila app in a browser: tests/test_studio_browser.py): key frames
+"""The posing studio's Python side (the Voila app in a browser: tests/viz/test_studio_browser.py): key frames
 and in-betweens, BVH export of every kind of pose, setup files, undo/redo and bad input."""
 
 from __future__ import annotations

@@ -21,11 +21,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.browser_helpers import foreground as _foreground, pixels as _pixels, wait_for as _wait_for
+from tests.viz.browser_helpers import foreground as _foreground, pixels as _pixels, wait_for as _wait_for
 
 pytestmark = pytest.mark.browser
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 NOTEBOOK = "00_skeletons_and_poses.ipynb"
 PANEL_NOTEBOOK = "01_fabrik.ipynb"
 NEURAL_NOTEBOOK = "03_autoencoder_solvers.ipynb"

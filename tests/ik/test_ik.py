@@ -12,7 +12,7 @@ from posekit.ik import (DEFAULT_TOLERANCE, EFFECTOR_SETS, KINDS, Effector, Fabri
                         SolverBase, default_constraints, effector_errors, effector_errors_batch, effector_set,
                         fabrik_chain, fix_bone_lengths, make_solver, register, solver_info, solver_names)
 from posekit.ik import registry
-from posekit.ik.fabrik import collapse_zero_bones
+from posekit.ik.fabrik_tree import collapse_zero_bones
 from posekit.ik.single_chain import straighten_chain
 from posekit.ik.fabrik_batched import fabrik_batched
 from posekit.ik.two_bone import two_bone_ik
@@ -38,7 +38,7 @@ def _cases_for(data, sample):
 CLASSICAL = [n for n in solver_names() if not solver_info(n).data]
 """Solvers with no trained weights: the properties of classical IK (exact bones, pelvis in place,
 convergence on reachable targets, no iteration at the solution) are checked on these; the learned
-solvers' own properties are tested with their lesson (tests/test_ae_solvers.py)."""
+solvers' own properties are tested with their lesson (tests/models/test_pose_autoencoder.py)."""
 
 
 @pytest.fixture
@@ -437,8 +437,12 @@ class RestPose(SolverBase):
 
 
 def test_a_registered_solver_is_everywhere_and_may_need_no_start(skel, cases, monkeypatch):
-    monkeypatch.setattr(registry, "_REGISTRY", dict(registry._REGISTRY))  # undone after the test
+    monkeypatch.setattr(registry._REGISTRY, "_entries", dict(registry._REGISTRY._entries))  # undone after the test
     register("rest", RestPose, description="the rest pose", lesson="tests")
+    with pytest.raises(ValueError, match="a solver named 'rest' is already registered; pass replace=True"):
+        register("rest", RestPose)
+    with pytest.raises(ValueError, match="a solver named 'fabrik' is already registered"):  # built-ins too
+        register("fabrik", RestPose)
     assert "rest" in solver_names() and solver_info("rest").kinds == ("position", "look_at")
     assert not solver_info("rest").needs_start
     solver = make_solver("rest", skel)

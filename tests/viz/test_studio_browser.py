@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tests.browser_helpers import BACKGROUND, pixels as _pixels, wait_for
+from tests.viz.browser_helpers import BACKGROUND, pixels as _pixels, wait_for
 from posekit.bench.studio import (CHROMIUM, choose_solvers, launch_chromium, open_studio, rapid_updates,
                                   serve_voila, update_number)
 

@@ -1,4 +1,4 @@
-"""The widgets' Python side (the browser side is tests/test_browser.py)."""
+"""The widgets' Python side (the browser side is tests/viz/test_browser.py)."""
 
 import numpy as np
 import pytest

@@ -136,7 +136,7 @@ def test_bandai_dataset_2_subset(shared_data):
 
 # ------------------------------------------------------------------ BVH folders in the wild
 def _folder(tmp_path, name, n, rig=None, frames=30):
-    from .test_rigs import mixamo_rig, write_rig
+    from ..io.test_rigs import mixamo_rig, write_rig
 
     folder = tmp_path / name
     folder.mkdir()
@@ -147,7 +147,7 @@ def _folder(tmp_path, name, n, rig=None, frames=30):
 
 
 def test_folder_with_other_hierarchy_says_what_differs(tmp_path):
-    from .test_rigs import mixamo_rig, write_rig
+    from ..io.test_rigs import mixamo_rig, write_rig
 
     folder = _folder(tmp_path, "mixed", 1)
     rename = lambda n: n and n.replace("LeftToeBase", "LeftToe")
