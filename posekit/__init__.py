@@ -4,10 +4,13 @@ Layers point down — a module imports only from its own layer or the ones above
 (the README's "The library" section draws the same table):
 
 1. core: :mod:`posekit.conventions`, :mod:`posekit.rotations`, :mod:`posekit.skeleton`,
-   :mod:`posekit.kinematics`, :mod:`posekit.transforms`
-2. data: :mod:`posekit.io` (BVH, DeepMimic conversion), :mod:`posekit.data`, :mod:`posekit.paths`
+   :mod:`posekit.kinematics`, :mod:`posekit.transforms`, :mod:`posekit.records` (``Pose``, ``NormStats``),
+   :mod:`posekit.paths`, :mod:`posekit.catalogue` (the built-in plug-in modules, by name) and
+   :mod:`posekit.plugins` (the registry they fill)
+2. data: :mod:`posekit.io` (BVH, rig and unit recognition, DeepMimic conversion), :mod:`posekit.data`
 3. solvers: :mod:`posekit.ik` (lesson 01), the inverse rig mapping (lesson 02), :mod:`posekit.learn`
-   (the torch layer the learned models share) — neural models are added lesson by lesson
+   (the torch layer the learned models share, the trainer registry) and :mod:`posekit.models`, one
+   folder per paper (lessons 03-05)
 4. top: :mod:`posekit.viz` (3D widget, matplotlib), :mod:`posekit.bench`, :mod:`posekit.cli`,
    :mod:`posekit.exercises`
 

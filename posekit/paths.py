@@ -2,6 +2,7 @@
 
 * :func:`samples_dir` — the embedded default data and shipped weights, ``data_samples/`` at the top
   of the posekit checkout (override with ``$POSEKIT_SAMPLES_DIR``).
+* :func:`weights_path` — where a weight file lives (``data_samples/weights/`` unless a folder is given).
 * :func:`shared_data_dir` — larger real mocap read by path, never copied: ``$POSEKIT_DATA_DIR``
   (the Makefile points it at ``../shared/data`` when that folder exists).
 * :func:`notebooks_dir` — the lessons, ``notebooks/`` of the checkout.
@@ -14,7 +15,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-__all__ = ["samples_dir", "shared_data_dir", "require_shared_data", "notebooks_dir", "course_assets_dir"]
+__all__ = ["samples_dir", "weights_path", "shared_data_dir", "require_shared_data", "notebooks_dir", "course_assets_dir"]
 
 _CHECKOUT = Path(__file__).resolve().parent.parent
 
@@ -23,6 +24,14 @@ def samples_dir() -> Path:
     """Folder holding the shipped samples and weights."""
     env = os.environ.get("POSEKIT_SAMPLES_DIR")
     return Path(env) if env else _CHECKOUT / "data_samples"
+
+
+def weights_path(file: str, folder=None) -> Path:
+    """Where the weight file ``file`` lives: in ``folder`` if given, else in ``weights/`` of :func:`samples_dir`.
+
+    Every learned model's shipped weights are found through this one function (each model names its
+    file: ``WEIGHTS`` beside its networks)."""
+    return Path(folder or samples_dir() / "weights") / file
 
 
 def shared_data_dir(data_dir=None) -> Path | None:

@@ -28,6 +28,14 @@ def shared_data():
     return d
 
 
+@pytest.fixture(scope="session")
+def mini():
+    """The Bandai mini set (shipped in data_samples/, its own train/val/test split)."""
+    from posekit.data.bandai_mini import load_bandai_mini
+
+    return load_bandai_mini()
+
+
 @pytest.fixture
 def rng():
     return np.random.default_rng(0)

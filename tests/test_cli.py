@@ -7,8 +7,8 @@ import pytest
 
 from posekit.cli import main
 
-from .test_bench import ensure_classical_solvers
-from .test_bvh import SIMPLE
+from .bench.test_bench import ensure_classical_solvers
+from .io.test_bvh import SIMPLE
 
 
 def run(*args):
@@ -37,6 +37,38 @@ def test_convert_writes_positions(tmp_path, capsys):
         assert z["positions"].shape == (2, 4, 3) and list(z["parents"]) == [-1, 0, 1, 0]
         np.testing.assert_allclose(z["positions"][0, 3], [0.11, 0.9, 0])
         assert float(z["frame_time"]) == pytest.approx(0.0333333)
+
+
+def test_convert_writes_metres_like_every_loader(tmp_path, capsys):
+    """A centimetre file comes out in metres, as `data inspect` and the loaders read it (issue 21)."""
+    from posekit.data import open_dataset
+
+    from .io.test_rigs import mixamo_rig, write_rig
+
+    src = write_rig(tmp_path / "cm.bvh", mixamo_rig(), np.random.default_rng(0))
+    with pytest.warns(UserWarning, match="lengths look like cm.*converted to metres"):
+        assert main(["data", "convert", str(src), str(tmp_path / "o.npz")]) == 0
+    assert "positions in metres (cm" in capsys.readouterr().out
+    with pytest.warns(UserWarning):
+        loaded = open_dataset(src)
+    with np.load(tmp_path / "o.npz") as z:
+        np.testing.assert_allclose(z["positions"], loaded.global_pos, atol=1e-9)
+        assert 1.0 < z["positions"][..., 1].max() - z["positions"][..., 1].min() < 2.5  # a person, not 146 "m"
+    assert main(["data", "convert", str(src), str(tmp_path / "k.npz"), "--scale", "1"]) == 0  # keep the numbers
+    with np.load(tmp_path / "k.npz") as z:
+        np.testing.assert_allclose(z["positions"], loaded.global_pos * 100, atol=1e-6)
+
+
+def test_warnings_print_as_one_line_without_source(tmp_path):
+    from .io.test_rigs import mixamo_rig, write_rig
+
+    src = write_rig(tmp_path / "cm.bvh", mixamo_rig(), np.random.default_rng(0))
+    for args in (("data", "inspect", str(src)), ("data", "convert", str(src), str(tmp_path / "o.npz"))):
+        r = run(*args)
+        assert r.returncode == 0
+        lines = r.stderr.splitlines()
+        assert len(lines) == 1 and lines[0].startswith(f"posekit: warning: {src}: lengths look like cm")
+        assert "warnings.warn" not in r.stderr and "UserWarning" not in r.stderr
 
 
 def test_malformed_file_exits_nonzero_with_file_and_line(tmp_path):

@@ -77,9 +77,11 @@ def test_local_pos_overrides_offsets(arm):
     assert pos[0, 2, 0] == pytest.approx(0.55) and pos[1, 2, 0] == pytest.approx(0.8)
 
 
-def test_bone_lengths_are_preserved_by_fk(sample):
-    lengths = bone_lengths_of(sample.skeleton, sample.global_pos)
-    np.testing.assert_allclose(lengths, np.broadcast_to(sample.skeleton.bone_lengths(), lengths.shape), atol=1e-5)
+def test_bone_lengths_are_preserved_by_fk(sample, rng):
+    q = rng.normal(size=(50, sample.skeleton.n_joints, 4))  # any rotations: FK must keep every bone's length
+    pos = fk(sample.skeleton, q / np.linalg.norm(q, axis=-1, keepdims=True), rng.normal(size=(50, 3)))[0]
+    lengths = bone_lengths_of(sample.skeleton, pos)
+    np.testing.assert_allclose(lengths, np.broadcast_to(sample.skeleton.bone_lengths(), lengths.shape), atol=1e-9)
 
 
 @pytest.mark.parametrize("bad, msg", [

@@ -7,7 +7,7 @@ whether the numbers hold on *every* frame of the two full datasets (read by path
 
 1. :func:`scale_motions` builds one :class:`~posekit.data.motion.MotionSet` of both datasets with a
    ``split`` for the protocol;
-2. :func:`posekit.models.ae_train.train_ae_solvers` trains the autoencoder, the solvers and the
+2. :func:`posekit.models.pose_autoencoder.train.train_ae_solvers` trains the autoencoder, the solvers and the
    chaining-aware copies on its ``train`` frames (validation losses on ``val``), in memory;
 3. the trained model is registered under temporary solver names (``neural-scale``, ..., unregistered
    when the run ends) and
@@ -57,7 +57,7 @@ largest offset change this makes is reported (``offset_dev_max_m``).
 
 Cost
 ----
-Measured with the default training settings (:data:`posekit.models.ae_train.DEFAULTS`) on a shared
+Measured with the default training settings (:data:`posekit.models.pose_autoencoder.train.DEFAULTS`) on a shared
 2-core machine, one torch thread: ``full`` 12.1 min (reading 24 s, training 11.3 min, benchmark 25 s),
 ``cross`` 10.2 min (15 s, 9.5 min, 23 s); about 1.3 GB of memory. The autoencoder's epochs grow with
 the training frames (about 4-5 s each here, 80 of them), the solvers' with ``pairs`` (fixed). Training
@@ -92,7 +92,7 @@ VARIANTS = {
     "neural-chained-raw": dict(chain=True, post="none"),
     "neural-fabrik": dict(post="fabrik"),
 }
-"""The neural rows of a run: row name -> :class:`~posekit.models.neural_ik.NeuralIKSolver` options. The
+"""The neural rows of a run: row name -> :class:`~posekit.models.pose_autoencoder.solver.NeuralIKSolver` options. The
 chained variants are measured on effector sets that the chain covers with more than one stage (5
 effectors; on the 2 hands they are the plain solver), as in ``posekit bench ik``."""
 
@@ -107,7 +107,7 @@ DEFAULT_STARTS = ("rest", "same-clip", "other-clip")
 def _register(model) -> dict:
     """Register the in-memory model under temporary names; returns {temporary name: row name}."""
     from ..ik.registry import register
-    from ..models.neural_ik import NeuralIKSolver
+    from ..models.pose_autoencoder.solver import NeuralIKSolver
 
     names = {}
     for row_name, opts in VARIANTS.items():
@@ -180,7 +180,7 @@ def run_scale(protocol: str = "full", n_cases: int = 1000, seed: int = 0, out=No
         :func:`~posekit.data.cases.build_cases` refuses for this data (e.g. ``other-clip`` with a single
         test clip) is skipped and the reason recorded in ``skipped_starts``.
     **train_settings
-        Any of :data:`posekit.models.ae_train.DEFAULTS` (default: those).
+        Any of :data:`posekit.models.pose_autoencoder.train.DEFAULTS` (default: those).
 
     Returns
     -------
@@ -199,8 +199,8 @@ def run_scale(protocol: str = "full", n_cases: int = 1000, seed: int = 0, out=No
         Bad arguments (see :func:`scale_motions`), or every start condition refused.
     """
     from ..learn.threads import limit_threads
-    from ..models.ae_solvers import chain_groups
-    from ..models.ae_train import DEFAULTS, train_ae_solvers
+    from ..models.pose_autoencoder.networks import chain_groups
+    from ..models.pose_autoencoder.train import DEFAULTS, train_ae_solvers
 
     bad = set(train_settings) - set(DEFAULTS)
     if bad:

@@ -30,13 +30,12 @@ import re
 import time
 from pathlib import Path
 
-import numpy as np
-
 from ..data.cases import START_CONDITIONS, start_condition
 from ..ik.api import EFFECTOR_SETS
 from ..ik.registry import solver_info
 from .ik import TABLE_LABELS, _group_title, default_data, resolve_solvers
 from .ik import run as run_ik
+from .all_plot import plot
 from .plugin import arg, register_benchmark
 
 __all__ = ["run", "write_report", "markdown", "plot", "pareto", "default_out", "FILES", "KEYS"]
@@ -52,8 +51,6 @@ KEYS = ("method", "start", "effectors", "lesson", "kinds", "latency_ms_median", 
 _DIGITS = {"latency_ms_median": 4, "mpjpe_mm_median": 3, "effector_error_mm_median": 3, "natural_mm_median": 3,
            "converged_fraction": 4, "bone_length_error_mm_max": 4}
 """Decimals kept in the rows (0.1 us, 1 um): beyond them the numbers are noise."""
-
-DPI = 150
 
 
 def default_out() -> Path:
@@ -277,129 +274,6 @@ def _reading(rows: list[dict], starts: list) -> str:
 
 
 # ------------------------------------------------------------------------------------------- the figure
-_STYLE = {"same-clip": ("o", "C0"), "other-clip": ("s", "C2"), "rest": ("^", "C3")}
-
-
-def plot(rows: list[dict], meta: dict, path=None):
-    """The speed/quality scatter: median ms per solve against median MPJPE mm (both log), one labelled point
-    per solver and start condition. Rendered with Agg at :data:`DPI`; saved to ``path`` when given.
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-    """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-    from matplotlib.lines import Line2D
-    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
-
-    fig = Figure(figsize=(10, 6.5), dpi=DPI)
-    FigureCanvasAgg(fig)
-    ax = fig.add_subplot()
-    starts = list(meta["starts"])
-    for name in dict.fromkeys(r["method"] for r in rows):
-        mine = [r for r in rows if r["method"] == name]
-        if len(mine) > 1:
-            ax.plot([r["latency_ms_median"] for r in mine], [r["mpjpe_mm_median"] for r in mine], color="0.75",
-                    lw=0.8, zorder=1)
-    for i, st in enumerate(starts):
-        marker, colour = _STYLE.get(st, ("D", f"C{4 + i}"))
-        mine = [r for r in rows if r["start"] == st]
-        ax.scatter([r["latency_ms_median"] for r in mine], [r["mpjpe_mm_median"] for r in mine], s=28,
-                   marker=marker, color=colour, zorder=3, label=f"start: {st}")
-    ax.set_xscale("log")
-    ax.set_yscale("log")  # both log: equal steps are equal ratios (twice as fast, half the error)
-    for axis in (ax.xaxis, ax.yaxis):
-        axis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
-        axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
-        axis.set_minor_formatter(NullFormatter())
-    x = np.array([r["latency_ms_median"] for r in rows])
-    y = np.array([r["mpjpe_mm_median"] for r in rows])
-    ax.set_xlim(x.min() / 1.8, x.max() * 1.8)
-    ax.set_ylim(y.min() / 1.3, y.max() * 1.3)
-    ax.grid(True, which="major", color="0.9", lw=0.6)
-    ax.set_axisbelow(True)
-    ax.set_xlabel("median time per solve, ms (one thread, log scale)")
-    ax.set_ylabel("median MPJPE, mm (body joints, pelvis-relative; log scale)")
-    ax.set_title(f"Speed and quality of every posekit IK solver: {meta['data']}, {meta['cases']} held-out cases "
-                 f"per start, effector set {meta['effectors']}", fontsize=10)
-    handles, _ = ax.get_legend_handles_labels()
-    if len(starts) > 1:
-        handles.append(Line2D([], [], color="0.75", lw=0.8, label="one solver, its starts joined"))
-    ax.legend(handles=handles, loc="upper left", fontsize=8, frameon=False)
-    fig.tight_layout()
-    _label_points(fig, ax, rows, {st: _STYLE.get(st, ("D", f"C{4 + i}"))[1] for i, st in enumerate(starts)})
-    if path is not None:
-        fig.savefig(path, dpi=DPI)
-    return fig
-
-
-def _label_points(fig, ax, rows: list[dict], colours: dict, fontsize: float = 6.5) -> None:
-    """Name every point (in a darker shade of its start's colour). Each label takes the nearest spot (a
-    greedy search over 8 directions and 5 distances, the most crowded points first) that overlaps no
-    other label, point, the legend or the frame, and is nearer its own point than any other; a leader line
-    joins a label that is not next to its point."""
-    from matplotlib.colors import to_rgb
-
-    renderer = fig.canvas.get_renderer()
-    pts = ax.transData.transform([(r["latency_ms_median"], r["mpjpe_mm_median"]) for r in rows])
-    pt_r = 4.0 * DPI / 72  # half a marker and a little air, px
-    frame = ax.get_window_extent(renderer)
-    taken = [(p[0] - pt_r, p[1] - pt_r, p[0] + pt_r, p[1] + pt_r) for p in pts]
-    if ax.get_legend() is not None:
-        lb = ax.get_legend().get_window_extent(renderer)
-        taken.append((lb.x0, lb.y0, lb.x1, lb.y1))
-    dirs = [(1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (-1, 1), (1, -1), (-1, -1)]
-    align = {-1: "right", 0: "center", 1: "left"}, {-1: "top", 0: "center", 1: "bottom"}
-    ink = {st: tuple(0.6 * np.array(to_rgb(c))) for st, c in colours.items()}
-
-    def overlap(a, b) -> float:
-        w, h = min(a[2], b[2]) - max(a[0], b[0]), min(a[3], b[3]) - max(a[1], b[1])
-        return w * h if w > 0 and h > 0 else 0.0
-
-    def gap(box, p) -> float:  # distance from a point to a box, px
-        return float(np.hypot(max(box[0] - p[0], 0, p[0] - box[2]), max(box[1] - p[1], 0, p[1] - box[3])))
-
-    def cost(box, i) -> float:
-        outside = (max(0, frame.x0 - box[0]) + max(0, box[2] - frame.x1) + max(0, frame.y0 - box[1])
-                   + max(0, box[3] - frame.y1))
-        own = gap(box, pts[i])
-        nearer = sum(1 for j, p in enumerate(pts) if j != i and gap(box, p) < own + 4)
-        return sum(overlap(box, t) for j, t in enumerate(taken) if j != i) + 1e3 * outside + 400 * nearer
-
-    crowd = [int(np.sum(np.hypot(*(pts - p).T) < 60)) for p in pts]
-    for i in sorted(range(len(rows)), key=lambda k: -crowd[k]):
-        r = rows[i]
-        text = ax.annotate(r["method"], (r["latency_ms_median"], r["mpjpe_mm_median"]), fontsize=fontsize,
-                           textcoords="offset points", xytext=(0, 0), zorder=4, color=ink[r["start"]])
-        best = None
-        for dist in (5, 11, 19, 30, 45):
-            for dx, dy in dirs:
-                step = dist / np.sqrt(2) if dx and dy else dist
-                text.set_position((dx * step, dy * step))
-                text.set_ha(align[0][dx])
-                text.set_va(align[1][dy])
-                b = text.get_window_extent(renderer)
-                box = (b.x0 - 1, b.y0 - 1, b.x1 + 1, b.y1 + 1)
-                c = cost(box, i)
-                if best is None or c < best[0]:
-                    best = (c, dx * step, dy * step, dx, dy, box)
-                if c == 0:
-                    break
-            if best[0] == 0:
-                break
-        _, ox, oy, dx, dy, box = best
-        text.set_position((ox, oy))
-        text.set_ha(align[0][dx])
-        text.set_va(align[1][dy])
-        if np.hypot(ox, oy) > 6:
-            ax.annotate("", (r["latency_ms_median"], r["mpjpe_mm_median"]), textcoords="offset points",
-                        xytext=(ox, oy), zorder=2, arrowprops={"arrowstyle": "-", "color": colours[r["start"]],
-                                                               "lw": 0.6, "shrinkA": 1, "shrinkB": 3})
-        taken.append(box)
-
-
-# ------------------------------------------------------------------------------------------- the CLI
 def _out(value):
     """``--out``: None (not given) -> :func:`default_out`; ``""``, ``none``, ``false`` or ``-`` -> write nothing."""
     if value is None:

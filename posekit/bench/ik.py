@@ -39,10 +39,12 @@ from typing import Callable
 
 import numpy as np
 
+from .. import catalogue
 from ..data.cases import START_ALIASES, START_CONDITIONS, Cases, build_cases, start_condition
 from ..data.metrics import NaturalnessIndex, score_poses
 from ..ik.api import EFFECTOR_SETS, effector_set
 from ..ik.registry import make_solver, solver_info, solver_names
+from ..plugins import Registry
 from .plugin import arg, register_benchmark
 
 __all__ = ["Method", "MethodContext", "register_method", "unregister_method", "method_names", "get_method",
@@ -117,7 +119,7 @@ class Method:
     description: str = ""
 
 
-_METHODS: dict[str, Method] = {}
+_METHODS = Registry("ik method", catalogue.BENCH_IK_METHODS)
 
 
 def register_method(key: str, run: Callable, *, group: str = "extra", needs=(), description: str = "",
@@ -140,46 +142,22 @@ def register_method(key: str, run: Callable, *, group: str = "extra", needs=(), 
     description : str
         One line for ``--help``.
     """
-    _load_builtin()
-    if key in _METHODS and not replace:
-        raise ValueError(f"an ik method named {key!r} is already registered; pass replace=True to redefine it")
     m = Method(key, run, group, tuple(needs), description)
-    _METHODS[key] = m
-    return m
+    return _METHODS.add(key, m, owner=getattr(run, "__module__", ""), replace=replace)
 
 
 def unregister_method(key: str) -> None:
     """Remove a method (tests, notebooks)."""
-    _METHODS.pop(key, None)
+    _METHODS.remove(key)
 
 
 def method_names() -> list[str]:
-    """Every registered method key, in registration order."""
-    _load_builtin()
-    return list(_METHODS)
+    """Every registered method key: the built-in ones (:data:`posekit.catalogue.BENCH_IK_METHODS`) first."""
+    return _METHODS.names()
 
 
 def get_method(key: str) -> Method:
-    _load_builtin()
-    if key not in _METHODS:
-        raise ValueError(f"unknown ik method {key!r}; valid: {', '.join(_METHODS)}")
-    return _METHODS[key]
-
-
-_loading = False
-
-
-def _load_builtin():
-    global _loading
-    if _loading:
-        return
-    _loading = True
-    try:
-        from . import ik_methods  # noqa: F401  (registers the baseline, batched FABRIK and ikpy)
-        from . import ik_neural  # noqa: F401  (lesson 03: neural variants and batched neural throughput)
-        from . import ik_latent  # noqa: F401  (lesson 04: latent optimisation's variants and batched throughput)
-    finally:
-        _loading = False
+    return _METHODS.get(key)
 
 
 # ---------------------------------------------------------------------------------------- solvers

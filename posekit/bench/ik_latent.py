@@ -7,7 +7,7 @@ fabrik,dls,neural,latent-opt --effectors 2,5 --start rest,same-clip,other-clip``
 
 * ``latent-variants`` — ``latent-opt-raw`` (the generator's pose, no post-processing),
   ``latent-opt-adam`` and ``latent-opt-adam-raw`` (Adam instead of L-BFGS);
-* ``latent-batched`` (group ``batched``) — :meth:`posekit.models.latent_ik.LatentOptSolver.predict` on
+* ``latent-batched`` (group ``batched``) — :meth:`posekit.models.aegan.solver.LatentOptSolver.predict` on
   every case at once (batched L-BFGS, each problem stopping on its own), one thread: solves per second
   and microseconds per pose.
 """

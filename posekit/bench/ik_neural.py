@@ -8,7 +8,7 @@ same cases and with the same metric code as every solver (so ``posekit bench ik 
 * ``neural-variants`` — ``neural-raw`` (the decoded pose, no post-processing), ``neural-fabrik`` (that
   pose as FABRIK's start) and, for sets the chain covers with more than one stage (5 effectors),
   ``neural-chained`` and ``neural-chained-raw`` (hands -> feet -> head, Sec. 3.5);
-* ``neural-batched`` (group ``batched``) — :meth:`posekit.models.neural_ik.NeuralIKSolver.predict` on
+* ``neural-batched`` (group ``batched``) — :meth:`posekit.models.pose_autoencoder.solver.NeuralIKSolver.predict` on
   every case at once (repeated to about :data:`BATCH_SOLVES` problems), one thread: solves per second
   and microseconds per pose, with and without post-processing; and ``neural networks only``, one
   pose at a time through root frame, encoder, solver and decoder (the compiled single-pose path,

@@ -13,7 +13,8 @@ benchmark without editing the CLI::
                        tables=[("My table", ["method", "ms"])])
 
 The built-in benchmarks (``fk``, ``ik``, ``invrig``, ``ae-scale``, ``protores``, ``all``, ``studio``) register themselves
-when their modules are imported; :func:`benchmark_names` imports them.
+when their modules are imported; :data:`posekit.catalogue.BENCHMARKS` names them, and the registry imports
+them the first time it is asked.
 """
 
 from __future__ import annotations
@@ -23,6 +24,8 @@ import textwrap
 from dataclasses import dataclass, field
 from typing import Callable
 
+from .. import catalogue, plugins
+from ..plugins import Arg, HelpFormatter, Registry, arg
 from .report import format_table, format_tables
 
 __all__ = ["Arg", "arg", "Benchmark", "register_benchmark", "unregister_benchmark", "get_benchmark",
@@ -30,26 +33,6 @@ __all__ = ["Arg", "arg", "Benchmark", "register_benchmark", "unregister_benchmar
 
 WIDTH = 100
 """Text output stays within this many columns."""
-
-_BUILTIN = ("fk", "ik", "invrig", "ae-scale", "protores", "all", "studio")
-
-
-@dataclass(frozen=True)
-class Arg:
-    """One command-line argument: the positional and keyword arguments of ``ArgumentParser.add_argument``."""
-
-    flags: tuple
-    kwargs: dict = field(default_factory=dict)
-
-    @property
-    def dest(self) -> str:
-        return self.kwargs.get("dest") or self.flags[0].lstrip("-").replace("-", "_")
-
-
-def arg(*flags, **kwargs) -> Arg:
-    """An argument spec, written like ``parser.add_argument`` (``arg("--cases", type=int, default=1000,
-    help=...)``); the help gets ``(default: ...)`` appended unless it already names its default."""
-    return Arg(tuple(flags), kwargs)
 
 
 @dataclass(frozen=True)
@@ -110,7 +93,7 @@ def _wrap(text: str) -> str:
     return "\n".join(textwrap.fill(line, WIDTH) if len(line) > WIDTH else line for line in text.splitlines())
 
 
-_REGISTRY: dict[str, Benchmark] = {}
+_REGISTRY = Registry("benchmark", catalogue.BENCHMARKS)
 
 
 def register_benchmark(name: str, run: Callable, *, help: str = "", args=(), tables=(), labels=None,
@@ -148,67 +131,32 @@ def register_benchmark(name: str, run: Callable, *, help: str = "", args=(), tab
     """
     if not name or not isinstance(name, str) or name.startswith("-"):
         raise ValueError(f"benchmark name must be a non-empty string, got {name!r}")
-    _load_builtin()
-    if name in _REGISTRY and not replace:
-        raise ValueError(f"a benchmark named {name!r} is already registered; pass replace=True to redefine it")
     for a in args:
         if not isinstance(a, Arg):
             raise ValueError(f"benchmark {name!r}: arguments must be made with arg(...), got {a!r}")
     b = Benchmark(name, run, help, tuple(args), tuple(tables), dict(labels or {}), header, group_by, group_title,
                   bool(wide), lesson)
-    _REGISTRY[name] = b
-    return b
+    return _REGISTRY.add(name, b, owner=getattr(run, "__module__", ""), replace=replace)
 
 
 def unregister_benchmark(name: str) -> None:
     """Remove a benchmark (tests, notebooks)."""
-    _REGISTRY.pop(name, None)
+    _REGISTRY.remove(name)
 
 
 def get_benchmark(name: str) -> Benchmark:
     """The registered benchmark ``name``; a clear error lists the valid names."""
-    _load_builtin()
-    if name not in _REGISTRY:
-        raise ValueError(f"unknown benchmark {name!r}; valid: {', '.join(_REGISTRY)}")
-    return _REGISTRY[name]
+    return _REGISTRY.get(name)
 
 
 def benchmark_names() -> list[str]:
     """Every registered benchmark, the built-in ones first."""
-    _load_builtin()
-    return sorted(_REGISTRY, key=lambda n: _BUILTIN.index(n) if n in _BUILTIN else len(_BUILTIN))
-
-
-class HelpFormatter(argparse.HelpFormatter):
-    """``--help`` that never breaks a name at its hyphen (``same-clip``, ``fabrik-constrained``)."""
-
-    def _split_lines(self, text, width):
-        return textwrap.wrap(" ".join(text.split()), width, break_on_hyphens=False)
+    return _REGISTRY.names()
 
 
 def add_arguments(parser: argparse.ArgumentParser, b: Benchmark) -> None:
     """Add a benchmark's arguments (and ``--json``, ``--wide``) to its subparser."""
-    for a in b.args:
-        kw = dict(a.kwargs)
-        if "help" in kw and "default" in kw and kw.get("action") != "store_true" and "default" not in kw["help"]:
-            kw["help"] = f"{kw['help']} (default: %(default)s)"
-        parser.add_argument(*a.flags, **kw)
+    plugins.add_arguments(parser, b.args)
     if b.wide:
         parser.add_argument("--wide", action="store_true", help="one wide table instead of several")
     parser.add_argument("--json", action="store_true", help="print the rows as JSON")
-
-
-_loading = False
-
-
-def _load_builtin():
-    # the built-in benchmarks register themselves on import; their heavy imports are deferred to run()
-    global _loading
-    if _loading or all(n in _REGISTRY for n in _BUILTIN):
-        return
-    _loading = True
-    try:
-        from . import ae_scale, fk, ik, invrig, protores, studio  # noqa: F401
-        from . import all as _all  # noqa: F401  (a module named like the builtin: imported under another name)
-    finally:
-        _loading = False

@@ -1,8 +1,8 @@
 """``posekit bench protores``: ProtoRes's Tables 1 and 2 at CPU scale (Oreshkin et al. 2021), speed, training time.
 
 Introduced in ``notebooks/05_protores.ipynb``. One run scores every method on the shipped 5-point and
-random benchmarks (:mod:`posekit.models.protores_benchmarks`) with one metric code
-(:mod:`posekit.models.protores_eval`):
+random benchmarks (:mod:`posekit.bench.effector_cases`) with one metric code
+(:mod:`posekit.bench.effector_scores`):
 
 * **Table 1** — ProtoRes, Masked-FCR, Transformer (each its shipped weights) and the classical stand-ins
   for FinalIK: FABRIK and DLS from the fitted rest pose;
@@ -124,7 +124,7 @@ def _speed_rows(solvers, five) -> list[dict]:
 
 
 def _training_rows(solvers) -> list[dict]:
-    from ..models.protores_train import weights_path
+    from ..models.protores.networks import weights_path
 
     rows = []
     for arch, solver in solvers.items():
@@ -160,10 +160,10 @@ def _ablation_rows(rows, training) -> list[dict]:
 def run(cases: int | None = None, classical: bool = True, speed: bool = True, progress: bool = False) -> list[dict]:
     """Every table of the module docstring; one dict per row. ``cases`` limits each benchmark (default all)."""
     from ..data.bandai_mini import load_bandai_mini
-    from ..models.protores_benchmarks import BENCHMARKS, load_benchmark
-    from ..models.protores_eval import run_classical, run_learned, scores
-    from ..models.protores import tolerance_to_sigma
-    from ..models.protores_ik import ProtoResSolver
+    from .effector_cases import BENCHMARKS, load_benchmark
+    from .effector_scores import run_classical, run_learned, scores
+    from ..models.protores.networks import tolerance_to_sigma
+    from ..models.protores.solver import ProtoResSolver
 
     motions = load_bandai_mini()
     s = motions.skeleton

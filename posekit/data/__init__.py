@@ -3,8 +3,9 @@
 from .dataset import NormStats, augment_positions, sample_pairs, split_by_clip, split_by_time
 from .motion import MotionSet
 from .sources import (load_bandai, load_bvh_files, load_sample, open_dataset, skeleton_preset)
-from .rigs import guess_roles, guess_units, missing_roles, rig_report
-from .bandai_mini import BandaiMiniSplit, bandai_mini_split, build_bandai_mini, load_bandai_mini
+from ..io.rigs import guess_roles, guess_units, missing_roles, rig_report
+from .bandai_mini import BandaiMiniSplit, bandai_mini_split, load_bandai_mini
+from .bandai_mini_build import build_bandai_mini
 from .cases import START_CONDITIONS, Cases, build_cases, case_split
 from .metrics import NaturalnessIndex, body_joints, score_poses
 

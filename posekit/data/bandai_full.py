@@ -31,7 +31,7 @@ CROSS_VAL_FRACTION = 0.03
 
 
 def _files(data_dir: Path, dataset: int) -> list[Path]:
-    from .sources import BANDAI_FOLDERS
+    from .bandai import BANDAI_FOLDERS
 
     folder = data_dir / BANDAI_FOLDERS[f"bandai{dataset}"] / "data"
     files = sorted(folder.glob(f"dataset-{dataset}_*.bvh"))
@@ -144,7 +144,8 @@ def scale_motions(protocol: str = "full", data_dir=None, limit: int | None = Non
         An unknown protocol, ``limit < 3``, ``step < 1``, a dataset whose hierarchy is not the 22-joint
         Bandai one, a rotating ``joint_Root`` or a bone whose length differs from the reference.
     """
-    from .bandai_mini import BANDAI_ROLES, JOINTS, BandaiMiniSplit, held_out_split, parse_clip_name
+    from .bandai import BANDAI_ROLES
+    from .bandai_mini import JOINTS, BandaiMiniSplit, held_out_split, parse_clip_name
     from .motion import MotionSet
     from .sources import load_bvh_files
     from ..kinematics import fk

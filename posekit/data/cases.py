@@ -35,6 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..kinematics import fk
+from ..records import Pose
 from ..transforms import rotate_y_rotations, to_root_space
 from .dataset import sample_pairs, split_by_clip
 from .motion import MotionSet
@@ -124,9 +125,6 @@ class Cases:
 
     def pose(self, i):
         """The start pose of case ``i`` as a :class:`posekit.ik.Pose` (what ``solver.solve`` takes)."""
-        # the one place the data layer touches the solver API: Pose is a plain record of arrays
-        from ..ik.api import Pose
-
         lp = None if self.start_local_pos is None else self.start_local_pos[i]
         return Pose(self.start_pos[i], self.start_rot[i], self.start_root[i], lp)
 

@@ -7,10 +7,10 @@ train on what these produce.
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
 
 import numpy as np
 
+from ..records import NormStats
 from ..transforms import mirror_positions, rotate_y_positions
 from .motion import MotionSet
 
@@ -96,53 +96,6 @@ def split_by_time(motions: MotionSet, fractions=(0.8, 0.1, 0.1)):
         for k in range(len(fr)):
             sets[k].append(frames[cut[k]:cut[k + 1]])
     return [np.sort(np.concatenate(s)) if s else np.zeros(0, np.int64) for s in sets]
-
-
-@dataclass
-class NormStats:
-    """Per-feature z-score statistics: ``(x - mean) / std``.
-
-    Attributes
-    ----------
-    mean, std : ndarray, shape (D,) (or any feature shape)
-    """
-
-    mean: np.ndarray
-    std: np.ndarray
-
-    @classmethod
-    def fit(cls, x, eps: float = 1e-6) -> "NormStats":
-        """Statistics over the first axis of ``x`` (N, ...); ``std`` is floored at ``eps`` so
-        constant features do not divide by zero."""
-        x = np.asarray(x, dtype=float)
-        if x.ndim < 1 or len(x) == 0:
-            raise ValueError("NormStats.fit needs at least one sample")
-        if not np.all(np.isfinite(x)):
-            raise ValueError("NormStats.fit: data contains NaN or inf")
-        return cls(x.mean(axis=0), np.maximum(x.std(axis=0), eps))
-
-    def normalize(self, x):
-        return (np.asarray(x, dtype=float) - self.mean) / self.std
-
-    def denormalize(self, z):
-        return np.asarray(z, dtype=float) * self.std + self.mean
-
-    def to_arrays(self, prefix: str = "norm_") -> dict:
-        """``{prefix + "mean": mean, prefix + "std": std}``, e.g. for ``np.savez`` or a checkpoint
-        (:func:`posekit.learn.save_checkpoint`)."""
-        return {prefix + "mean": self.mean, prefix + "std": self.std}
-
-    @classmethod
-    def from_arrays(cls, arrays, prefix: str = "norm_") -> "NormStats":
-        """Inverse of :meth:`to_arrays` (float64 arrays)."""
-        return cls(np.asarray(arrays[prefix + "mean"], dtype=float), np.asarray(arrays[prefix + "std"], dtype=float))
-
-    def same_as(self, other: "NormStats", rtol: float = 1e-6) -> bool:
-        """Same shapes and values to ``rtol``: a model trained on one must not be fed the other."""
-        a, b = np.asarray(self.mean), np.asarray(other.mean)
-        sa, sb = np.asarray(self.std), np.asarray(other.std)
-        return (a.shape == b.shape and sa.shape == sb.shape and np.allclose(a, b, rtol=rtol)
-                and np.allclose(sa, sb, rtol=rtol))
 
 
 def augment_positions(skeleton, global_pos, rng=None, mirror_prob: float = 0.5, rotate: bool = True):

@@ -38,10 +38,10 @@ class MotionSet:
         channels); None means ``skeleton.offsets``.
     source : str
         Where the data came from.
-    units : posekit.data.rigs.UnitGuess, optional
+    units : posekit.io.rigs.UnitGuess, optional
         The file unit detected (or given) when read from BVH, and the scale applied to it.
     rig : str
-        The naming convention recognised (``"cmu"``, ``"mixamo"``, ... see :mod:`posekit.data.rigs`).
+        The naming convention recognised (``"cmu"``, ``"mixamo"``, ... see :mod:`posekit.io.rigs`).
     """
 
     skeleton: Skeleton

@@ -14,28 +14,18 @@ from ..io.bvh import read_bvh
 from ..kinematics import fk
 from ..paths import require_shared_data, samples_dir
 from ..skeleton import Skeleton
+from .bandai import BANDAI_FOLDERS, BANDAI_ROLES
 from .motion import MotionSet
-from .rigs import guess_units, unit_warning
+from ..io.rigs import guess_units, unit_warning
 
 __all__ = [
-    "SAMPLE_FILE", "BANDAI_FOLDERS", "BANDAI_ROLES",
+    "SAMPLE_FILE",
     "load_sample", "load_bvh_files", "load_bandai", "skeleton_preset", "open_dataset", "dataset_names",
     "hierarchy_difference",
 ]
 
 SAMPLE_FILE = "deepmimic_humanoid.npz"
 """File name of the embedded default data inside :func:`posekit.paths.samples_dir`."""
-
-BANDAI_FOLDERS = {"bandai1": "bandai-namco-1", "bandai2": "bandai-namco-2-every4th"}
-
-BANDAI_ROLES = {
-    "pelvis": "Hips", "chest": "Chest", "neck": "Neck", "head": "Head",
-    "left_hip": "UpperLeg_L", "left_knee": "LowerLeg_L", "left_foot": "Foot_L", "left_toe": "Toes_L",
-    "right_hip": "UpperLeg_R", "right_knee": "LowerLeg_R", "right_foot": "Foot_R", "right_toe": "Toes_R",
-    "left_shoulder": "UpperArm_L", "left_elbow": "LowerArm_L", "left_hand": "Hand_L",
-    "right_shoulder": "UpperArm_R", "right_elbow": "LowerArm_R", "right_hand": "Hand_R",
-}
-
 
 def load_sample() -> MotionSet:
     """The embedded default: 15 DeepMimic humanoid clips, 18 joints, metres, facing +Z.
@@ -64,11 +54,11 @@ def load_bvh_files(paths, scale: float | None = None, roles: dict | None = None,
     paths : sequence of path
     scale : float, optional
         File units to metres (0.01 for centimetres). Default: detected from the median standing
-        height of the files (:func:`posekit.data.rigs.guess_units`), with a warning when the unit is
+        height of the files (:func:`posekit.io.rigs.guess_units`), with a warning when the unit is
         not metres; one scale for all files.
     roles : dict, optional
         Canonical roles -> joint names; default guessed from the names
-        (:func:`posekit.data.rigs.guess_roles`); given roles replace guessed ones.
+        (:func:`posekit.io.rigs.guess_roles`); given roles replace guessed ones.
     drop_tpose : bool
         Drop each file's first frame.
     progress : bool
@@ -77,8 +67,8 @@ def load_bvh_files(paths, scale: float | None = None, roles: dict | None = None,
     Returns
     -------
     MotionSet
-        Lengths in metres. Two extra attributes: ``units`` (:class:`posekit.data.rigs.UnitGuess`:
-        unit, scale, height) and ``rig`` (:class:`posekit.data.rigs.RolesReport`: rig name, roles,
+        Lengths in metres. Two extra attributes: ``units`` (:class:`posekit.io.rigs.UnitGuess`:
+        unit, scale, height) and ``rig`` (:class:`posekit.io.rigs.RolesReport`: rig name, roles,
         missing roles).
 
     Raises

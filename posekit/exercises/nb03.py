@@ -10,9 +10,9 @@ from ._check import report
 def check_pose_vector(my_pose_vector) -> bool:
     """Check ``my_pose_vector(skeleton, global_pos (J, 3)) -> (3B,)``: the body joints (no helper root)
     in the pose's root frame — pelvis projected on the floor at the origin, facing +Z — flattened
-    (:func:`posekit.models.ae_data.pose_vectors`)."""
+    (:func:`posekit.data.pose_vectors.pose_vectors`)."""
     from ..data.bandai_mini import load_bandai_mini
-    from ..models.ae_data import pose_vectors
+    from ..data.pose_vectors import pose_vectors
 
     m = load_bandai_mini()
     cases = []
@@ -31,7 +31,7 @@ def check_tied_decoder(my_decode) -> bool:
     authors' code, ``W1^T relu(W2^T relu(W3^T z))`` with no biases (weights in torch's (out, in) layout)."""
     import torch
 
-    from ..models.ae_solvers import PoseAutoencoder
+    from ..models.pose_autoencoder.networks import PoseAutoencoder
 
     cases = []
 
@@ -52,10 +52,10 @@ def check_tied_decoder(my_decode) -> bool:
 def check_solver_loss(my_loss) -> bool:
     """Check ``my_loss(decoded (N, F), target (N, F), columns, k) -> float``: Eq. (1), the mean squared
     error on the target joints' feature ``columns`` plus ``k`` times the mean squared error on the
-    other features (:func:`posekit.models.ae_train.solver_loss`)."""
+    other features (:func:`posekit.models.pose_autoencoder.train.solver_loss`)."""
     import torch
 
-    from ..models.ae_train import solver_loss
+    from ..models.pose_autoencoder.train import solver_loss
 
     rng = np.random.default_rng(3)
     cases = []

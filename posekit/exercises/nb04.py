@@ -9,10 +9,10 @@ from ._check import report
 
 def check_tree_depths(my_depths) -> bool:
     """Check ``my_depths(parents) -> (J,) int``: each joint's depth in the tree (0 at a root, parent -1),
-    the order in which an SPL can predict the joints (:func:`posekit.models.spl.tree_levels`)."""
+    the order in which an SPL can predict the joints (:func:`posekit.models.aegan.spl.tree_levels`)."""
     from ..data.bandai_mini import load_bandai_mini
-    from ..models.aegan import body_parents
-    from ..models.spl import tree_levels
+    from ..models.aegan.networks import body_parents
+    from ..models.aegan.spl import tree_levels
 
     def expected(parents):
         d = np.zeros(len(parents), dtype=float)
@@ -53,7 +53,7 @@ def check_latent_loss(my_loss) -> bool:
 
 def check_generator_loss(my_loss) -> bool:
     """Check ``my_loss(fake_logits (N,)) -> float``: the non-saturating generator loss, the mean of
-    ``-log sigmoid(logit)`` (``BCE(D(G(z)), 1)``; :mod:`posekit.models.aegan_train`)."""
+    ``-log sigmoid(logit)`` (``BCE(D(G(z)), 1)``; :mod:`posekit.models.aegan.train`)."""
     rng = np.random.default_rng(5)
     cases = []
 

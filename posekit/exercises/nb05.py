@@ -10,7 +10,7 @@ from ._check import report
 def check_prototype_step(my_step) -> bool:
     """Check ``my_step(b (N, d), f (N, d), e_prev (N, d), r) -> (e (N, d), p (d,), x_next (N, d))``: one block of
     Eq. 2 after its layers — ``e = e_prev + f``, the prototype ``p = mean_i e_i``, ``x_next = relu(b - p / r)``
-    (:class:`posekit.models.protores.ProtoResEncoder`)."""
+    (:class:`posekit.models.protores.networks.ProtoResEncoder`)."""
     rng = np.random.default_rng(6)
     cases = []
 
@@ -33,7 +33,7 @@ def check_tolerance_weight(my_weight) -> bool:
     """Check ``my_weight(lam (K,)) -> (sigma (K,), weight (K,))``: the noise scale ``sigma = sigma_M Lambda^eta``
     (sigma_M = 0.1, eta = 13) and the loss weight ``min(W_M, 1 / sigma)`` (W_M = 1000; an exact effector,
     sigma = 0, gets W_M)."""
-    from ..models.protores import ETA, SIGMA_M
+    from ..models.protores.networks import ETA, SIGMA_M
 
     def describe(got, exp):
         i = int(np.argmax(np.abs(got - exp) / (np.abs(exp) + 1e-12)))
@@ -54,10 +54,10 @@ def check_tolerance_weight(my_weight) -> bool:
 def check_centroid(my_centroid) -> bool:
     """Check ``my_centroid(kind (N,), value (N, 6), lam (N,)) -> (3,)``: the mean of the *position* effectors'
     positions weighted by ``1 - Lambda + 1e-3`` (the origin when there is none;
-    :func:`posekit.models.protores.centroid`)."""
+    :func:`posekit.models.protores.networks.centroid`)."""
     import torch
 
-    from ..models.protores import centroid
+    from ..models.protores.networks import centroid
 
     rng = np.random.default_rng(7)
 

@@ -110,7 +110,7 @@ def rotations_of(skeleton: Skeleton, start: Pose, who: str):
 
 
 def pose_from(Rl, root_pos, Pg, local_pos=None) -> Pose:
-    """The :class:`~posekit.ik.api.Pose` a rotation solver returns.
+    """The :class:`~posekit.records.Pose` a rotation solver returns.
 
     Parameters
     ----------

@@ -17,7 +17,7 @@ The contract (version 2)
   B poses (or None), ``effectors`` one effector list shared by every problem or B lists; result ``b``
   equals ``solve(starts[b], effectors[b])`` (FABRIK solves a batch vectorised, to rounding).
 * ``IKResult.effector_error`` and ``IKResult.converged`` always come from
-  :func:`~posekit.ik.effectors.effector_errors`, the one definition of every kind's error.
+  :func:`~posekit.ik.effector_errors.effector_errors`, the one definition of every kind's error.
 
 :class:`SolverBase` holds the shared checks and the default batch loop; a solver subclasses it and
 writes ``_solve(start, resolved) -> IKResult``.
@@ -32,10 +32,10 @@ from typing import Protocol, Sequence, runtime_checkable
 
 import numpy as np
 
-from ..kinematics import fk
+from ..records import Pose
 from ..skeleton import Skeleton
-from .effectors import (DEFAULT_TOLERANCE, KINDS, Effector, ResolvedEffectors, check_look_at, effector_errors,
-                        effector_errors_batch, errors_of, resolve_effectors)
+from .effector_errors import effector_errors, effector_errors_batch, errors_of
+from .effectors import DEFAULT_TOLERANCE, KINDS, Effector, ResolvedEffectors, check_look_at, resolve_effectors
 
 __all__ = ["Effector", "Pose", "IKResult", "Solver", "SolverBase", "EFFECTOR_SETS", "effector_set",
            "resolve_effectors", "effector_errors", "effector_errors_batch", "KINDS", "DEFAULT_TOLERANCE",
@@ -50,39 +50,6 @@ EFFECTOR_SETS = {
 
 
 @dataclass
-class Pose:
-    """A posed skeleton. ``global_pos`` is always there; rotation-based solvers also fill
-    ``local_rot`` and ``root_pos``.
-
-    Attributes
-    ----------
-    global_pos : ndarray, shape (J, 3), metres
-    local_rot : ndarray, shape (J, 4), optional
-        Local quaternions ``(x, y, z, w)``.
-    root_pos : ndarray, shape (3,), optional
-    local_pos : ndarray, shape (J, 3), optional
-        Per-joint translations when they differ from the skeleton's offsets (BVH position channels).
-    """
-
-    global_pos: np.ndarray
-    local_rot: np.ndarray | None = None
-    root_pos: np.ndarray | None = None
-    local_pos: np.ndarray | None = None
-
-    @classmethod
-    def from_rotations(cls, skeleton: Skeleton, local_rot, root_pos, local_pos=None) -> "Pose":
-        """Pose from local quaternions (J, 4) and root position (3,), positions by FK."""
-        local_rot = np.asarray(local_rot, dtype=float)
-        root_pos = np.asarray(root_pos, dtype=float)
-        lp = None if local_pos is None else np.asarray(local_pos, dtype=float)
-        return cls(fk(skeleton, local_rot, root_pos, lp)[0], local_rot, root_pos, lp)
-
-    def copy(self) -> "Pose":
-        c = lambda a: None if a is None else np.array(a, copy=True)  # noqa: E731
-        return Pose(self.global_pos.copy(), c(self.local_rot), c(self.root_pos), c(self.local_pos))
-
-
-@dataclass
 class IKResult:
     """What a solver returns.
 
@@ -93,7 +60,7 @@ class IKResult:
         Every effector within its tolerance.
     iterations : int
     effector_error : ndarray, shape (K,)
-        Each effector's error (:func:`~posekit.ik.effectors.effector_errors`): metres for position
+        Each effector's error (:func:`~posekit.ik.effector_errors.effector_errors`): metres for position
         effectors, radians for rotation and look-at effectors.
     info : dict
         Solver-specific extras.
@@ -112,7 +79,7 @@ class IKResult:
 @runtime_checkable
 class Solver(Protocol):
     """Anything that poses a skeleton to meet effectors (the contract in the module docstring).
-    ``isinstance(x, Solver)`` only checks attribute names; ``tests/test_ik.py`` checks behaviour."""
+    ``isinstance(x, Solver)`` only checks attribute names; ``tests/ik/test_ik.py`` checks behaviour."""
 
     name: str
     skeleton: Skeleton

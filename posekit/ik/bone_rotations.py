@@ -113,7 +113,7 @@ def check_roundtrip(skeleton, local_rot, root_pos) -> float:
 
 
 def pose_with_rotations(skeleton: Skeleton, pose, reference, atol: float = 1e-6):
-    """A :class:`~posekit.ik.api.Pose` with local rotations that reproduces ``pose``'s positions exactly.
+    """A :class:`~posekit.records.Pose` with local rotations that reproduces ``pose``'s positions exactly.
 
     ``pose`` itself when it has rotations; else rotations turned from ``reference``'s (a Pose with
     rotations, e.g. the solve's start) onto ``pose``'s positions (:func:`rotations_from_positions`). One

@@ -21,7 +21,7 @@ from .._jit import njit
 from ..skeleton import Skeleton
 from ._rigid import fk_one, pose_from, rotatable, rotate_joint, rotation_between, rotations_of
 from .api import IKResult, SolverBase, base_index
-from .effectors import errors_into
+from .effector_errors import errors_into
 from .registry import register
 
 __all__ = ["CCDSolver"]
@@ -84,6 +84,6 @@ class CCDSolver(SolverBase):
         return self.result(pose_from(Rl, root, Pg, start.local_pos), res, it, global_rot=Rg)
 
 
-register("ccd", CCDSolver, kinds=CCDSolver.kinds, needs_start=True, replace=True,
+register("ccd", CCDSolver, kinds=CCDSolver.kinds, needs_start=True,
          description="Cyclic Coordinate Descent: turn each joint towards its target, sweep after sweep",
          lesson="notebooks/01_fabrik.ipynb")

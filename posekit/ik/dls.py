@@ -28,7 +28,7 @@ angle of 1 rad counts as 10 cm, 1 degree as 1.7 mm, about the 1 mm position tole
 (Eq. 10 of Buss 2004, "Introduction to Inverse Kinematics with Jacobian Transpose, Pseudoinverse and
 Damped Least Squares methods"): the damping ``lambda`` keeps steps finite near singular (stretched)
 poses. Steps are repeated until every effector is within tolerance (the shared error function,
-:func:`posekit.ik.effectors.errors_into`).
+:func:`posekit.ik.effector_errors.errors_into`).
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ from .._jit import njit
 from ..skeleton import Skeleton
 from ._rigid import fk_one, log_rotation, pose_from, rodrigues, rotatable, rotate_joint, rotations_of
 from .api import IKResult, SolverBase, base_index
-from .effectors import errors_into
+from .effector_errors import errors_into
 from .registry import register
 
 __all__ = ["DLSSolver", "ANGLE_SCALE"]
@@ -222,6 +222,6 @@ class DLSSolver(SolverBase):
         return self.result(pose_from(Rl, root, Pg, start.local_pos), res, it, global_rot=Rg)
 
 
-register("dls", DLSSolver, kinds=DLSSolver.kinds, needs_start=True, replace=True,
+register("dls", DLSSolver, kinds=DLSSolver.kinds, needs_start=True,
          description="Damped least squares on the Jacobian; position, rotation and look-at effectors",
          lesson="notebooks/01_fabrik.ipynb")

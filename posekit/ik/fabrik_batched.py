@@ -15,8 +15,8 @@ import numpy as np
 from ..kinematics import bone_lengths_of
 from ..skeleton import Skeleton
 from .api import base_index
-from .effectors import position_errors
-from .fabrik import ZERO_BONE, collapse_zero_bones, effector_chains, reduced_effectors
+from .effector_errors import position_errors
+from .fabrik_tree import ZERO_BONE, collapse_zero_bones, effector_chains, reduced_effectors
 from .fabrik_kernel import _S_MAX, EXTENDED_RATIO, MIN_AXIAL, SECANT_STEPS
 
 __all__ = ["fabrik_batched"]
@@ -132,8 +132,8 @@ def fabrik_batched(skeleton: Skeleton, start_pos, eff_joints, targets, tolerance
     skeleton : Skeleton
     start_pos : ndarray, shape (B, J, 3), metres
         Start poses (their bone lengths are kept). A bone shorter than
-        :data:`posekit.ik.fabrik.ZERO_BONE` is a rigid attachment
-        (:func:`posekit.ik.fabrik.collapse_zero_bones`); it must be so in every start pose.
+        :data:`posekit.ik.fabrik_tree.ZERO_BONE` is a rigid attachment
+        (:func:`posekit.ik.fabrik_tree.collapse_zero_bones`); it must be so in every start pose.
     eff_joints : sequence of str or int, length K
         Effector joints (names, roles or indices), the same for every problem.
     targets : ndarray, shape (B, K, 3), metres

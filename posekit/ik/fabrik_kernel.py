@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._jit import njit
-from .effectors import position_errors_into
+from .effector_errors import position_errors_into
 
 EXTENDED_RATIO = 0.9
 """A chain whose target lies at >= this fraction of its reach is straightened directly (see

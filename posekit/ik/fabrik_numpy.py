@@ -10,7 +10,7 @@ import numpy as np
 
 from ..kinematics import bone_lengths_of
 from .api import base_index
-from .fabrik import effector_chains
+from .fabrik_tree import effector_chains
 from .single_chain import straighten_chain
 
 __all__ = ["fabrik_numpy"]

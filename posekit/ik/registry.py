@@ -2,6 +2,8 @@
 
 Introduced in ``notebooks/01_fabrik.ipynb``. A solver module registers itself once, when it is
 imported (``register("fabrik", FabrikSolver, ...)`` at the end of :mod:`posekit.ik.fabrik`); the
+built-in modules are named, in lesson order, by :data:`posekit.catalogue.SOLVERS` and imported the
+first time the registry is asked (the registry imports nothing above it); the
 benchmark, the CLI, the viewer and the studio only ever ask this registry, so a solver added by a
 later lesson (or by a student's notebook) is available everywhere without editing them::
 
@@ -22,6 +24,8 @@ import inspect
 from dataclasses import dataclass, field
 from typing import Callable
 
+from .. import catalogue
+from ..plugins import Registry
 from .effectors import normalise_kind
 
 __all__ = ["SolverInfo", "register", "unregister", "make_solver", "solver_names", "solver_info"]
@@ -61,7 +65,7 @@ class SolverInfo:
     data: str = ""
 
 
-_REGISTRY: dict[str, SolverInfo] = {}
+_REGISTRY = Registry("solver", catalogue.SOLVERS, load_on_add=False)
 
 
 def _kinds(kinds, what: str) -> tuple:
@@ -92,7 +96,7 @@ def register(name: str, factory: Callable, *, kinds=None, needs_start: bool | No
         Default the factory's ``needs_start`` attribute, else True; must agree likewise.
     description, lesson : str
     replace : bool
-        Redefine an existing name (e.g. while editing a notebook).
+        Redefine a registered name (e.g. while editing a notebook); without it a taken name is an error.
     data : str
         A learned solver's data set (:attr:`SolverInfo.data`).
     **defaults
@@ -106,8 +110,6 @@ def register(name: str, factory: Callable, *, kinds=None, needs_start: bool | No
     """
     if not name or not isinstance(name, str):
         raise ValueError(f"solver name must be a non-empty string, got {name!r}")
-    if name in _REGISTRY and not replace:
-        raise ValueError(f"a solver named {name!r} is already registered; pass replace=True to redefine it")
     if not callable(factory):
         raise ValueError(f"solver {name!r}: factory must be callable (a solver class or a function), got {factory!r}")
     what = f"solver {name!r}"
@@ -126,15 +128,14 @@ def register(name: str, factory: Callable, *, kinds=None, needs_start: bool | No
                          f"{factory.__name__}.needs_start is {own_start}")
     _check_config(name, factory, defaults)
     info = SolverInfo(name, factory, kinds, bool(needs_start), description, lesson, dict(defaults), str(data))
-    _REGISTRY[name] = info
-    return info
+    return _REGISTRY.add(name, info, owner=getattr(factory, "__module__", ""), replace=replace)
 
 
 def unregister(name: str) -> None:
     """Forget a registered solver (e.g. one a notebook registered to try out)."""
     if name not in _REGISTRY:
         raise ValueError(f"no solver named {name!r} is registered")
-    del _REGISTRY[name]
+    _REGISTRY.remove(name)
 
 
 def _parameters(factory):
@@ -159,10 +160,7 @@ def _check_config(name, factory, config):
 
 def solver_info(name: str) -> SolverInfo:
     """The registry entry of a solver; a clear error lists the valid names."""
-    _load_builtin()
-    if name not in _REGISTRY:
-        raise ValueError(f"unknown solver {name!r}; valid: {', '.join(_REGISTRY)}")
-    return _REGISTRY[name]
+    return _REGISTRY.get(name)
 
 
 def make_solver(name: str, skeleton, **config):
@@ -196,16 +194,6 @@ def make_solver(name: str, skeleton, **config):
 
 
 def solver_names() -> list[str]:
-    """Every registered solver name, in registration order."""
-    _load_builtin()
-    return list(_REGISTRY)
-
-
-def _load_builtin():
-    # the classical solvers register themselves when posekit.ik is imported; the learned ones when
-    # their module is (lesson 03's neural solvers: posekit.models.neural_ik; lesson 04's latent
-    # optimisation: posekit.models.latent_ik; lesson 05's ProtoRes: posekit.models.protores_ik)
-    from . import ccd, dls, fabrik  # noqa: F401
-    from ..models import neural_ik  # noqa: F401  (lesson order: 03 before 04)
-    from ..models import latent_ik  # noqa: F401
-    from ..models import protores_ik  # noqa: F401
+    """Every registered solver name: the built-in ones in lesson order (:data:`posekit.catalogue.SOLVERS`),
+    then the others in registration order."""
+    return _REGISTRY.names()

@@ -61,8 +61,7 @@ class Setup:
         return float(np.mean(np.abs(y - self.test[frames]) / self.sd))
 
     def net(self, method: str, folder=None):
-        from .nn import load_inverse_net  # torch is imported only when a network is loaded
-        from .train import weights_path
+        from .nn import load_inverse_net, weights_path  # torch is imported only when a network is loaded
 
         return load_inverse_net(weights_path(method, folder), self.rig.names, self.rig.skeleton.names)
 

@@ -16,12 +16,21 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from ..data.dataset import NormStats
+from .. import paths
+from ..records import NormStats
 from ..learn import fit, load_checkpoint, save_checkpoint
 
-__all__ = ["KIND", "InverseRigNet", "train_inverse_net", "save_inverse_net", "load_inverse_net"]
+__all__ = ["KIND", "WEIGHTS", "weights_path", "InverseRigNet", "train_inverse_net", "save_inverse_net", "load_inverse_net"]
 
 KIND = "invrig_nn"
+
+WEIGHTS = "invrig_nn_{method}.pt"
+"""File name of the shipped weights of one supersampling method, in ``data_samples/weights/``."""
+
+
+def weights_path(method: str, folder=None):
+    """``folder/invrig_nn_{method}.pt`` (default the shipped weights' folder, :func:`posekit.paths.weights_path`)."""
+    return paths.weights_path(WEIGHTS.format(method=method), folder)
 
 
 class InverseRigNet:

@@ -7,21 +7,12 @@ rig to get their joint positions, and train :func:`~posekit.invrig.nn.train_inve
 
 from __future__ import annotations
 
-from pathlib import Path
-
-from ..paths import samples_dir
-from .nn import save_inverse_net, train_inverse_net
+from ..learn.trainers import register_trainer
+from ..plugins import arg
+from .nn import save_inverse_net, train_inverse_net, weights_path
 from .sampling import METHODS, sample_controls
 
-__all__ = ["WEIGHTS", "LICENCE", "weights_path", "command", "train_all"]
-
-WEIGHTS = "invrig_nn_{method}.pt"
-
-
-def weights_path(method: str, folder=None) -> Path:
-    """``folder/invrig_nn_{method}.pt`` (default ``data_samples/weights``)."""
-    return Path(folder or samples_dir() / "weights") / WEIGHTS.format(method=method)
-
+__all__ = ["LICENCE", "command", "train_all"]
 
 LICENCE = ("MIT: made from the DeepMimic humanoid sample's skeleton (the DeepMimic code and data repository, MIT "
            "licence; as redistributed in the pybullet wheel, zlib licence), posed by posekit's seeded rig animation. "
@@ -58,3 +49,28 @@ def train_all(methods=METHODS, samples: int = 20_000, epochs: int = 20, seed: in
                                     data=data, licence=LICENCE, method=m, samples=samples, final_loss=losses[-1],
                                     train_loss=losses)
     return paths
+
+
+def _cli(args) -> int:
+    """``posekit train invrig``."""
+    import sys
+
+    paths = train_all(methods=args.methods.split(","), samples=args.samples, epochs=args.epochs, seed=args.seed,
+                      out=args.out, progress=sys.stderr.isatty())
+    for m, p in paths.items():
+        print(f"wrote {p} ({p.stat().st_size / 1e3:.0f} kB)")
+    return 0
+
+
+register_trainer(
+    "invrig", _cli, help="inverse-rig networks, one per supersampling method (lesson 02)",
+    makes="data_samples/weights/invrig_nn_{uniform,gaussian,mvn,gmm,pca}.pt",
+    what="inverse-rig networks, one per supersampling method (Holden et al. 2017)",
+    used_by="lesson 02 (02_inverse_rig_mapping.ipynb) and posekit bench invrig",
+    takes="about 40 s on 2 idle cores (8 s per method)",
+    args=[arg("--methods", default="uniform,gaussian,mvn,gmm,pca",
+              help="comma-separated supersampling methods (default: uniform,gaussian,mvn,gmm,pca)"),
+          arg("--samples", type=int, default=20_000, help="training samples per method (default: 20000)"),
+          arg("--epochs", type=int, default=20, help="(default: 20)"),
+          arg("--seed", type=int, default=0, help="(default: 0)"),
+          arg("--out", default=None, help="folder (default data_samples/weights)")])

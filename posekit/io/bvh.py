@@ -6,8 +6,8 @@ Introduced in ``notebooks/00_skeletons_and_poses.ipynb``. Conventions: :mod:`pos
 The reader accepts any channel layout (0-6 channels on any joint; position channels give that
 joint's translation, replacing its OFFSET), any rotation order, ``End Site`` blocks, CRLF line ends,
 tabs, scientific notation, and a unit ``scale`` (0.01 for centimetre files, ``None`` to detect the unit
-from the skeleton's height: :func:`posekit.data.rigs.guess_units`). Joint roles are guessed from the
-names (:func:`posekit.data.rigs.guess_roles`) unless given. Malformed files raise :class:`BVHError`
+from the skeleton's height: :func:`posekit.io.rigs.guess_units`). Joint roles are guessed from the
+names (:func:`posekit.io.rigs.guess_roles`) unless given. Malformed files raise :class:`BVHError`
 naming the file and the line; a ``Frames:`` count one short of the rows that follow (a common exporter
 slip) only warns (:class:`BVHWarning`) and all rows are read.
 """
@@ -25,6 +25,7 @@ from scipy.spatial.transform import Rotation
 from ..kinematics import fk
 from ..rotations import quat_to_euler
 from ..skeleton import Skeleton
+from .rigs import guess_roles, guess_units, rig_report, standing_height, unit_warning
 
 __all__ = ["BVHError", "BVHWarning", "BVHMotion", "read_bvh", "write_bvh"]
 
@@ -64,9 +65,9 @@ class BVHMotion:
     path : str
     units : UnitGuess
         The detected length unit, the scale applied and the standing height
-        (:class:`posekit.data.rigs.UnitGuess`).
+        (:class:`posekit.io.rigs.UnitGuess`).
     rig : RolesReport
-        The recognised rig and the roles it lacks (:class:`posekit.data.rigs.RolesReport`).
+        The recognised rig and the roles it lacks (:class:`posekit.io.rigs.RolesReport`).
     """
 
     skeleton: Skeleton
@@ -141,12 +142,12 @@ def read_bvh(path, scale: float | None = 1.0, drop_tpose: bool = False, roles: d
     scale : float or None
         Multiplies every length (OFFSETs, position channels): 0.01 turns centimetres into metres.
         The default 1 keeps the file's numbers. ``None`` detects the unit from the rest pose's
-        standing height (:func:`posekit.data.rigs.guess_units`) and warns when it is not metres.
+        standing height (:func:`posekit.io.rigs.guess_units`) and warns when it is not metres.
     drop_tpose : bool
         Drop the first frame (many captures start with a T-pose).
     roles : dict, optional
         Canonical roles (see :data:`posekit.skeleton.ROLES`) -> joint names. Default: guessed from
-        the joint names and hierarchy (:func:`posekit.data.rigs.guess_roles`); the roles given
+        the joint names and hierarchy (:func:`posekit.io.rigs.guess_roles`); the roles given
         replace the guessed ones of the same name, the others stay guessed.
     name : str
         Label for the skeleton.
@@ -169,8 +170,6 @@ def read_bvh(path, scale: float | None = 1.0, drop_tpose: bool = False, roles: d
     UserWarning
         ``scale=None`` and the detected unit is not metres (the message says which and how to override).
     """
-    from ..data.rigs import guess_roles, guess_units, rig_report, standing_height, unit_warning
-
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8", errors="replace")

@@ -9,7 +9,7 @@ A checkpoint is one ``torch.save`` file holding a plain dict (nanoGPT style)::
     kind      "invrig_nn", ...              config    the model's arguments (plain Python values)
     state     {name: tensor}                half      True: floating weights stored as float16
     skeleton  {"name", "roles", "names", "parents", "offsets"} or None  (offsets (J, 3) float64, metres)
-    norms     {name: {"mean": tensor, "std": tensor}}           (:class:`~posekit.data.dataset.NormStats`)
+    norms     {name: {"mean": tensor, "std": tensor}}           (:class:`~posekit.records.NormStats`)
     command   the command that made it      seed      its seed
     data      data provenance               licence   the licence of what went in
     extra     anything else (plain values, tensors, numpy arrays)
@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from ..data.dataset import NormStats
+from ..records import NormStats
 from ..skeleton import Skeleton
 
 __all__ = ["FORMAT", "FORMAT_VERSION", "save_checkpoint", "load_checkpoint"]

@@ -1,0 +1,139 @@
+"""Lesson 05's measured studies: Table 2's ablations and the width / accuracy / time trade-off of ProtoRes.
+
+Introduced in ``notebooks/05_protores.ipynb``; ``posekit train protores-studies`` runs :func:`run_studies` and
+writes ``data_samples/results/protores_ablation.json`` (read by ``posekit bench protores`` and the lesson).
+
+* **Ablations** (the paper's Table 2) — ProtoRes with the shipped settings, all for :data:`STEPS` steps
+  (a quarter of the shipped run, so that the study fits a session): as shipped, (a) without the global
+  position decoder (one decoder of twice the blocks predicts the rotations and the pelvis; FK rooted
+  there) and (b) with every joint weighted 1 instead of the randomized ``min(W_M, 1/sigma)``; scored on
+  the shipped benchmarks, with the shipped (8,000-step) ProtoRes beside them.
+* **Width** — ProtoRes of widths 64, 128 (the ablations' reference run) and 256, the same :data:`STEPS`
+  steps: parameters, seconds per step, one-pose time on one thread, and the benchmarks' errors.
+
+Every run is seeded and single-threaded; ``workers`` runs train side by side, one per core.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from concurrent.futures import ProcessPoolExecutor
+
+import numpy as np
+
+from ...learn.trainers import register_trainer
+from ...plugins import arg
+
+__all__ = ["ABLATIONS", "WIDTHS", "STEPS", "run_studies", "studies_path", "score_net"]
+
+ABLATIONS = {"no GPD": {"gpd": False}, "fixed weights": {"weighted": False}}
+WIDTHS = (64, 128, 256)
+STEPS = 2000
+
+
+def studies_path():
+    from ...paths import samples_dir
+
+    return samples_dir() / "results" / "protores_ablation.json"
+
+
+def score_net(net, motions=None) -> dict:
+    """Both benchmarks' L_ikd-L2 (1e-3 m^2), L_loc-geo (rad) and MPJPE (mm) of a network, and its one-pose time."""
+    from ...learn.threads import limit_threads
+    from ...bench.effector_cases import BENCHMARKS, load_benchmark
+    from ...bench.effector_scores import run_learned, scores
+    from .solver import ProtoResSolver
+
+    solver = ProtoResSolver(net.skeleton, net=net)
+    out = {}
+    with limit_threads(1):
+        for name in BENCHMARKS:
+            b = load_benchmark(name, motions)
+            r = run_learned(solver, b)
+            sc = scores(b, r["global_pos"], r["local_rot"], r["global_rot"], r["gpd_pos"])
+            out[f"{name}_ikd_l2_e3"] = round(sc["ikd_l2"] * 1000, 3)
+            out[f"{name}_loc_geo"] = round(sc["loc_geo"], 4)
+            out[f"{name}_mpjpe_mm"] = round(sc["mpjpe_mm"], 1)
+        args = solver.arrays(solver.resolve(b.effectors(0)))
+        for _ in range(5):
+            solver.predict(*args)
+        ts = []
+        for _ in range(50):
+            t = time.perf_counter()
+            solver.predict(*args)
+            ts.append(time.perf_counter() - t)
+    out["ms_predict"] = round(float(np.median(ts)) * 1000, 2)
+    return out
+
+
+def _job(job):
+    from ...data.bandai_mini import load_bandai_mini
+    from ...data.metrics import body_joints
+    from .networks import ProtoResConfig
+    from .train import train_protores
+
+    label, cfg_kw, settings, seed = job
+    motions = load_bandai_mini()
+    cfg = ProtoResConfig(len(body_joints(motions.skeleton)), **cfg_kw)
+    net, rep = train_protores(motions, seed=seed, out=False, progress=False, config=cfg, **settings)
+    return {"method": label, **score_net(net, motions), "parameters": net.n_parameters(), "steps": rep["steps"],
+            "train_min": round(rep["train_seconds"] / 60, 1), "ms_per_step": round(rep["seconds_per_step"] * 1000),
+            "val_mpjpe_mm": round(rep["val"]["mpjpe_mm"], 1)}
+
+
+def run_studies(seed: int = 0, out=None, workers: int = 2, progress: bool = True) -> dict:
+    """Train and score the studies of the module docstring; write the JSON (``out=False``: none)."""
+    from ...data.bandai_mini import load_bandai_mini
+    from .solver import load_protores
+
+    t0 = time.perf_counter()
+    jobs = [(f"width {w}", {"width": w}, {"steps": STEPS}, seed) for w in (256, 64, 128)]  # longest first
+    jobs += [(f"ProtoRes, {k}", {k2: v for k2, v in kw.items() if k2 == "gpd"},
+              {"steps": STEPS, **{k2: v for k2, v in kw.items() if k2 != "gpd"}}, seed) for k, kw in ABLATIONS.items()]
+    with ProcessPoolExecutor(max_workers=max(1, workers)) as pool:
+        done = list(pool.map(_job, jobs))
+    width = lambda r: int(r["method"][6:]) if r["method"].startswith("width") else 0  # noqa: E731
+    done.sort(key=lambda r: (not r["method"].startswith("width"), width(r)))
+    shipped = load_protores("protores")
+    rep = shipped.checkpoint["extra"]["report"]
+    full = {"method": "ProtoRes (shipped)", **score_net(shipped, load_bandai_mini()),
+            "parameters": shipped.n_parameters(), "steps": rep["steps"],
+            "train_min": round(rep["train_seconds"] / 60, 1),
+            "ms_per_step": round(rep["seconds_per_step"] * 1000), "val_mpjpe_mm": round(rep["val"]["mpjpe_mm"], 1)}
+    ref = dict(next(r for r in done if r["method"] == "width 128"), method=f"ProtoRes ({STEPS} steps)")
+    res = {"rows": [full, ref] + [r for r in done if r["method"].startswith("ProtoRes")],
+           "width": [r for r in done if r["method"].startswith("width")], "seed": seed,
+           "steps": STEPS, "seconds": round(time.perf_counter() - t0),
+           "command": f"posekit train protores-studies --seed {seed}"}
+    if out is not False:
+        path = studies_path() if out is None else out
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(res, indent=1) + "\n")
+    return res
+
+
+def _cli(args) -> int:
+    """``posekit train protores-studies``."""
+    import sys
+    from pathlib import Path
+
+    out = Path(args.out) if args.out else studies_path()
+    res = run_studies(seed=args.seed, out=out, workers=args.workers, progress=sys.stderr.isatty())
+    for r in res["rows"] + res["width"]:
+        print(f"{r['method']:<28} random L_ikd-L2 {r['random_ikd_l2_e3']:.3f}e-3 m^2, "
+              f"L_loc-geo {r['random_loc_geo']:.3f}; "
+              f"5-point {r['5point_ikd_l2_e3']:.3f}e-3, {r['5point_loc_geo']:.3f}; {r['train_min']} min")
+    print(f"wrote {out} in {res['seconds']} s")
+    return 0
+
+
+register_trainer(
+    "protores-studies", _cli, help="lesson 05's ablations (no GPD, fixed weights) and width study",
+    makes="data_samples/results/protores_ablation.json",
+    what="lesson 05's Table 2 ablations (no GPD, fixed weights) and the width study",
+    used_by="lesson 05 (05_protores.ipynb), posekit bench protores",
+    takes="about 15 minutes on 2 cores (five 2,000-step runs, two side by side)",
+    args=[arg("--workers", type=int, default=2, help="runs side by side, one thread each (default: 2)"),
+          arg("--seed", type=int, default=0, help="(default: 0)"),
+          arg("--out", default=None, help="JSON file (default data_samples/results/protores_ablation.json)")])

@@ -1,0 +1,269 @@
+"""The posing studio's Python side (the Voila app in a browser: tests/viz/test_studio_browser.py): key frames
+and in-betweens, BVH export of every kind of pose, setup files, undo/redo and bad input."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from posekit.data import load_bandai_mini
+from posekit.data.cases import build_cases
+from posekit.ik import Effector, effector_set, make_solver
+from posekit.ik.keyframes import inbetween_effectors, interpolate_effectors, slerp, solve_sequence, write_poses_bvh
+from posekit.io.bvh import BVHError, read_bvh
+from posekit.rotations import geodesic_distance, quat_to_matrix, random_rotations
+
+
+@pytest.fixture(scope="module")
+def bandai():
+    m = load_bandai_mini()
+    return m, build_cases(m, 4, seed=0, start="same-clip")
+
+
+@pytest.fixture(scope="module")
+def studio(bandai, tmp_path_factory):
+    from posekit.viz import PosingStudio
+
+    m, cases = bandai
+    s = m.skeleton
+    return PosingStudio(s, cases.pose(0), ["fabrik", "protores"], effector_set(s, "5", cases.target_pos[0]),
+                        export_dir=tmp_path_factory.mktemp("studio"))
+
+
+def test_slerp_is_the_constant_speed_shorter_arc():
+    q = random_rotations((2,), 3)
+    R0, R1 = quat_to_matrix(q[0]), quat_to_matrix(q[1])
+    total = geodesic_distance(R0, R1)
+    for s in (0.0, 0.3, 0.5, 1.0):
+        Rs = quat_to_matrix(slerp(q[0], q[1], s))
+        assert np.isclose(geodesic_distance(R0, Rs), s * total, atol=1e-7)
+        np.testing.assert_allclose(quat_to_matrix(slerp(q[0], -q[1], s)), Rs, atol=1e-9)  # -q is the same rotation
+
+
+def test_inbetweens_interpolate_every_kind(bandai):
+    m, cases = bandai
+    s = m.skeleton
+    q = random_rotations((2,), 5)
+    a = [Effector("Hand_L", [0.0, 1.0, 0.0]), Effector("Chest", q[0], "rotation", tolerance=0.01),
+         Effector("Head", [0.0, 1.6, 1.0], "look_at", axis=[0, 0, 1])]
+    b = [Effector("Head", [1.0, 1.6, 0.0], "look_at", axis=[1, 0, 0]), Effector("Hand_L", [0.4, 1.2, 0.0]),
+         Effector("Chest", q[1], "rotation", tolerance=0.03)]  # the same effectors in another order
+    mid = interpolate_effectors(s, a, b, 0.5)
+    assert [e.kind for e in mid] == ["position", "rotation", "look_at"]
+    np.testing.assert_allclose(mid[0].target, [0.2, 1.1, 0.0])
+    np.testing.assert_allclose(mid[1].tolerance, 0.02)
+    R = mid[1].target
+    assert np.isclose(geodesic_distance(R, quat_to_matrix(q[0])), geodesic_distance(R, quat_to_matrix(q[1])))
+    np.testing.assert_allclose(mid[2].axis, np.array([1, 0, 1]) / np.sqrt(2), atol=1e-12)
+    smooth = interpolate_effectors(s, a, b, 0.25, ease="smooth")
+    np.testing.assert_allclose(smooth[0].target[0], 0.4 * (3 * 0.25 ** 2 - 2 * 0.25 ** 3))
+    frames = inbetween_effectors(s, [a, b, a], 4)
+    assert len(frames) == 11 and frames[0] is not frames[5] and frames[5] == b and frames[10] == a
+    with pytest.raises(ValueError, match=r"different effectors \(only in the first: Head look-at"):
+        interpolate_effectors(s, a, a[:2], 0.5)
+    with pytest.raises(ValueError, match="at least two keys"):
+        inbetween_effectors(s, [a], 3)
+    with pytest.raises(ValueError, match="unknown ease"):
+        interpolate_effectors(s, a, b, 0.5, ease="bouncy")
+
+
+@pytest.mark.parametrize("name", ["fabrik", "dls", "protores", "neural"])
+def test_animated_bvh_reads_back_to_the_solved_poses(bandai, tmp_path, name):
+    """Positions-only solvers (FABRIK, neural) get rotations and, where needed, position channels; the file
+    reads back through posekit's reader to every frame's pose."""
+    m, cases = bandai
+    s = m.skeleton
+    keys = [effector_set(s, "5", cases.target_pos[k]) for k in range(3)]
+    results = solve_sequence(make_solver(name, s), cases.pose(0), inbetween_effectors(s, keys, 5, "smooth"))
+    assert len(results) == 13
+    path = tmp_path / f"{name}.bvh"
+    write_poses_bvh(path, s, [r.pose for r in results], cases.pose(0), frame_time=1 / 24)
+    back = read_bvh(path)
+    assert back.n_frames == 13 and np.isclose(back.frame_time, 1 / 24) and list(back.skeleton.names) == list(s.names)
+    np.testing.assert_allclose(back.global_positions(), np.stack([r.pose.global_pos for r in results]), atol=1e-6)
+    text = path.read_text()
+    assert text.startswith("HIERARCHY\nROOT joint_Root") and "MOTION\nFrames: 13\nFrame Time: 0.041666667" in text
+    # the root has 6 channels; a rotation solver needs no position channel anywhere else
+    moved = [ch for ch in back.channels[1:] if "Xposition" in ch]
+    assert back.channels[0][:3] == ("Xposition", "Yposition", "Zposition")
+    if name in ("dls", "protores"):
+        assert not moved
+
+
+def test_studio_undo_redo_coalesces_drags(studio):
+    ed = studio.editor
+    n0, steps0 = len(ed.rows), len(studio.history)
+    t0 = ed.rows[0]["target"].copy()
+    for k in range(5):  # one drag: five moves in quick succession are one step
+        ed.move_target(0, t0 + [0.02 * (k + 1), 0.0, 0.0])
+    assert len(studio.history) == steps0 + 1
+    ed.add("Chest", "rotation")
+    ed.set_rotation(len(ed.rows) - 1, yaw=20.0)
+    assert len(studio.history) == steps0 + 3 and len(ed.rows) == n0 + 1
+    studio.undo()
+    np.testing.assert_allclose(ed.rows[-1]["euler"], 0.0)
+    studio.undo()
+    assert len(ed.rows) == n0
+    studio.undo()
+    np.testing.assert_allclose(ed.rows[0]["target"], t0)
+    for name in studio.solvers:  # undo re-solved every view
+        assert not isinstance(studio.editor.results[name], Exception)
+    assert studio.undo_button.disabled is (studio.position == 0)
+    studio.redo(); studio.redo(); studio.redo()
+    assert len(ed.rows) == n0 + 1 and ed.rows[-1]["euler"][0] == 20.0 and studio.redo_button.disabled
+    studio.undo(); studio.undo(); studio.undo()  # leave it as it was for the next tests
+    # a new change after undo drops the redo steps
+    ed.move_target(1, ed.rows[1]["target"] + [0.0, 0.01, 0.0])
+    assert studio.position == len(studio.history) - 1
+
+
+def test_studio_setup_round_trip_and_bad_files(studio, tmp_path):
+    ed = studio.editor
+    ed.add("Head", "look_at", lam=0.3)
+    path = studio.save(tmp_path / "setup.json")
+    saved = json.loads(path.read_text())
+    assert saved["format"] == "posekit-effector-setup" and saved["solvers"] == ["fabrik", "protores"]
+    assert saved["effectors"][-1]["kind"] == "look_at" and saved["effectors"][-1]["lam"] == 0.3
+    assert "download setup.json" in studio.message.value
+    ed.remove(len(ed.rows) - 1)
+    studio.load(path)
+    assert ed.setup() == saved["effectors"]
+    before = ed.setup()
+    bad = {
+        "broken.json": ('{"format": "posekit-effector-setup",\n "version": 1\n "effectors": []}', r"line 3, column 2"),
+        "other.json": ('{"hello": 1}', "not a posekit effector setup"),
+        "joint.json": (json.dumps({**saved, "effectors": [{"joint": "Tail", "kind": "position", "target": [0, 0, 0]}]}),
+                       "effector 1: unknown joint 'Tail'"),
+        "shape.json": (json.dumps({**saved, "effectors": [{"joint": "Hips", "kind": "position", "target": [0, 0]}]}),
+                       r"'target' must be \(3,\) finite numbers"),
+        "kind.json": (json.dumps({**saved, "effectors": [{"joint": "Hips", "kind": "pointing", "target": [0, 0, 0]}]}),
+                      "unknown kind 'pointing'"),
+        "rot.json": (json.dumps({**saved, "effectors": [{"joint": "Hips", "kind": "rotation", "base": np.ones((3, 3)).tolist()}]}),
+                     "not a rotation matrix"),
+        "skeleton.json": (json.dumps({**saved, "skeleton": ["a", "b"]}), "made for another skeleton"),
+    }
+    for name, (text, message) in bad.items():
+        (tmp_path / name).write_text(text)
+        with pytest.raises(ValueError, match=message):
+            studio.load(tmp_path / name)
+        assert ed.setup() == before, name  # nothing lost
+    # the button path shows the message instead of raising
+    studio.setup_path.value = str(tmp_path / "broken.json")
+    studio._safely(lambda: studio.load(studio.setup_path.value))
+    assert "line 3, column 2" in studio.message.value and ed.setup() == before
+    # an upload (bytes from the browser) goes the same way
+    studio._on_upload({"new": ({"name": "x.json", "content": memoryview(b"\xff\xfe")},)})
+    assert "not a text file" in studio.message.value
+    studio._on_upload({"new": ({"name": "s.json", "content": memoryview(path.read_bytes())},)})
+    assert studio.message.value.startswith("loaded s.json")
+    ed.remove(len(ed.rows) - 1)
+
+
+def test_studio_exports_bvh_png_and_reads_a_start_pose(studio, bandai, tmp_path):
+    m, cases = bandai
+    for name in studio.solvers:
+        p = studio.export_bvh(tmp_path / f"{name}.bvh", solver=name)
+        np.testing.assert_allclose(read_bvh(p).global_positions()[0], studio.editor.results[name].pose.global_pos,
+                                   atol=1e-6)
+        assert "read back within 0.000 mm" in studio.message.value
+    png = studio.export_png(tmp_path / "views.png")
+    from PIL import Image
+
+    with Image.open(png) as im:
+        assert im.size[0] >= 600 and im.size[1] >= 300
+    # a start pose from a BVH file (here one we wrote), and a malformed one that changes nothing
+    write_poses_bvh(tmp_path / "start.bvh", m.skeleton, [cases.pose(2)], cases.pose(2))
+    studio.load_start_bvh(tmp_path / "start.bvh")
+    np.testing.assert_allclose(studio.start.global_pos, cases.pose(2).global_pos, atol=1e-6)
+    (tmp_path / "bad.bvh").write_text("HIERARCHY\nROOT Hips\n{\n  OFFSET 0 zero 0\n")
+    with pytest.raises(BVHError, match=r"bad.bvh:4: "):
+        studio.load_start_bvh(tmp_path / "bad.bvh")
+    np.testing.assert_allclose(studio.start.global_pos, cases.pose(2).global_pos, atol=1e-6)
+    studio._on_upload({"new": ({"name": "bad.bvh", "content": memoryview((tmp_path / "bad.bvh").read_bytes())},)})
+    assert "bad.bvh:4: " in studio.message.value
+    write_poses_bvh(tmp_path / "start0.bvh", m.skeleton, [cases.pose(0)], cases.pose(0))
+    studio.load_start_bvh(tmp_path / "start0.bvh")  # back to the fixture's start for the next tests
+
+
+def test_studio_timeline_builds_and_exports_an_animation(studio, tmp_path):
+    ed = studio.editor
+    studio.clear_keys()
+    with pytest.raises(ValueError, match="at least two keys"):
+        studio.build_animation()
+    studio.add_key()
+    hand = [i for i, r in enumerate(ed.rows) if r["joint"] == "Hand_L"][0]
+    ed.move_target(hand, ed.rows[hand]["target"] + [0.0, 0.3, 0.0])
+    studio.add_key()
+    ed.add("Chest", "rotation")
+    with pytest.raises(ValueError, match="same effectors as the first"):
+        studio.add_key()
+    ed.remove(len(ed.rows) - 1)
+    studio.inbetweens.value = 6
+    frames = studio.build_animation("fabrik")
+    assert len(frames) == 8 and all(r.converged for r in frames)
+    assert studio.timeline_viewer is not None and studio.timeline_box.children
+    p = studio.export_animation(tmp_path / "anim.bvh")
+    back = read_bvh(p)
+    assert back.n_frames == 8
+    np.testing.assert_allclose(back.global_positions(), np.stack([r.pose.global_pos for r in frames]), atol=1e-6)
+    studio.clear_keys()
+
+
+def test_studio_solver_choice_and_a_failing_solver(studio, bandai):
+    from posekit.ik.registry import register, unregister
+
+    with pytest.raises(ValueError, match="choose 2 to 4 solvers"):
+        studio.set_solvers(["fabrik"])
+    with pytest.raises(ValueError, match="unknown solver"):
+        studio.set_solvers(["fabrik", "nope"])
+    setup = studio.editor.setup()
+    studio.set_solvers(["dls", "ccd", "protores-transformer"])
+    assert studio.solvers == ["dls", "ccd", "protores-transformer"] and studio.editor.setup() == setup
+    assert len(studio.editor.viewers) == 3 and "protores-transformer" in studio.summary.value
+
+    class Broken:
+        kinds, needs_start = ("position",), True
+
+        def __init__(self, skeleton):
+            self.skeleton = skeleton
+
+        def solve(self, start, effectors):
+            raise RuntimeError("kaput")
+
+    register("broken-test", Broken)
+    try:
+        studio.available.append("broken-test")
+        studio.set_solvers(["fabrik", "broken-test"])
+        assert isinstance(studio.editor.results["broken-test"], RuntimeError)
+        assert "RuntimeError: kaput" in studio.editor.labels["broken-test"].value
+        assert "failed: kaput" in studio.summary.value
+        assert studio.editor.results["fabrik"].converged  # the others keep working
+        ed = studio.editor
+        ed.move_target(0, ed.rows[0]["target"] + [0.05, 0.0, 0.0])
+        assert studio.editor.results["fabrik"].converged
+    finally:
+        studio.available.remove("broken-test")
+        unregister("broken-test")
+        studio.set_solvers(["fabrik", "protores"])
+
+
+def test_bench_studio_refuses_bad_configurations_before_starting_anything():
+    from posekit.bench.studio import rapid_updates, run
+
+    with pytest.raises(ValueError, match="give 2-4 registered solvers"):
+        run(updates=10, configs=["fabrik"])
+    with pytest.raises(ValueError, match=r"unknown: nope"):
+        run(updates=10, configs=["fabrik,nope"])
+    with pytest.raises(ValueError, match="at least 1"):
+        rapid_updates(None, 0)
+
+
+def test_skeleton_sides_from_names():
+    from posekit.skeleton import Skeleton
+
+    names = ["Hips", "LeftUpLeg", "RightUpLeg", "Spine", "Hand_L", "Hand_R", "left_foot", "LThumb", "Head"]
+    parents = [-1, 0, 0, 0, 3, 3, 1, 4, 3]
+    s = Skeleton(names, np.array(parents), np.zeros((len(names), 3)))
+    assert list(s.sides()) == [0, 1, -1, 0, 1, -1, 1, 1, 0]

@@ -1,0 +1,200 @@
+"""The posing studio as a browser app: notebook 06 served by Voila, driven in a real headless Chromium.
+
+It loads and every view draws a skeleton; dragging a target in 3D re-solves every view; a rotation and a
+look-at effector change the pose; the BVH export downloads a file posekit's reader parses; 1,000 rapid
+target updates all arrive, the kernel survives and its memory does not grow (the latency is printed, not
+asserted: ``posekit bench studio`` measures it); and Voila's kernel is gone when the test ends.
+
+Needs Debian's ``chromium`` (``make test`` installs it) and Playwright's Python package.
+"""
+
+from __future__ import annotations
+
+
+import numpy as np
+import pytest
+
+from tests.viz.browser_helpers import BACKGROUND, pixels as _pixels, wait_for
+from posekit.bench.studio import (CHROMIUM, choose_solvers, launch_chromium, open_studio, rapid_updates,
+                                  serve_voila, update_number)
+
+pytestmark = pytest.mark.browser
+
+VIEWS = ".posekit-views"
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    if not __import__("pathlib").Path(CHROMIUM).exists():
+        pytest.fail(f"{CHROMIUM} not found: install Debian's chromium and chromium-driver (make test does)")
+    with serve_voila(folder=tmp_path_factory.mktemp("voila"), cull_idle_s=600) as s:
+        yield s
+
+
+@pytest.fixture(scope="module")
+def page(server):
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as p:
+        browser = launch_chromium(p)
+        try:
+            pg = open_studio(browser, server.url)
+            server.note_kernels()
+            yield pg
+        finally:
+            browser.close()
+
+
+def _labels(page):
+    return page.locator(f"{VIEWS} .widget-html-content", has_text="time")
+
+
+def _texts(page):
+    return [t for t in _labels(page).all_inner_texts()]
+
+
+def _canvases(page):
+    return page.locator(f"{VIEWS} canvas").all()
+
+
+def _images(page):
+    return [_pixels(c) for c in _canvases(page)]
+
+
+def _all_changed(before, after, frac=0.0005):
+    return all((np.abs(a - b).sum(-1) > 60).mean() > frac for a, b in zip(before, after))
+
+
+def _wait_update(page, n0, what, timeout=60):
+    wait_for(lambda: update_number(page) > n0, timeout, what, every=0.2)
+
+
+def test_studio_loads_and_every_view_shows_a_skeleton(page):
+    canvases = _canvases(page)
+    assert len(canvases) == 3  # the notebook compares FABRIK, DLS and ProtoRes
+    for c in canvases:
+        img = wait_for(lambda c=c: (lambda im: im if (np.abs(im - BACKGROUND).sum(-1) > 60).mean() > 0.002
+                                     else None)(_pixels(c)), 60, "a skeleton on every canvas")
+        assert (np.abs(img - BACKGROUND).sum(-1) > 60).mean() > 0.002
+    texts = _texts(page)
+    assert len(texts) == 3 and all("worst effector" in t and "ms" in t for t in texts), texts
+    summary = page.locator(".posekit-summary").inner_text()
+    assert all(n in summary for n in ("fabrik", "dls", "protores")), summary
+
+
+def test_dragging_a_target_in_3d_resolves_every_view(page, server):
+    first = _canvases(page)[0]
+    first.scroll_into_view_if_needed()
+    before, texts, n0 = _images(page), _texts(page), update_number(page)
+    # the selected joint (the left hand, with its target) wears a translucent yellow marker
+    img = _pixels(first)
+    r, g, b = img[..., 0], img[..., 1], img[..., 2]
+    ys, xs = np.nonzero((r > 180) & (g > 120) & (g < 215) & (b < 90))
+    assert len(xs) > 3, "the selected joint's yellow marker is not on the canvas"
+    x, y = float(np.median(xs)), float(np.median(ys))
+    page.locator(VIEWS).get_by_role("button", name="drag in 3D").click()
+    box = first.bounding_box()
+    page.mouse.move(box["x"] + x, box["y"] + y)
+    page.mouse.down()
+    page.mouse.move(box["x"] + x + 15, box["y"] + y - 45, steps=8)
+    page.mouse.up()
+    _wait_update(page, n0, "a solve after the drag")
+    wait_for(lambda: all(a != b for a, b in zip(_texts(page), texts)), 60, "every view's status to change")
+    wait_for(lambda: _all_changed(before, _images(page)), 30, "every view to re-pose")
+    # the target moved up (the sliders show it) and the studio counted the drag as one undo step
+    ty = page.locator(".posekit-target-y .widget-readout").inner_text()
+    assert float(ty) > 0.949 + 0.02, ty
+    page.locator(VIEWS).get_by_role("button", name="drag in 3D").click()  # orbit again
+    page.screenshot(path=str(server.folder / "studio_after_drag.png"))
+
+
+def _add(page, joint, kind):
+    n0 = update_number(page)
+    row = page.locator(VIEWS).locator(".widget-hbox", has=page.get_by_role("button", name="add effector"))
+    row.locator(".widget-dropdown", has_text="joint").locator("select").select_option(joint)
+    row.locator(".widget-dropdown", has_text="kind").locator("select").select_option(kind)
+    row.get_by_role("button", name="add effector").click()
+    _wait_update(page, n0, f"the {kind} effector on {joint}")
+
+
+def _drag_slider(page, handle, dx):
+    handle.scroll_into_view_if_needed()
+    box = handle.bounding_box()
+    page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+    page.mouse.down()
+    page.mouse.move(box["x"] + box["width"] / 2 + dx, box["y"] + box["height"] / 2, steps=6)
+    page.mouse.up()
+
+
+def test_rotation_and_look_at_effectors_change_the_pose(page):
+    # a rotation on the chest, turned with its yaw slider: DLS and ProtoRes (which honour rotations) re-pose
+    _add(page, "Chest", "rotation")
+    canv = _canvases(page)
+    before = [_pixels(c) for c in canv[1:]]
+    texts = _texts(page)[1:]
+    n0 = update_number(page)
+    _drag_slider(page, page.locator(VIEWS).locator(".widget-slider", has_text="yaw").locator(".noUi-handle").first, 90)
+    _wait_update(page, n0, "a solve after the yaw slider")
+    wait_for(lambda: all(a != b for a, b in zip(_texts(page)[1:], texts)), 60, "DLS and ProtoRes to follow the yaw")
+    wait_for(lambda: _all_changed(before, [_pixels(c) for c in _canvases(page)[1:]]), 30, "their views to turn")
+    assert all("°" in t for t in _texts(page)[1:])  # an angular error is reported
+    # a look-at on the neck, its target moved with the sliders (the first view's joint list selects it)
+    _add(page, "Neck", "look_at")
+    page.locator(VIEWS).locator(".widget-dropdown", has_text="joint").first.locator("select").select_option("Neck")
+    before = [_pixels(c) for c in _canvases(page)[1:]]
+    texts = _texts(page)[1:]
+    n0 = update_number(page)
+    _drag_slider(page, page.locator(".posekit-target-x .noUi-handle").first, 120)
+    _wait_update(page, n0, "a solve after moving the look-at target")
+    wait_for(lambda: all(a != b for a, b in zip(_texts(page)[1:], texts)), 60, "DLS and ProtoRes to look")
+    wait_for(lambda: _all_changed(before, [_pixels(c) for c in _canvases(page)[1:]]), 30, "their views to turn")
+
+
+def test_bvh_export_downloads_a_file_posekit_reads(page, tmp_path):
+    from posekit.io.bvh import read_bvh
+
+    page.locator(".widget-dropdown", has_text="export").locator("select").select_option("dls")
+    page.get_by_role("button", name="pose as BVH").click()
+    message = page.locator(".posekit-message")
+    wait_for(lambda: "read back within 0.000 mm" in message.inner_text(), 60, "the export message")
+    with page.expect_download(timeout=30_000) as dl:
+        message.get_by_text("download pose_dls.bvh").click()
+    path = tmp_path / "pose.bvh"
+    dl.value.save_as(path)
+    motion = read_bvh(path)
+    assert motion.n_frames == 1 and len(motion.skeleton.names) == 22 and motion.skeleton.names[1] == "Hips"
+    # a malformed setup upload is reported in the app and nothing is lost
+    n_rows = page.locator(VIEWS).get_by_role("button", name="remove").count()
+    with page.expect_file_chooser(timeout=30_000) as chooser:
+        page.get_by_role("button", name="upload setup / BVH").click()
+    chooser.value.set_files(files=[{"name": "bad.json", "mimeType": "application/json",
+                                    "buffer": b'{"format": "posekit-effector-setup",\n oops}'}])
+    wait_for(lambda: "bad.json, line 2, column 2" in message.inner_text(), 30, "the upload's error message")
+    assert page.locator(VIEWS).get_by_role("button", name="remove").count() == n_rows
+
+
+def test_1000_rapid_updates_keep_the_kernel_alive_and_small(page, server):
+    choose_solvers(page, ["fabrik", "protores"])
+    page.locator(VIEWS).locator(".widget-dropdown", has_text="joint").first.locator("select").select_option("Hand_L")
+    kernel = server.note_kernels()[0]
+    result = rapid_updates(page, 1000, kernel)
+    lat = result["latency_ms"]
+    assert result["updates"] == 1000 and len(lat) >= 990
+    assert result["kernel_alive"] and kernel.is_running()
+    growth = result["rss_mb_end"] - result["rss_mb_early"]
+    print(f"\nstudio, fabrik + protores: 1,000 updates, latency p50 {np.percentile(lat, 50):.0f} ms, "
+          f"p95 {np.percentile(lat, 95):.0f} ms; kernel RSS {result['rss_mb_early']:.0f} -> {result['rss_mb_end']:.0f} MB")
+    assert growth < 50, f"the kernel grew by {growth:.0f} MB over 900 updates"
+    # still answering
+    n0 = update_number(page)
+    page.keyboard.press("ArrowRight")
+    _wait_update(page, n0, "an update after the 1,000")
+
+
+def test_voila_shuts_its_kernel_down(page, server):
+    kernels = server.note_kernels()
+    assert kernels and all(k.is_running() for k in kernels)
+    page.close()
+    alive = server.stop()
+    assert alive == [], f"kernels still running after Voila stopped: {alive}"
+    assert all(not k.is_running() or k.status() == "zombie" for k in kernels)

@@ -1,0 +1,291 @@
+"""The widgets' Python side (the browser side is tests/viz/test_browser.py)."""
+
+import numpy as np
+import pytest
+
+from posekit.data.cases import build_cases
+from posekit.ik import effector_set
+from posekit.ik.registry import make_solver
+from posekit.viz import SkeletonViewer, SolverPanel
+
+
+def test_viewer_updates_buffers_not_scene(sample):
+    v = SkeletonViewer(sample.skeleton, sample.global_pos[0])
+    children = v.scene.children
+    attr = v._joints.geometry.attributes["position"]
+    v.set_pose(sample.global_pos[50])
+    assert v.scene.children is children and v._joints.geometry.attributes["position"] is attr
+    # each bone is a ring of vertices round the parent and one round the child, at the bone's radius
+    b = v._bones
+    rings = b.geometry.attributes["position"].array.reshape(-1, 2, b.sides, 3)
+    pos = sample.global_pos[50]
+    np.testing.assert_allclose(rings[:, 1].mean(1), pos[b.pairs[:, 1]], atol=1e-5)
+    np.testing.assert_allclose(rings[:, 0].mean(1), pos[b.pairs[:, 0]], atol=1e-5)
+    np.testing.assert_allclose(np.linalg.norm(rings[:, 1] - pos[b.pairs[:, 1]][:, None], axis=-1), b.radius, atol=1e-5)
+    axis = pos[b.pairs[:, 1]] - pos[b.pairs[:, 0]]
+    radial = rings[:, 1] - pos[b.pairs[:, 1]][:, None]
+    assert np.abs(np.einsum("bsk,bk->bs", radial, axis)).max() < 1e-5  # rings square to the bone
+    normals = b.geometry.attributes["normal"].array.reshape(rings.shape)
+    np.testing.assert_allclose(normals[:, 1] * b.radius, radial, atol=1e-5)
+
+
+def test_bones_are_coloured_by_side(sample):
+    s = sample.skeleton
+    v = SkeletonViewer(s)
+    colours = v._bones.geometry.attributes["color"].array.reshape(len(v._bones.pairs), -1, 3)[:, 0]
+    side = s.sides()[v._bones.pairs[:, 1]]
+    left, right, centre = (colours[side == k] for k in (1, -1, 0))
+    assert len(left) and len(right) and len(centre)
+    assert np.ptp(left, axis=0).max() == 0 and np.ptp(right, axis=0).max() == 0
+    assert left[0, 2] > left[0, 0] and right[0, 0] > right[0, 2]  # left blue, right red
+    assert list(s.sides()[[s.index("left_hip"), s.index("right_hip"), s.index("chest")]]) == [1, -1, 0]
+
+
+def _in_view(v, pos):
+    """Every joint inside the camera's field of view (pinhole model of the viewer's camera)."""
+    cam = np.asarray(v.camera.position, float)
+    forward = -cam / np.linalg.norm(cam)  # the camera looks at the orbit pivot, the origin
+    right = np.cross(forward, [0.0, 1.0, 0.0])
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    rel = pos - v._offset - cam
+    depth = rel @ forward
+    tan_v = np.tan(np.radians(v.FOV) / 2)
+    return bool(np.all(depth > 0) and np.all(np.abs(rel @ up) / depth < tan_v)
+                and np.all(np.abs(rel @ right) / depth < tan_v * v.aspect))
+
+
+def test_camera_keeps_the_pose_framed(sample):
+    s = sample.skeleton
+    v = SkeletonViewer(s, sample.global_pos[0], width=300, height=330)
+    assert _in_view(v, sample.global_pos[0])
+    far = sample.global_pos[0] + np.array([3.0, 0.0, -4.0])
+    assert not _in_view(v, far)
+    v.set_pose(far)  # a pose that walked off: the view follows it
+    assert _in_view(v, far)
+    # playback: framed on the whole clip, every frame in view without moving the camera again
+    frames = sample.global_pos[sample.clip_frames("walk")]
+    w = SkeletonViewer(s, frames[0], width=300, height=330)
+    w.player(frames)
+    cam = list(w.camera.position)
+    assert all(_in_view(w, f) for f in frames[::10])
+    w.set_pose(frames[-1])
+    assert list(w.camera.position) == cam
+
+
+def test_drag_moves_the_target_across_the_camera_facing_plane(sample):
+    from posekit.viz.drag import drag_point
+
+    np.testing.assert_allclose(drag_point([0, 0, 5], [0, 1, 4], [0, 0, 0], [0, 0, 1]), [0, 5, 0])
+    assert drag_point([0, 0, 5], [1, 0, 5], [0, 0, 0], [0, 0, 1]) is None  # parallel to the plane
+    assert drag_point([0, 0, 5], [0, 0, 6], [0, 0, 0], [0, 0, 1]) is None  # behind the camera
+    s = sample.skeleton
+    v = SkeletonViewer(s, sample.global_pos[0])
+    seen = []
+    v.on_target_change(lambda n, p: seen.append((n, p)))
+    hand = sample.global_pos[0][s.index("left_wrist")]
+    v.drag_mode.value = True
+    assert v.orbit.enabled is False
+    v.grab(hand + 0.005)  # pressed on the joint
+    assert v.dragging == "left_wrist" and v.selected == "left_wrist"
+    cam = np.asarray(v.camera.position) + v._offset
+    # the browser reports a point on the mouse ray (here: half-way to a point 10 cm right of the hand,
+    # seen from the camera); the target goes where the ray meets the plane through the hand
+    goal = hand + 0.1 * np.cross(cam - hand, [0, 1, 0]) / np.linalg.norm(np.cross(cam - hand, [0, 1, 0]))
+    v.drag_to(cam + 0.5 * (goal - cam))
+    assert seen and seen[-1][0] == "left_wrist"
+    np.testing.assert_allclose(v.targets["left_wrist"], goal, atol=1e-9)
+    np.testing.assert_allclose(v.sliders[0].value, goal[0], atol=v.SLIDER_STEP)
+    v._on_release({"new": [0, 0, 0]})
+    n = len(seen)
+    v.drag_to(cam + 0.5 * (hand - cam))
+    assert len(seen) == n  # released: moving the mouse no longer drags
+    # pressed on the target marker (not the joint): the same target is grabbed again
+    v.grab(goal + 0.01)
+    assert v.dragging == "left_wrist"
+    v.drag_mode.value = False
+    assert v.orbit.enabled is True and v.dragging is None
+
+
+def test_target_sliders_are_fine_and_centred_on_the_joint(sample):
+    s = sample.skeleton
+    v = SkeletonViewer(s, sample.global_pos[0])
+    v.select("right_ankle")
+    ankle = sample.global_pos[0][s.index("right_ankle")]
+    for sl, c in zip(v.sliders, ankle):
+        assert sl.step == 0.001 and sl.min <= c - 0.49 and sl.max >= c + 0.49 and sl.max - sl.min < 1.01
+    # a target moved far away from code: the range follows it
+    v.move_target("right_ankle", ankle + [2.0, 0.0, 0.0])
+    assert v.sliders[0].min <= ankle[0] + 2.0 <= v.sliders[0].max
+    # stored under the joint's name whatever the caller used (a role here)
+    v.move_target("left_hand", [0.1, 1.0, 0.3])
+    assert "left_wrist" in v.targets and "left_hand" not in v.targets
+
+
+def test_viewer_selection_sliders_and_callbacks(sample):
+    s = sample.skeleton
+    v = SkeletonViewer(s, sample.global_pos[0])
+    seen = []
+    v.on_target_change(lambda name, p: seen.append((name, p)))
+    v.select("left_hand")
+    assert v.selected == "left_wrist" and "left_wrist" in v.status.value
+    v.sliders[1].value = v.sliders[1].value + 0.2
+    assert seen and seen[-1][0] == "left_wrist"
+    np.testing.assert_allclose(v.targets["left_wrist"][1], sample.global_pos[0][s.index("left_wrist"), 1] + 0.2)
+    # a double-click near a joint selects it; one that hits nothing (distance None) changes nothing
+    v._on_pick({"new": [0.0, 0.0, 0.0]})
+    assert v.selected == "left_wrist"
+    v.picker.distance = 2.0
+    v._on_pick({"new": list(sample.global_pos[0][s.index("head")] - v._offset + 0.01)})
+    assert v.selected == "head"
+
+
+def test_selection_alone_creates_no_target_and_idle_sliders_show_nothing(sample):
+    s = sample.skeleton
+    v = SkeletonViewer(s, sample.global_pos[0])
+    # nothing selected: the dropdown says so and the sliders are off, with no number shown
+    assert v.joint_select.label == "(none)" and v.selected is None
+    assert all(sl.disabled and not sl.readout for sl in v.sliders)
+    seen = []
+    v.on_target_change(lambda name, p: seen.append(name))
+    v.select("left_elbow")
+    assert all(not sl.disabled and sl.readout for sl in v.sliders)
+    # the browser snaps each value to the slider's step grid and sends it back: not a move
+    for sl in v.sliders:
+        sl.value = sl.min + round((sl.value - sl.min) / sl.step) * sl.step
+    assert not seen and v.targets == {} and "away" not in v.status.value
+    v.sliders[0].value += 0.05
+    joint = sample.global_pos[0][s.index("left_elbow")]
+    assert seen == ["left_elbow"] and "cm away" in v.status.value
+    assert abs(np.linalg.norm(v.targets["left_elbow"] - joint) - 0.05) < v.SLIDER_STEP
+    v.joint_select.value = ""
+    assert v.selected is None and all(sl.disabled for sl in v.sliders)
+
+
+def test_viewer_refuses_bad_poses(sample):
+    v = SkeletonViewer(sample.skeleton)
+    with pytest.raises(ValueError, match=r"expected shape \(18, 3\)"):
+        v.set_pose(np.zeros((17, 3)))
+    with pytest.raises(ValueError, match="NaN"):
+        v.set_ghost(np.full((18, 3), np.nan))
+    with pytest.raises(ValueError, match="unknown joint"):
+        v.set_targets({"tail": [0, 0, 0]})
+
+
+def test_player_steps_through_frames(sample):
+    v = SkeletonViewer(sample.skeleton)
+    frames = sample.global_pos[sample.clip_frames("walk")]
+    box = v.player(frames, 1 / 30)
+    box.children[1].value = 10
+    np.testing.assert_allclose(v.pose, frames[10])
+
+
+def test_solver_panel_resolves_on_target_moves(sample):
+    s = sample.skeleton
+    cases = build_cases(sample, 3)
+    panel = SolverPanel(s, {n: make_solver(n, s) for n in ("fabrik", "dls")}, cases.pose(0),
+                        effector_set(s, "2", cases.target_pos[0]), truth=cases.target_pos[0])
+    target = cases.target_pos[0][s.index("left_hand")] + np.array([0.05, 0.05, 0.0])
+    panel.move_target("left_hand", target)
+    for name in ("fabrik", "dls"):
+        res = panel.results[name]
+        assert res.converged, name
+        np.testing.assert_allclose(panel.viewers[name].pose[s.index("left_hand")], target, atol=1e-3)
+        assert panel.labels[name].value.startswith("<b>✓ reached</b><table"), panel.labels[name].value
+    # a target out of every solver's reach is reported as not reached, each status on its own lines
+    panel.move_target("left_hand", target + np.array([0.0, 5.0, 0.0]))
+    for name in ("fabrik", "dls"):
+        label = panel.labels[name].value
+        assert not panel.results[name].converged and label.startswith("<b>✗ not reached</b><table"), label
+        assert label.count("<tr>") == 3 and ">iterations<" in label and " ms<" in label
+
+
+def test_effector_editor_edits_every_kind_and_re_solves():
+    """Lesson 05's EffectorEditor: effectors of all three kinds added, turned, loosened and removed; every
+    change re-solves each solver; a solver that refuses a kind gets only the kinds it honours."""
+    from posekit.data import load_bandai_mini
+    from posekit.ik import Effector, Pose
+    from posekit.bench.effector_scores import rest_starts
+    from posekit.bench.effector_cases import load_benchmark
+    from posekit.rotations import geodesic_distance
+    from posekit.viz import EffectorEditor
+
+    m = load_bandai_mini()
+    s = m.skeleton
+    five = load_benchmark("5point", m)
+    q, r = rest_starts(five, m)
+    ed = EffectorEditor(s, {"ProtoRes": make_solver("protores", s), "FABRIK": make_solver("fabrik", s)},
+                        Pose.from_rotations(s, q[0], r[0]), effectors=five.effectors(0), truth=five.global_pos[0])
+    assert len(ed.effectors) == 5 and all(not isinstance(v, Exception) for v in ed.results.values())
+    before = ed.results["ProtoRes"].pose.global_pos.copy()
+    k = ed.add("Head", "rotation")
+    assert ed.effectors[k].kind == "rotation" and ed.results["ProtoRes"].kinds[-1] == "rotation"
+    assert len(ed.results["FABRIK"].kinds) == 5  # FABRIK gets the position effectors only
+    ed.set_rotation(k, yaw=90)
+    turned = ed.effectors[k].target
+    assert np.degrees(geodesic_distance(turned, ed.rows[k]["base"])) == pytest.approx(90, abs=1e-6)
+    look = ed.add("Hand_L", "look_at")
+    assert ed.effectors[look].kind == "look_at" and np.isclose(np.linalg.norm(ed.effectors[look].axis), 1)
+    ed.move_target(look, ed.effectors[look].target + [0.0, 0.5, 0.0])
+    v = ed.viewers["ProtoRes"]  # the look-at target: an orange marker and a ray from the hand to it
+    assert set(v.look_targets) == {"Hand_L"} and v._look_mesh.mesh.visible and v._rays.visible
+    ray = v._rays.geometry.attributes["position"].array
+    hand = ed.results["ProtoRes"].pose.global_pos[s.index("Hand_L")]
+    assert np.allclose(ray[0], hand, atol=1e-5) and np.allclose(ray[1], ed.effectors[look].target, atol=1e-5)
+    assert v._targets_mesh.n == 5 and v._look_mesh.n == 1  # five red position targets, one orange look-at
+    ed.set_tolerance(0, 1.0)
+    assert ed.effectors[0].tolerance == pytest.approx(0.1)
+    assert not np.allclose(ed.results["ProtoRes"].pose.global_pos, before)
+    with pytest.raises(ValueError, match=r"\[0, 1\]"):
+        ed.set_tolerance(0, 2.0)
+    with pytest.raises(ValueError, match="not a rotation"):
+        ed.set_rotation(0, yaw=10)
+    with pytest.raises(ValueError, match="unknown effector kind"):
+        ed.add("Head", "orientation")
+    ed.remove(k)
+    assert len(ed.effectors) == 6 and all(e.kind != "rotation" for e in ed.effectors)
+    ed.first.move_target("Foot_L", five.global_pos[0, s.index("Foot_L")] + [0.3, 0.0, 0.0])  # a slider move
+    foot = next(e for e in ed.effectors if e.joint == "Foot_L" and e.kind == "position")
+    assert np.allclose(foot.target, five.global_pos[0, s.index("Foot_L")] + [0.3, 0.0, 0.0])
+    ed.first.move_target("Toes_R", [0.0, 0.0, 0.0])  # a joint without an effector gets a position one
+    assert ed.effectors[-1].joint == "Toes_R" and ed.effectors[-1].kind == "position"
+    with pytest.raises(ValueError, match="already has a position effector"):
+        ed.add("Hand_R", "position")
+    with pytest.raises(ValueError, match="already has a look-at effector"):
+        ed.add("Hand_L", "rotation")
+    ed.add("UpperArm_R", "position", target=[40.0, 1.0, 0.0])
+    assert not isinstance(ed.results["ProtoRes"], Exception), ed.results["ProtoRes"]
+    assert "UpperArm_R" in ed.results["ProtoRes"].info["out_of_range"]
+
+
+def test_dragging_an_orange_marker_moves_the_look_at_target():
+    """A joint with a position and a look-at effector: pressing on its orange marker drags the point it looks
+    at (the position target stays); pressing on the red one drags the position target."""
+    from posekit.data import load_bandai_mini
+    from posekit.ik import Pose
+    from posekit.viz import EffectorEditor
+
+    m = load_bandai_mini()
+    s = m.skeleton
+    start = Pose.from_rotations(s, m.local_rot[0], m.root_pos[0])
+    ed = EffectorEditor(s, {"dls": make_solver("dls", s), "fabrik": make_solver("fabrik", s)}, start)
+    head = start.global_pos[s.index("Head")]
+    ed.add("Head", "position", target=head)
+    ed.add("Head", "look_at")
+    look0 = ed.rows[1]["target"].copy()
+    v = ed.first
+    v.grab(look0 + 0.01)
+    assert v.dragging == "Head" and v.dragging_look
+    cam = np.asarray(v.camera.position) + v._offset
+    goal = look0 + np.array([0.3, 0.0, 0.0])
+    goal = goal - ((goal - look0) @ (cam - look0)) / np.sum((cam - look0) ** 2) * (cam - look0)  # in the plane
+    v.drag_to(cam + 0.5 * (goal - cam))
+    np.testing.assert_allclose(ed.rows[1]["target"], goal, atol=1e-9)
+    np.testing.assert_allclose(ed.rows[0]["target"], head)
+    np.testing.assert_allclose(v.look_targets["Head"], goal, atol=1e-9)
+    assert "dls" in ed.results and ed.results["dls"].kinds == ("position", "look_at")
+    v._on_release({"new": [0, 0, 0]})
+    v.grab(head + 0.005)
+    assert v.dragging == "Head" and not v.dragging_look
+    v.drag_to(cam + 0.5 * (head + [0.0, 0.05, 0.0] - cam))
+    assert not np.allclose(ed.rows[0]["target"], head) and np.allclose(ed.rows[1]["target"], goal)
