@@ -207,6 +207,18 @@ _RECORD = f"""() => {{
 }}"""
 
 
+def _settle(page, quiet_s: float = 1.5, timeout_s: float = 60.0) -> None:
+    """Wait until the studio's update counter has stood still for ``quiet_s`` seconds (at most ``timeout_s``)."""
+    last, since, t0 = update_number(page), time.monotonic(), time.monotonic()
+    while time.monotonic() - t0 < timeout_s:
+        page.wait_for_timeout(100)
+        now = update_number(page)
+        if now != last:
+            last, since = now, time.monotonic()
+        elif time.monotonic() - since >= quiet_s:
+            return
+
+
 def rapid_updates(page, n: int, kernel=None, timeout_s: float = 30.0, progress: bool = False) -> dict:
     """Move the first view's target-x slider one step per key press, ``n`` times, each as soon as the last
     update has arrived; returns the latencies (ms, key press -> summary shows the next update) and the
@@ -228,6 +240,7 @@ def rapid_updates(page, n: int, kernel=None, timeout_s: float = 30.0, progress: 
         raise ValueError(f"--updates must be at least 1, got {n}")
     if page.locator(".posekit-target-x .noUi-target[disabled], .posekit-target-x [disabled]").count():
         raise RuntimeError("the target sliders are disabled: select a joint in the first view first")
+    _settle(page)  # a joint just selected re-draws its sliders: a key press must not land on the old ones
     page.evaluate(_RECORD)
     handle = page.locator(".posekit-target-x .noUi-handle").first
     handle.scroll_into_view_if_needed()
@@ -245,7 +258,10 @@ def rapid_updates(page, n: int, kernel=None, timeout_s: float = 30.0, progress: 
         try:
             page.wait_for_function(f"() => ({_UPDATE})() > {before}", timeout=timeout_s * 1000, polling=5)
         except Exception as err:  # noqa: BLE001 - playwright's TimeoutError: the update never came
-            raise RuntimeError(f"update {i + 1} of {n} did not arrive within {timeout_s:.0f} s") from err
+            on_slider = page.evaluate("() => !!document.activeElement && "
+                                      "document.activeElement.classList.contains('noUi-handle')")
+            raise RuntimeError(f"update {i + 1} of {n} did not arrive within {timeout_s:.0f} s (the key press "
+                               f"{'reached' if on_slider else 'did not reach'} the slider)") from err
         arrived += 1
         if kernel is not None and i == max(n // 10 - 1, 0):
             rss_early = kernel.memory_info().rss / 2 ** 20
