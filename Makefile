@@ -78,7 +78,7 @@ test: setup browser-deps course-assets
 	$(PY) -m pytest $(XDIST) $(PYTEST_ARGS)
 
 test-unit: setup
-	$(PY) -m pytest tests -m "not browser" $(XDIST) $(PYTEST_ARGS)
+	$(PY) -m pytest tests -m "not browser and not slow" $(XDIST) $(PYTEST_ARGS)
 
 # PORTABLE_VARIANTS: a subset of `python tools/test_portable.py --list`
 test-portable: setup

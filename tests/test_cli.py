@@ -140,6 +140,7 @@ def test_bench_ik_rejects_unknown_solver_and_set(capsys):
     assert code == 2 and "unknown effector set '7'" in err
 
 
+@pytest.mark.slow
 def test_bench_invrig_json():
     r = run("bench", "invrig", "--json", "--budget", "200")
     assert r.returncode == 0, r.stderr

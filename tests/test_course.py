@@ -118,6 +118,7 @@ def course(tmp_path_factory):
     return out
 
 
+@pytest.mark.slow
 def test_course_build_writes_every_part(course):
     assert (course / "index.html").is_file() and (course / "report" / "bench_all.html").is_file()
     assert (course / "report" / "bench_all.png").is_file()
@@ -131,6 +132,7 @@ def test_course_build_writes_every_part(course):
     assert "CC BY-NC 4.0" in index
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("number", NUMBERS)
 def test_each_lesson_yields_sane_slides_with_its_key_figure(course, number):
     le = find_lesson(number)
@@ -184,6 +186,7 @@ def test_course_opens_from_disk_in_chromium(course):
     assert errors == []
 
 
+@pytest.mark.slow
 def test_make_course_and_slides_targets(tmp_path, course):
     out = tmp_path / "c"
     r = subprocess.run(["make", "-C", str(ROOT), "slides", f"COURSE_OUT={out}"], capture_output=True, text=True,
@@ -241,6 +244,7 @@ def test_instructor_notebook_fills_every_exercise(number):
             compile(python, f"lesson {number}", "exec")  # pasted code parses (IPython magics aside)
 
 
+@pytest.mark.slow
 def test_solutions_command_runs_the_instructor_version(tmp_path, capsys):
     assert main(["exercises", "solutions", "00", "--out", str(tmp_path), "--html"]) == 0
     out = capsys.readouterr().out
@@ -252,6 +256,7 @@ def test_solutions_command_runs_the_instructor_version(tmp_path, capsys):
     assert (tmp_path / "00_skeletons_and_poses.solutions.html").is_file()
 
 
+@pytest.mark.slow
 def test_a_solution_that_fails_its_checker_fails_the_run(tmp_path, monkeypatch, capsys):
     module = importlib.import_module("posekit.exercises.solutions.nb00")
 
