@@ -59,3 +59,31 @@ def test_portable_refuses_an_unknown_variant(capsys):
     with pytest.raises(SystemExit) as e:
         _portable().main(["skylake"])
     assert e.value.code == 2 and "unknown variant(s) skylake; expected one of" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.name)
+def test_every_library_name_the_prose_mentions_exists(path):
+    """A student looks up what the text names: every ``posekit.a.b`` in a markdown cell is a module or an
+    attribute of one (a moved module leaves no stale name behind)."""
+    import importlib
+    import re
+
+    def resolves(name):
+        parts = name.split(".")
+        for k in range(len(parts), 0, -1):
+            try:
+                obj = importlib.import_module(".".join(parts[:k]))
+            except ImportError:
+                continue
+            try:
+                for a in parts[k:]:
+                    obj = getattr(obj, a)
+                return True
+            except AttributeError:
+                return False
+        return False
+
+    nb = json.loads(path.read_text())
+    text = "\n".join("".join(c["source"]) for c in nb["cells"] if c["cell_type"] == "markdown")
+    names = sorted({m.group(0) for m in re.finditer(r"posekit(\.[A-Za-z_]\w*)+", text)})
+    assert [n for n in names if not resolves(n)] == []
