@@ -184,9 +184,12 @@ def open_studio(browser, url: str, timeout_s: float = 300.0, viewport=(1400, 160
 
 
 def choose_solvers(page, names, timeout_s: float = 120.0):
-    """Choose ``names`` in the studio's solver list, press *compare*, wait for one canvas per solver."""
+    """Tick exactly ``names`` in the studio's solver check boxes, press *compare*, wait for one canvas per solver."""
     n0 = update_number(page)
-    page.locator(".posekit-solver-choice select").select_option(list(names))
+    for box in page.locator(".posekit-solver-choice .widget-checkbox").all():
+        tick = box.locator("input")
+        if (box.inner_text().strip() in names) != tick.is_checked():
+            tick.click()
     page.locator(".posekit-compare").click()
     page.wait_for_function(f"() => document.querySelectorAll('.posekit-views canvas').length === {len(names)}",
                            timeout=timeout_s * 1000)

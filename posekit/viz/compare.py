@@ -13,32 +13,46 @@ from dataclasses import replace
 import numpy as np
 
 from ..ik.api import Effector, Pose
+from ..ik.effectors import resolve_effectors
 from .viewer import SkeletonViewer
 
-__all__ = ["SolverPanel", "solver_views", "status_line", "status_table", "worst_errors"]
+__all__ = ["SolverPanel", "solver_views", "solve_views", "status_line", "status_table", "worst_errors",
+           "KIND_LABELS"]
+
+KIND_LABELS = {"position": "position", "rotation": "rotation", "look_at": "look-at"}
+"""How an effector kind is written for a person."""
 
 
-def status_line(result, ms: float) -> str:
+def status_line(result, ms: float, joints=None, ignored=()) -> str:
     """One solver's status under its view, as a small HTML table: reached or not, the worst effector
-    error (mm for positions; degrees for rotation and look-at effectors, when there are any), iterations
-    and time (ms)."""
-    mark = "✓ reached" if result.converged else "✗ not reached"
+    error and its joint (mm for positions; degrees for rotation and look-at effectors, when there are any),
+    iterations and time (ms). ``ignored``: effectors the solver was not given because it does not honour
+    their kind — the view says so ("look-at ignored") and never calls them reached."""
     it = result.iterations
-    return status_table(f"<b>{mark}</b>", [("worst effector", worst_errors(result)),
+    if ignored:
+        kinds = ", ".join(dict.fromkeys(KIND_LABELS[e.kind] for e in ignored))
+        used = len(result.effector_error)
+        mark = (f"✓ {used} of {used + len(ignored)} reached" if result.converged else "✗ not reached")
+        mark += f" · <span style='color:#b9770e'>{kinds} ignored</span>"
+    else:
+        mark = "✓ reached" if result.converged else "✗ not reached"
+    return status_table(f"<b>{mark}</b>", [("worst effector", worst_errors(result, joints)),
                                            (f"iteration{'' if it == 1 else 's'}", str(it)), ("time", f"{ms:.2f} ms")])
 
 
-def worst_errors(result) -> str:
+def worst_errors(result, joints=None) -> str:
     """A result's worst effector errors as text: mm for positions, degrees for rotation and look-at effectors
-    (each when there are any), e.g. ``"2.1 mm, 0.7°"``."""
+    (each when there are any), each followed by its joint when ``joints`` (one name per effector, in the
+    result's order) is given, e.g. ``"2.1 mm (Hand_L), 0.7° (Head)"``."""
     err = np.asarray(result.effector_error, dtype=float)
     kinds = tuple(getattr(result, "kinds", ()) or ("position",) * len(err))
     angular = np.array([k != "position" for k in kinds], dtype=bool)
     parts = []
-    if (~angular).any():
-        parts.append(f"{err[~angular].max() * 1000:.1f} mm")
-    if angular.any():
-        parts.append(f"{np.degrees(err[angular].max()):.1f}°")
+    for mask, scale, unit in ((~angular, 1000.0, " mm"), (angular, None, "°")):
+        if mask.any():
+            k = int(np.flatnonzero(mask)[np.argmax(err[mask])])
+            value = err[k] * scale if scale else np.degrees(err[k])
+            parts.append(f"{value:.1f}{unit}" + (f" ({html.escape(str(joints[k]))})" if joints is not None else ""))
     return ", ".join(parts)
 
 
@@ -60,6 +74,59 @@ def solver_views(skeleton, names, pose, truth=None, width: int = 300, height: in
         viewers[name], labels[name] = v, w.HTML()
         boxes.append(w.VBox([w.HTML(f"<b>{html.escape(str(name))}</b>"), v.renderer, labels[name]]))
     return viewers, labels, boxes
+
+
+def solve_views(skeleton, solvers: dict, viewers: dict, labels: dict, start, effectors, results: dict,
+                times: dict) -> None:
+    """Solve with every solver and refresh its view and status label — the one loop behind
+    :class:`SolverPanel` and :class:`~posekit.viz.EffectorEditor`.
+
+    Each solver gets the effectors of the kinds it honours (``solver.kinds``); its label names the kinds it
+    ignored. A solver that raises keeps its last pose and shows why (a ``ValueError`` is a refusal, e.g. a
+    joint set a network was not trained for; anything else is shown with its type); the others go on.
+
+    Parameters
+    ----------
+    skeleton : Skeleton
+    solvers, viewers, labels : dict
+        Name -> solver, :class:`~posekit.viz.SkeletonViewer` and ipywidgets.HTML.
+    start : Pose
+        Start pose (passed only to solvers with ``needs_start``).
+    effectors : list of Effector
+    results, times : dict
+        Filled in: name -> IKResult or the exception raised; name -> milliseconds of the solve.
+    """
+    names = [skeleton.names[skeleton.index(e.joint)] for e in effectors]
+    positions = {n: e.target for n, e in zip(names, effectors) if e.kind == "position"}
+    looks = {n: e.target for n, e in zip(names, effectors) if e.kind == "look_at"}
+    rotations = {n: resolve_effectors(skeleton, [e]).rotation[0] for n, e in zip(names, effectors)
+                 if e.kind == "rotation"}
+    for name, solver in solvers.items():
+        viewers[name].set_targets(positions, looks, rotations)
+        if not effectors:
+            labels[name].value = "add an effector"
+            continue
+        kinds = getattr(solver, "kinds", ("position",))
+        use = [k for k, e in enumerate(effectors) if e.kind in kinds]
+        ignored = [e for e in effectors if e.kind not in kinds]
+        if not use:
+            results.pop(name, None)
+            labels[name].value = (f"<b>nothing to solve</b><br>{html.escape(name)} honours "
+                                  f"{', '.join(KIND_LABELS[k] for k in kinds)} effectors only: "
+                                  f"{', '.join(dict.fromkeys(KIND_LABELS[e.kind] for e in ignored))} ignored")
+            continue
+        t = time.perf_counter()
+        try:
+            res = solver.solve(start if getattr(solver, "needs_start", True) else None, [effectors[k] for k in use])
+        except Exception as err:  # noqa: BLE001 - a solver that fails says why in its view; the others go on
+            results[name] = err
+            what = "" if isinstance(err, ValueError) else f"{type(err).__name__}: "
+            labels[name].value = f"<b>✗ cannot solve</b><br>{html.escape(what + str(err))}"
+            continue
+        ms = (time.perf_counter() - t) * 1e3
+        results[name], times[name] = res, ms
+        viewers[name].set_pose(res.pose.global_pos)
+        labels[name].value = status_line(res, ms, [names[k] for k in use], ignored)
 
 
 class SolverPanel:
@@ -84,9 +151,12 @@ class SolverPanel:
     ----------
     widget : ipywidgets.VBox
     results : dict
-        Name -> last :class:`~posekit.ik.api.IKResult`, or the ``ValueError`` the solver raised (its
-        view then shows the message and keeps its last pose; e.g. a neural solver asked for a joint set
-        it has no network for).
+        Name -> last :class:`~posekit.ik.api.IKResult`, or the exception the solver raised (its view then
+        shows the message and keeps its last pose; e.g. a neural solver asked for a joint set it has no
+        network for). Each solver gets the effectors of the kinds it honours; its view names the others
+        as ignored (:func:`solve_views`).
+    times : dict
+        Name -> milliseconds of its last solve.
     """
 
     def __init__(self, skeleton, solvers: dict, start: Pose, effectors, truth=None, width: int = 300,
@@ -97,10 +167,11 @@ class SolverPanel:
         self.solvers = dict(solvers)
         self.start = start
         self.effectors = {skeleton.names[skeleton.index(e.joint)]: e for e in effectors}
-        self.results = {}
+        self.results, self.times = {}, {}
         self.viewers, self.labels, boxes = solver_views(skeleton, self.solvers, start.global_pos, truth, width, height)
         first = next(iter(self.viewers.values()))
         first.on_target_change(self._on_target)
+        first.on_look_target_change(self._on_target)
         self.widget = w.VBox([w.HBox(boxes), first.controls])
         self.solve()
 
@@ -126,23 +197,6 @@ class SolverPanel:
         next(iter(self.viewers.values())).move_target(name, position)
 
     def solve(self):
-        """Solve with every solver and refresh the views."""
-        effs = list(self.effectors.values())
-        # points to draw: position and look-at targets (a rotation has none)
-        targets = {self.skeleton.names[self.skeleton.index(e.joint)]: e.target for e in effs
-                   if e.kind in ("position", "look_at")}
-        looks = {self.skeleton.names[self.skeleton.index(e.joint)]: e.target for e in effs if e.kind == "look_at"}
-        for name, solver in self.solvers.items():
-            t = time.perf_counter()
-            try:
-                res = solver.solve(self.start, effs)
-            except ValueError as err:  # a solver that refuses these effectors says why; the others go on
-                self.results[name] = err
-                self.labels[name].value = f"<b>✗ cannot solve</b><br>{html.escape(str(err))}"
-                continue
-            ms = (time.perf_counter() - t) * 1e3
-            self.results[name] = res
-            v = self.viewers[name]
-            v.set_pose(res.pose.global_pos)
-            v.set_targets(targets, looks)
-            self.labels[name].value = status_line(res, ms)
+        """Solve with every solver and refresh the views (:func:`solve_views`)."""
+        solve_views(self.skeleton, self.solvers, self.viewers, self.labels, self.start,
+                    list(self.effectors.values()), self.results, self.times)

@@ -107,8 +107,7 @@ class DragTargets:
         marker radii), else the nearest joint's target (created on the first move)."""
         p = np.asarray(point, float).reshape(3)
         looks = self.look_targets
-        red = [(float(np.linalg.norm(q - p)), n, False) for n, q in self.targets.items()
-               if not (n in looks and np.array_equal(looks[n], q))]
+        red = [(float(np.linalg.norm(q - p)), n, False) for n, q in self.targets.items()]
         orange = [(float(np.linalg.norm(q - p)), n, True) for n, q in looks.items()]
         near = [c for c in red + orange if c[0] <= 2.6 * self._joints.radius]
         # on a marker: that target (an orange one: the point the joint looks at); else the nearest joint's

@@ -13,13 +13,15 @@ a tolerance comes in as ``tolerance_of``).
   added with), and *remove*.
 * **Markers** — position targets are red; a look-at target is orange, with a ray from its joint.
 * **Move a target** — pick the effector's joint in the first view (double-click or the joint list) and
-  drag the X/Y/Z sliders: a position target moves, or the point a look-at effector faces.
+  drag the X/Y/Z sliders: a position target moves, or the point a look-at effector faces (a joint with
+  both: the *sliders move* choice says which).
+* **Ignored kinds** — a solver gets only the effectors of the kinds it honours; its view says which kinds
+  it ignored and never calls them reached.
 """
 
 from __future__ import annotations
 
 import html
-import time
 
 import numpy as np
 
@@ -27,7 +29,7 @@ from ..ik.api import Effector, Pose
 from ..kinematics import fk
 from ..rotations import euler_to_quat, quat_to_matrix
 from ..transforms import facing_angle
-from .compare import solver_views, status_line
+from .compare import solve_views, solver_views
 
 __all__ = ["EffectorEditor"]
 
@@ -80,7 +82,8 @@ class EffectorEditor:
         self.first = next(iter(self.viewers.values()))
         self.first.on_target_change(self._on_target)
         self.first.on_look_target_change(self._on_look)
-        self.add_joint = w.Dropdown(options=list(skeleton.names), value=skeleton.names[skeleton.pelvis()],
+        self.add_joint = w.Dropdown(options=[skeleton.names[j] for j in self.first.body],
+                                    value=skeleton.names[skeleton.pelvis()],
                                     description="joint", layout=w.Layout(width="220px"))
         self.add_kind = w.Dropdown(options=list(KIND_CHOICES), value="position", description="kind",
                                    layout=w.Layout(width="200px"))
@@ -198,13 +201,11 @@ class EffectorEditor:
         self._changed("move", index)
 
     def _on_target(self, joint, position):
-        # the first view moves one point per joint: the joint's position effector, else its look-at target,
-        # else a new position effector
-        for kind in ("position", "look_at"):
-            for i, r in enumerate(self.rows):
-                if r["joint"] == joint and r["kind"] == kind:
-                    self.move_target(i, position)
-                    return
+        # a red target moved in the first view (sliders or dragging): the joint's position effector, or a new one
+        for i, r in enumerate(self.rows):
+            if r["joint"] == joint and r["kind"] == "position":
+                self.move_target(i, position)
+                return
         self.add(joint, "position", target=position)
 
     def on_change(self, callback):
@@ -289,7 +290,7 @@ class EffectorEditor:
         self._changed("setup", None)
 
     def _on_look(self, joint, position):
-        # an orange marker dragged in 3D: that joint's look-at target
+        # an orange marker moved in the first view (sliders or dragging): that joint's look-at target
         for i, r in enumerate(self.rows):
             if r["joint"] == joint and r["kind"] == "look_at":
                 self.move_target(i, position)
@@ -311,34 +312,11 @@ class EffectorEditor:
 
     # ------------------------------------------------------------------ solving
     def solve(self):
-        """Solve with every solver and refresh the views (a solver that refuses says why under its view)."""
-        effs = self.effectors
+        """Solve with every solver and refresh the views (:func:`~posekit.viz.compare.solve_views`: a solver gets
+        the effectors of the kinds it honours, names the others as ignored, and says why when it refuses)."""
         self.updates += 1
-        # the sliders move a joint's position target, else its look-at target; look-at targets are
-        # drawn apart (orange, with a ray from the joint)
-        looks = {r["joint"]: r["target"] for r in self.rows if r["kind"] == "look_at"}
-        targets = dict(looks)
-        targets.update({r["joint"]: r["target"] for r in self.rows if r["kind"] == "position"})
-        for name, solver in self.solvers.items():
-            v = self.viewers[name]
-            v.set_targets(targets, looks)
-            if not effs:
-                self.labels[name].value = "add an effector"
-                continue
-            t = time.perf_counter()
-            try:
-                start = None if not getattr(solver, "needs_start", True) else self.start
-                use = [e for e in effs if e.kind in getattr(solver, "kinds", ("position",))]
-                res = solver.solve(start, use)
-            except Exception as err:  # noqa: BLE001 - a solver that fails says why in its view; the others go on
-                self.results[name] = err
-                what = "" if isinstance(err, ValueError) else f"{type(err).__name__}: "
-                self.labels[name].value = f"<b>✗ cannot solve</b><br>{html.escape(what + str(err))}"
-                continue
-            ms = (time.perf_counter() - t) * 1e3
-            self.results[name], self.times[name] = res, ms
-            v.set_pose(res.pose.global_pos)
-            self.labels[name].value = status_line(res, ms)
+        solve_views(self.skeleton, self.solvers, self.viewers, self.labels, self.start, self.effectors,
+                    self.results, self.times)
 
 
 def _conflict(rows, joint: str, kind: str) -> str | None:

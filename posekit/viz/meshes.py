@@ -10,7 +10,14 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["icosphere", "Spheres", "Bones", "SIDE_COLOURS"]
+__all__ = ["icosphere", "Spheres", "Bones", "SIDE_COLOURS", "PICK_BOUND"]
+
+PICK_BOUND = 100.0
+"""Half-size (metres) of a box two unused vertices of every pickable mesh span. three.js tests a mouse ray
+against a mesh's bounding sphere before its triangles and computes that sphere once, at the first render;
+spheres that later move outside it (a clip played on, a hand raised, a marker created at the origin and
+then placed) could no longer be picked. With the two far corners in the position buffer (no triangle
+uses them, so nothing is drawn) the sphere holds every place a joint or marker can go."""
 
 SIDE_COLOURS = {1: "#1a5276", -1: "#922b21", 0: "#4d5656"}
 """Bone colours by side of the body (:meth:`posekit.skeleton.Skeleton.sides`): left dark blue, right dark
@@ -61,7 +68,7 @@ class Spheres:
         self.n = n
         V = len(self.unit)
         index = (faces[None] + (np.arange(n) * V)[:, None, None]).reshape(-1).astype(np.uint32)
-        normals = np.tile(self.unit, (n, 1)).astype(np.float32)
+        normals = np.concatenate([np.tile(self.unit, (n, 1)), np.zeros((2, 3))]).astype(np.float32)
         self.geometry = three.BufferGeometry(attributes={
             "position": three.BufferAttribute(self._positions(np.zeros((n, 3))), normalized=False),
             "normal": three.BufferAttribute(normals, normalized=False),
@@ -71,7 +78,9 @@ class Spheres:
         self.mesh = three.Mesh(self.geometry, material)
 
     def _positions(self, centres):
-        return (centres[:, None, :] + self.radius * self.unit[None]).reshape(-1, 3).astype(np.float32)
+        """Vertex positions (n V + 2, 3): each sphere's, then the two far corners (:data:`PICK_BOUND`)."""
+        verts = (centres[:, None, :] + self.radius * self.unit[None]).reshape(-1, 3)
+        return np.concatenate([verts, [[-PICK_BOUND] * 3, [PICK_BOUND] * 3]]).astype(np.float32)
 
     def set(self, centres):
         self.geometry.attributes["position"].array = self._positions(np.asarray(centres, float))

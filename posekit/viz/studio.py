@@ -4,9 +4,10 @@ Introduced in ``notebooks/06_posing_studio.ipynb`` and served as a browser app b
 It is :class:`~posekit.viz.EffectorEditor` (effectors of every kind with tolerances, target sliders,
 dragging in 3D) with what an animator expects around it:
 
-* **solvers** — any 2-4 registered names (:func:`posekit.ik.registry.solver_names`): a solver a later
-  lesson or a student registers appears in the list without a change here; a summary table gives each
-  one's worst effector error and solve time;
+* **solvers** — any 2-4 registered names (:func:`posekit.ik.registry.solver_names`), ticked in a list of
+  check boxes: a solver a later lesson or a student registers appears without a change here; a summary
+  table gives each one's worst effector error and solve time; while solvers load (or anything slow runs)
+  the studio says it is busy;
 * **undo / redo** — every change is a step (a drag, or a slider moved without a second's pause, is one);
 * **setups** — save and load the effectors as JSON (:mod:`posekit.viz.setup_file`), from a path on the
   server or uploaded from the browser; a malformed file is reported and nothing is lost;
@@ -23,6 +24,7 @@ from __future__ import annotations
 import base64
 import html
 import time
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -68,7 +70,7 @@ class PosingStudio:
         Passed to :class:`EffectorEditor` (slider value -> tolerance).
     export_dir : str or Path
     width, height : int
-        Each view's canvas, pixels.
+        Each view's canvas, pixels (default width: the views share about 1,250 px, 300-560 px each).
 
     Attributes
     ----------
@@ -84,7 +86,7 @@ class PosingStudio:
     """
 
     def __init__(self, skeleton, start: Pose, solvers=("fabrik", "dls"), effectors=(), available=None,
-                 tolerance_of=None, export_dir="studio_exports", width: int = 300, height: int = 330):
+                 tolerance_of=None, export_dir="studio_exports", width: int | None = None, height: int = 360):
         import ipywidgets as w
 
         if start.local_rot is None:
@@ -96,11 +98,14 @@ class PosingStudio:
         self.keys, self.frames, self.timeline_viewer = [], [], None
         self._restoring, self._last_move = False, (None, -1e9)
 
-        self.choose = w.SelectMultiple(options=self.available, value=(), rows=min(8, len(self.available)),
-                                       description="solvers", layout=w.Layout(width="330px"))
+        self.checks = {n: w.Checkbox(value=False, description=n, indent=False, layout=w.Layout(width="150px"))
+                       for n in self.available}
+        self.choose = w.GridBox(list(self.checks.values()),
+                                layout=w.Layout(grid_template_columns="repeat(5, 150px)", width="780px"))
         self.compare_button = w.Button(description="compare", button_style="info",
-                                       tooltip=f"pose with the chosen {MIN_SOLVERS}-{MAX_SOLVERS} solvers")
-        self.compare_button.on_click(lambda _: self._safely(lambda: self.set_solvers(self.choose.value)))
+                                       tooltip=f"pose with the ticked {MIN_SOLVERS}-{MAX_SOLVERS} solvers")
+        self.compare_button.on_click(lambda _: self._safely(lambda: self.set_solvers(self.chosen)))
+        self.busy = w.HTML()
         self.summary = w.HTML()
         self.message = w.HTML()
         self.undo_button = w.Button(description="undo", icon="undo", disabled=True, layout=w.Layout(width="90px"))
@@ -136,7 +141,8 @@ class PosingStudio:
         self.timeline_box = w.VBox([])
         self.views_box = w.VBox([])
         self.widget = w.VBox([
-            w.HBox([self.choose, self.compare_button]),
+            w.HTML(f"<b>Solvers</b> — tick {MIN_SOLVERS} to {MAX_SOLVERS}, then compare"),
+            w.HBox([self.choose, w.VBox([self.compare_button, self.busy])]),
             self.views_box,
             w.HTML("<b>All solvers</b>"), self.summary,
             w.HBox([self.undo_button, self.redo_button, self.setup_path, save, load, self.upload]),
@@ -144,7 +150,7 @@ class PosingStudio:
             w.HTML("<b>Timeline</b> — key setups; in-betweens posed by the export solver"),
             w.HBox([add_key, clear, self.inbetweens, self.ease, build, anim]), self.keys_label, self.timeline_box,
             self.message])
-        for widget, name in ((self.summary, "summary"), (self.choose, "solver-choice"),
+        for widget, name in ((self.summary, "summary"), (self.choose, "solver-choice"), (self.busy, "busy"),
                              (self.compare_button, "compare"), (self.views_box, "views"), (self.message, "message")):
             widget.add_class(f"posekit-{name}")  # for a browser test (and a stylesheet)
         self.editor = None
@@ -157,11 +163,29 @@ class PosingStudio:
         display(self.widget)
 
     def _safely(self, action):
-        """Run a button's action; a ValueError (bad input) becomes the message, never a traceback."""
+        """Run a button's action with the studio marked busy; a ValueError (bad input) becomes the message,
+        never a traceback."""
         try:
-            action()
+            with self.working():
+                action()
         except (ValueError, OSError) as err:
             self.message.value = _error(str(err))
+
+    @property
+    def chosen(self) -> tuple:
+        """The ticked solver names, in the list's order."""
+        return tuple(n for n, c in self.checks.items() if c.value)
+
+    @contextmanager
+    def working(self, what: str = "working"):
+        """Mark the studio busy (a note beside *compare*, the button disabled) while the block runs."""
+        self.busy.value = f"<span style='color:#b9770e'>⏳ {html.escape(what)}…</span>"
+        self.compare_button.disabled = True
+        try:
+            yield
+        finally:
+            self.busy.value = ""
+            self.compare_button.disabled = False
 
     # ------------------------------------------------------------------ solvers and views
     @property
@@ -183,14 +207,11 @@ class PosingStudio:
                 built[n] = make_solver(n, self.skeleton)
             except ValueError as err:
                 raise ValueError(f"{n} cannot pose this skeleton: {err}") from None
-        for n, solver in built.items():  # a first solve compiles or loads what it needs: not part of its time
-            try:
-                solver.solve(self.start if getattr(solver, "needs_start", True) else None,
-                             list(effectors) or [Effector(self.skeleton.pelvis(), self.start.global_pos[self.skeleton.pelvis()])])
-            except Exception:  # noqa: BLE001 - its view will say what is wrong on the real solve
-                pass
+        for solver in built.values():  # a first solve compiles or loads what it needs: not part of its time
+            self._warm_up(solver, effectors)
         setup = self.editor.setup() if self.editor is not None else None
         w, h = self.size
+        w = w or int(np.clip(1250 // len(names), 300, 560))
         editor = EffectorEditor(self.skeleton, built, self.start, effectors, tolerance_of=self.tolerance_of,
                                 width=w, height=h)
         if setup is not None:
@@ -201,12 +222,31 @@ class PosingStudio:
             editor.first.select(self.editor.first.selected)  # keep the joint the sliders move
         self.editor = editor
         self.views_box.children = (editor.widget,)
-        if tuple(self.choose.options) != tuple(self.available):
-            self.choose.options = list(self.available)
-        self.choose.value = tuple(names)
+        for n, c in self.checks.items():
+            c.value = n in names
         self.export_solver.options = names
         self.export_solver.value = names[0]
         self._refresh()
+
+    def _warm_up(self, solver, effectors=()):
+        """Solve once so that the first real solve is not the one that compiles kernels or loads weights: with
+        ``effectors`` when given, else with the first of a few effector sets (both hands; hands, feet and head;
+        the pelvis) that this solver accepts (a learned solver only takes the joint sets it was trained on)."""
+        s, P = self.skeleton, self.start.global_pos
+        roles = [r for r in ("left_wrist", "right_wrist", "left_ankle", "right_ankle", "head") if r in s.roles]
+        candidates = [list(effectors)] if effectors else []
+        candidates += [[Effector(r, P[s.index(r)]) for r in roles[:2]], [Effector(r, P[s.index(r)]) for r in roles],
+                       [Effector(s.pelvis(), P[s.pelvis()])]]
+        start = self.start if getattr(solver, "needs_start", True) else None
+        for effs in candidates:
+            if not effs:
+                continue
+            try:
+                solver.solve(start, [e for e in effs if e.kind in getattr(solver, "kinds", ("position",))] or effs)
+                return True
+            except Exception:  # noqa: BLE001 - try the next set; the real solve says what is wrong
+                continue
+        return False
 
     def _refresh(self):
         rows = []
@@ -414,8 +454,9 @@ class PosingStudio:
                                      int(self.inbetweens.value), self.ease.value)
         self.frames = solve_sequence(s, self.start, frames, progress=True)
         self._frames_solver = name
-        w, h = self.size
-        v = SkeletonViewer(self.skeleton, self.frames[0].pose.global_pos, width=2 * w, height=h, controls=False)
+        h = self.size[1]
+        v = SkeletonViewer(self.skeleton, self.frames[0].pose.global_pos, width=2 * (self.size[0] or 420), height=h,
+                           controls=False)
         v.player(np.stack([r.pose.global_pos for r in self.frames]))
         self.timeline_viewer = v
         self.timeline_box.children = (v.widget,)

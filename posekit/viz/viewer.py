@@ -6,7 +6,8 @@ Introduced in ``notebooks/00_skeletons_and_poses.ipynb``; every later lesson pos
 
 What it shows: a skeleton (bones as solid cylinders coloured by side — left blue, right red, centre
 grey — with a sphere at every joint, so that they read as capsules), an optional translucent *ghost*
-pose for comparison, *target* markers (red) and *look-at* targets (orange, with a ray from the joint).
+pose for comparison, *target* markers (magenta), *look-at* targets (orange, with a ray from the joint) and
+*rotation* targets (an axes triad at the joint: x red, y green, z blue, in the orientation asked for).
 Updating a pose rewrites the buffers of the existing geometries (:mod:`posekit.viz.meshes`) instead of
 rebuilding the scene, so playback and live solving stay smooth. The camera keeps the pose framed: it is
 fitted to the pose (or to a whole clip in :meth:`SkeletonViewer.player`), and follows a pose that leaves
@@ -15,7 +16,12 @@ the framed region.
 Interaction: orbit with the mouse (drag to rotate, wheel to zoom, right-drag to pan);
 **double-click** a joint to select it (a single-click picker would also fire at the end of every
 orbit drag); the X/Y/Z sliders then move that joint's target, in 1 mm steps within
-:attr:`SkeletonViewer.SLIDER_SPAN` of it. With **drag in 3D** on, orbiting stops and pressing the mouse
+:attr:`SkeletonViewer.SLIDER_SPAN` of it (a slider pushed to an end of its range re-centres on the new
+value, so any point can be reached). A joint with both a target and a look-at target gets a choice of
+which one the sliders move. Selecting never moves anything: the sliders' new ranges and values reach the
+browser in one message each, and a value the browser sends back that the kernel set itself (an echo) is
+not taken as a move. Helper joints that are not part of the body (Bandai's ``joint_Root``, the world
+point under the feet) cannot be selected. With **drag in 3D** on, orbiting stops and pressing the mouse
 on a target marker or a joint and moving it drags that target across the plane through it that faces
 the camera. ``on_target_change`` callbacks (an IK solver, in later lessons) receive
 ``(joint_name, position)``; targets are always stored under the joint's own name, whatever name, role
@@ -27,14 +33,23 @@ The viewer knows no solver: lessons connect one through :meth:`SkeletonViewer.on
 from __future__ import annotations
 
 import html
+import time
 
 import numpy as np
 
+from ..data.metrics import body_joints
 from ..skeleton import Skeleton
 from .drag import DragTargets
 from .meshes import Bones, Spheres, icosphere
 
-__all__ = ["SkeletonViewer", "icosphere"]
+__all__ = ["SkeletonViewer", "icosphere", "TARGET_COLOUR", "LOOK_COLOUR"]
+
+TARGET_COLOUR = "#d81b9c"
+"""Position targets: magenta, apart from the right side's red bones and the look-at orange."""
+LOOK_COLOUR = "#e67e22"
+"""Look-at targets and their rays: orange."""
+TRIAD_LENGTH = 0.12
+"""Length (metres) of each axis of a rotation target's triad."""
 
 
 class SkeletonViewer(DragTargets):
@@ -48,7 +63,7 @@ class SkeletonViewer(DragTargets):
     ghost : ndarray, shape (J, 3), optional
         A second pose drawn translucent (e.g. the ground truth, or another solver).
     targets : dict, optional
-        Joint name (or role, or index) -> (3,) target position, drawn as red spheres.
+        Joint name (or role, or index) -> (3,) target position, drawn as magenta spheres.
     width, height : int
         Canvas size in pixels.
     joint_radius : float
@@ -74,7 +89,12 @@ class SkeletonViewer(DragTargets):
     SLIDER_STEP = 0.001
     """Target slider resolution, metres."""
     SLIDER_SPAN = 0.5
-    """The X/Y/Z sliders reach this far (metres) either side of the selected joint's target."""
+    """The X/Y/Z sliders reach this far (metres) either side of the selected joint's target (a slider
+    pushed to an end re-centres on its new value)."""
+    ECHO_S = 2.0
+    """For this many seconds after the kernel changes a slider, the browser sending back the value the kernel
+    set, the value it held before clamped into the new range, or an end of a new range is an echo, not a move
+    (the browser re-sends values when a slider's range changes)."""
     VIEW_DIRECTION = np.array([0.35, 0.2, 1.0]) / np.linalg.norm([0.35, 0.2, 1.0])
     """From the pose towards the camera: in front of the character, a little right and above."""
     FOV = 40.0
@@ -92,13 +112,15 @@ class SkeletonViewer(DragTargets):
         J = skeleton.n_joints
         self.pose = np.array(rest_pose(skeleton) if pose is None else pose, dtype=float)
         self._check(self.pose, "pose")
-        self.targets, self.look_targets = {}, {}
+        self.targets, self.look_targets, self.rotation_targets = {}, {}, {}
         self.selected = None
         self.follow = follow
         self.aspect = width / height
         self._select_callbacks, self._target_callbacks, self._look_callbacks = [], [], []
         self._init_drag()
         self._syncing = False
+        self._echoes = [[], [], []]  # per slider: (time, value) the kernel set
+        self.body = [int(j) for j in body_joints(skeleton)]  # what can be selected (not a helper root)
 
         self._bones = Bones(skeleton, radius=0.7 * joint_radius)
         self._joints = Spheres(J, joint_radius, "#2e86c1")
@@ -134,8 +156,8 @@ class SkeletonViewer(DragTargets):
 
         self.status = w.HTML(value="double-click a joint to select it")
         # "" stands for no selection: a Dropdown whose value is None shows a blank box
-        self.joint_select = w.Dropdown(options=[("(none)", "")] + [(n, n) for n in skeleton.names],
-                                       value="", description="joint", layout=w.Layout(width="220px"))
+        self.joint_select = w.Dropdown(options=[("(none)", "")] + [(skeleton.names[j],) * 2 for j in self.body],
+                                       value="", description="selected", layout=w.Layout(width="230px"))
         self.joint_select.observe(lambda ch: self.select(ch["new"] or None), names="value")
         self.drag_mode = self._drag_toggle()
         step = self.SLIDER_STEP
@@ -147,7 +169,12 @@ class SkeletonViewer(DragTargets):
         for a, s in zip("xyz", self.sliders):
             s.add_class(f"posekit-target-{a}")
             s.observe(self._on_slider, names="value")
-        self.controls = w.VBox([w.HBox([self.joint_select, self.drag_mode]), *self.sliders, self.status])
+        self.handle_choice = w.ToggleButtons(options=[("target", "target"), ("look-at", "look_at")], value="target",
+                                             description="sliders move", style={"button_width": "70px"},
+                                             layout=w.Layout(display="none"))
+        self.handle_choice.observe(lambda ch: self._sync_sliders(recentre=True), names="value")
+        self.controls = w.VBox([w.HBox([self.joint_select, self.drag_mode]), self.handle_choice, *self.sliders,
+                                self.status])
         self.controls.layout.display = None if controls else "none"
         self._extra = w.VBox([])
         self.widget = w.VBox([self.renderer, self.controls, self._extra])
@@ -192,11 +219,21 @@ class SkeletonViewer(DragTargets):
         self._bones.set(self.pose)
         self._joints.set(self.pose)
         self._draw_rays()
-        if self.follow and np.linalg.norm(self.pose - self._offset, axis=1).max() > 1.05 * self._radius:
-            self.frame_camera(keep_distance=True)
+        self._follow()
         if self.selected is not None:
             self._selected_marker.set(self.pose[[self.skeleton.index(self.selected)]])
             self._update_status()
+
+    def _shown_points(self):
+        """Everything the view should keep in frame: the pose, the targets and the look-at targets, (N, 3)."""
+        return np.concatenate([self.pose.reshape(-1, 3), *[np.array(list(d.values())).reshape(-1, 3)
+                                                          for d in (self.targets, self.look_targets) if d]])
+
+    def _follow(self):
+        """Step the camera back (and re-centre it) when the pose or a target leaves the framed region."""
+        pts = self._shown_points()
+        if self.follow and np.linalg.norm(pts - self._offset, axis=1).max() > 1.05 * self._radius:
+            self.frame_camera(pts, keep_distance=True)
 
     def set_ghost(self, global_pos=None):
         """Show (shape (J, 3)) or hide (None) the ghost pose."""
@@ -218,37 +255,63 @@ class SkeletonViewer(DragTargets):
             new[name] = p
         return new
 
-    def set_targets(self, targets: dict, look_at: dict | None = None):
-        """Replace the target markers: joint name -> (3,) position in metres (red spheres; the sliders
-        move these). ``look_at``: joint name -> (3,) point the joint should face, drawn as an orange
-        sphere with a ray from the joint (a joint may appear in both)."""
+    def set_targets(self, targets: dict, look_at: dict | None = None, rotations: dict | None = None):
+        """Replace the target markers: joint name -> (3,) position in metres (magenta spheres). ``look_at``: joint
+        name -> (3,) point the joint should face, drawn as an orange sphere with a ray from the joint (a joint
+        may appear in both; the sliders then move the one :attr:`handle_choice` says). ``rotations``: joint name
+        -> (3, 3) world rotation the joint should take, drawn as an axes triad at the joint (x red, y green,
+        z blue; :data:`TRIAD_LENGTH`), so turning a rotation target shows on screen."""
         new = self._points(targets, "target")
         looks = self._points(look_at or {}, "look-at target")
-        red = {n: p for n, p in new.items() if not (n in looks and np.array_equal(looks[n], p))}
-        key = (tuple(red), tuple(looks))
+        rots = {}
+        for name, R in (rotations or {}).items():
+            name = self.skeleton.names[self.skeleton.index(name)]
+            R = np.asarray(R, dtype=float)
+            if R.shape != (3, 3) or not np.all(np.isfinite(R)):
+                raise ValueError(f"rotation target for {name}: expected a finite (3, 3) matrix, got shape {R.shape}")
+            rots[name] = R
+        self.rotation_targets = rots
+        red = new
+        key = (tuple(red), tuple(looks), tuple(rots))
         rebuild = key != self._target_key or self._targets_mesh is None
         self.targets, self.look_targets, self._target_key = new, looks, key
         if rebuild:
             import pythreejs as three
 
-            self._targets_mesh = Spheres(max(len(red), 1), self._joints.radius * 1.3, "#e74c3c")
+            self._targets_mesh = Spheres(max(len(red), 1), self._joints.radius * 1.3, TARGET_COLOUR)
             self._targets_mesh.mesh.visible = bool(red)
-            self._look_mesh = Spheres(max(len(looks), 1), self._joints.radius * 1.3, "#e67e22")
+            self._look_mesh = Spheres(max(len(looks), 1), self._joints.radius * 1.3, LOOK_COLOUR)
             self._look_mesh.mesh.visible = bool(looks)
             self._rays = three.LineSegments(
                 three.BufferGeometry(attributes={"position": three.BufferAttribute(
                     np.zeros((2 * max(len(looks), 1), 3), np.float32), normalized=False)}),
-                three.LineBasicMaterial(color="#e67e22", linewidth=1))
+                three.LineBasicMaterial(color=LOOK_COLOUR, linewidth=1))
             self._rays.visible = bool(looks)
-            self._target_group.children = [self._targets_mesh.mesh, self._look_mesh.mesh, self._rays]
+            n = max(len(rots), 1)
+            rgb = np.repeat(np.eye(3, dtype=np.float32)[None].repeat(n, 0), 2, axis=1).reshape(-1, 3)
+            self._triads = three.LineSegments(
+                three.BufferGeometry(attributes={
+                    "position": three.BufferAttribute(np.zeros((6 * n, 3), np.float32), normalized=False),
+                    "color": three.BufferAttribute(rgb, normalized=False)}),
+                three.LineBasicMaterial(vertexColors="VertexColors", linewidth=2))
+            self._triads.visible = bool(rots)
+            self._target_group.children = [self._targets_mesh.mesh, self._look_mesh.mesh, self._rays, self._triads]
         if red:
             self._targets_mesh.set(np.array(list(red.values())))
         if looks:
             self._look_mesh.set(np.array(list(looks.values())))
         self._draw_rays()
+        self._follow()
         self._sync_sliders()
 
     def _draw_rays(self):
+        """Place the look-at rays (joint -> point) and the rotation triads (at their joints) on the current pose."""
+        rots = getattr(self, "rotation_targets", {})
+        if rots:
+            at = self.pose[[self.skeleton.index(n) for n in rots]]  # (R, 3)
+            tips = at[:, None, :] + TRIAD_LENGTH * np.stack(list(rots.values())).transpose(0, 2, 1)  # columns: axes
+            seg = np.stack([np.repeat(at[:, None, :], 3, axis=1), tips], axis=2).reshape(-1, 3)
+            self._triads.geometry.attributes["position"].array = seg.astype(np.float32)
         looks = self.look_targets
         if looks:
             joints = self.pose[[self.skeleton.index(n) for n in looks]]
@@ -256,7 +319,7 @@ class SkeletonViewer(DragTargets):
             self._rays.geometry.attributes["position"].array = seg.astype(np.float32)
 
     def frame_camera(self, poses=None, keep_distance: bool = False):
-        """Frame the view on ``poses`` (shape (..., J, 3); default the current pose): the orbit pivot moves
+        """Frame the view on ``poses`` (shape (..., J, 3) or (N, 3) points; default the current pose): the orbit pivot moves
         to their middle and the camera steps back along its current direction until they fit (with
         ``keep_distance``, only further back, never closer)."""
         centre, radius = self._frame(self.pose if poses is None else poses)
@@ -274,7 +337,10 @@ class SkeletonViewer(DragTargets):
     def select(self, joint):
         """Select a joint by name, role or index (None clears the selection)."""
         name = None if joint is None else self.skeleton.names[self.skeleton.index(joint)]
+        if name is not None and self.skeleton.index(name) not in self.body:
+            raise ValueError(f"{name} is a helper joint, not part of the body: it cannot be selected")
         self.selected = name
+        self._show_handle_choice()
         if self.joint_select.value != (name or ""):
             self.joint_select.value = name or ""
         self._selected_marker.mesh.visible = name is not None
@@ -286,7 +352,9 @@ class SkeletonViewer(DragTargets):
             cb(name)
 
     def _nearest_joint(self, p):
-        return self.skeleton.names[int(np.argmin(np.linalg.norm(self.pose - p, axis=1)))]
+        """The body joint nearest to point ``p`` (3,), world frame, metres."""
+        body = self.pose[self.body]
+        return self.skeleton.names[self.body[int(np.argmin(np.linalg.norm(body - p, axis=1)))]]
 
     def _on_pick(self, change):
         p = np.asarray(change["new"], dtype=float)
@@ -295,43 +363,84 @@ class SkeletonViewer(DragTargets):
         self.select(self._nearest_joint(p + self._offset))  # picked point is in scene coordinates
 
     # ------------------------------------------------------------------ sliders
+    def _show_handle_choice(self):
+        both = self.selected is not None and self.selected in self.targets and self.selected in self.look_targets
+        self.handle_choice.layout.display = None if both else "none"
+
+    def _handle(self):
+        """What the sliders move for the selected joint: ``("look_at", point)`` for its look-at target (when it
+        has only that, or when it has both and the choice says so), else ``("target", point)`` — its target,
+        or the joint itself when it has none yet."""
+        name = self.selected
+        has_look, has_target = name in self.look_targets, name in self.targets
+        if has_look and (not has_target or self.handle_choice.value == "look_at"):
+            return "look_at", self.look_targets[name]
+        return "target", self.targets.get(name, self.pose[self.skeleton.index(name)])
+
     def _sync_sliders(self, recentre: bool = False):
-        """Show the selected joint's target (or, without one, the joint) on the sliders, within
-        ``SLIDER_SPAN`` of it (the range moves with a new selection, or when the target leaves it); with no
-        selection the sliders are disabled and show no number."""
+        """Show the selected joint's handle (:meth:`_handle`) on the sliders, within ``SLIDER_SPAN`` of it (the
+        range moves with a new selection, or when the point leaves it); with no selection the sliders are
+        disabled and show no number. Each slider's range and value go to the browser in one message, and
+        every value set is remembered for ``ECHO_S`` seconds as an echo to ignore."""
         active = self.selected is not None
         for s in self.sliders:
             s.disabled, s.readout = not active, active
+        self._show_handle_choice()
         if not active:
             self._synced = None
             return
-        p = self.targets.get(self.selected, self.pose[self.skeleton.index(self.selected)])
+        _, p = self._handle()
         step = self.SLIDER_STEP
+        now = time.monotonic()
         self._syncing = True
         try:
-            for s, v in zip(self.sliders, p):
-                if recentre or not (s.min <= v <= s.max):
-                    # limits on the step grid, so that the browser's snapping to it does not move a value
-                    lo = float(np.floor((v - self.SLIDER_SPAN) / step) * step)
-                    hi = float(np.ceil((v + self.SLIDER_SPAN) / step) * step)
-                    if lo > s.max:
-                        s.max, s.min = hi, lo
-                    else:
-                        s.min, s.max = lo, hi
-                s.value = float(np.clip(v, s.min, s.max))
+            for axis, (s, v) in enumerate(zip(self.sliders, p)):
+                before = (s.min, s.max, s.value)
+                with s.hold_sync():
+                    if recentre or not (s.min <= v <= s.max):
+                        # limits on the step grid, so that the browser's snapping to it does not move a value
+                        lo = float(np.floor((v - self.SLIDER_SPAN) / step) * step)
+                        hi = float(np.ceil((v + self.SLIDER_SPAN) / step) * step)
+                        if lo > s.max:
+                            s.max, s.min = hi, lo
+                        else:
+                            s.min, s.max = lo, hi
+                    s.value = float(np.clip(v, s.min, s.max))
+                if (s.min, s.max, s.value) != before:  # a change the browser may echo
+                    # what it may send back: the new value, and the value it held before clamped into the new
+                    # range (at an end, when the range moved past it)
+                    echoes = {s.value, float(np.clip(before[2], s.min, s.max))}
+                    if (s.min, s.max) != before[:2]:
+                        echoes |= {s.min, s.max}
+                    self._echoes[axis] = [(t, x) for t, x in self._echoes[axis] if now - t < self.ECHO_S]
+                    self._echoes[axis] += [(now, x) for x in echoes]
         finally:
             self._syncing = False
         self._synced = np.array([s.value for s in self.sliders])
 
     def _on_slider(self, change):
+        """A slider moved in the browser: move the handle along that axis only (the other coordinates stay the
+        handle's), unless the value is one the kernel set (an echo, or the browser's snap to the step grid)."""
         if self._syncing or self.selected is None:
             return
-        values = np.array([s.value for s in self.sliders])
-        # the browser snaps a synced value to the slider's step grid and sends it back: that is
-        # not a move, and must not create a target a fraction of a step from the joint
-        if self._synced is not None and np.all(np.abs(values - self._synced) <= 0.5 * self.SLIDER_STEP + 1e-9):
+        axis = self.sliders.index(change["owner"])
+        v, tol = float(change["new"]), 0.5 * self.SLIDER_STEP + 1e-9
+        kind, p = self._handle()
+        if abs(v - p[axis]) <= tol or (self._synced is not None and abs(v - self._synced[axis]) <= tol):
             return
-        self.move_target(self.selected, values)
+        now = time.monotonic()
+        if any(now - t < self.ECHO_S and abs(v - x) <= tol for t, x in self._echoes[axis]):
+            self._sync_sliders()  # put the slider back where the handle is
+            return
+        p = np.array(p, dtype=float)
+        p[axis] = v
+        if kind == "look_at":
+            self.move_look_target(self.selected, p)
+        else:
+            self.move_target(self.selected, p)
+        s = change["owner"]
+        if v <= s.min + tol or v >= s.max - tol:  # at an end: re-centre, so the next push goes further
+            self._sync_sliders(recentre=True)
 
     def move_target(self, joint, position):
         """Set one joint's target (creating it if needed) and notify ``on_target_change`` callbacks."""
@@ -341,10 +450,8 @@ class SkeletonViewer(DragTargets):
             raise ValueError(f"target for {name} contains NaN or inf")
         targets = dict(self.targets)
         targets[name] = position
-        looks = dict(self.look_targets)
-        if name in looks:  # the joint's point is the one it looks at
-            looks[name] = position
-        self.set_targets(targets, looks)
+        self.set_targets(targets, self.look_targets)
+        self._show_handle_choice()
         self._update_status()
         for cb in self._target_callbacks:
             cb(name, self.targets[name].copy())
@@ -359,9 +466,11 @@ class SkeletonViewer(DragTargets):
             raise ValueError(f"look-at target for {name} contains NaN or inf")
         looks = dict(self.look_targets)
         looks[name] = position
-        targets = {n: (position if n == name and np.array_equal(p, self.look_targets[name]) else p)
-                   for n, p in self.targets.items()}
-        self.set_targets(targets, looks)
+        self.set_targets(self.targets, looks)
+        self._update_status()
+        if not self._look_callbacks:  # nobody listens to look-at moves: the joint's target it is
+            for cb in self._target_callbacks:
+                cb(name, position.copy())
         for cb in self._look_callbacks:
             cb(name, position.copy())
 
@@ -387,6 +496,9 @@ class SkeletonViewer(DragTargets):
         if self.selected in self.targets:
             t = self.targets[self.selected]
             rows.append(("target", t, f"{np.linalg.norm(t - p) * 100:.1f} cm away"))
+        if self.selected in self.look_targets:
+            t = self.look_targets[self.selected]
+            rows.append(("looks at", t, f"{np.linalg.norm(t - p) * 100:.1f} cm away"))
         cell = "<td style='padding:0 8px;text-align:right;font-family:monospace'>{}</td>"
         body = "".join(f"<tr><th style='text-align:left;padding-right:8px'>{n}</th>"
                        + "".join(cell.format(f"{c:+.3f}") for c in q) + f"<td style='padding-left:8px'>{extra}</td></tr>"

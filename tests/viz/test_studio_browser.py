@@ -140,7 +140,7 @@ def test_rotation_and_look_at_effectors_change_the_pose(page):
     assert all("°" in t for t in _texts(page)[1:])  # an angular error is reported
     # a look-at on the neck, its target moved with the sliders (the first view's joint list selects it)
     _add(page, "Neck", "look_at")
-    page.locator(VIEWS).locator(".widget-dropdown", has_text="joint").first.locator("select").select_option("Neck")
+    page.locator(VIEWS).locator(".widget-dropdown", has_text="selected").first.locator("select").select_option("Neck")
     before = [_pixels(c) for c in _canvases(page)[1:]]
     texts = _texts(page)[1:]
     n0 = update_number(page)
@@ -175,7 +175,7 @@ def test_bvh_export_downloads_a_file_posekit_reads(page, tmp_path):
 
 def test_1000_rapid_updates_keep_the_kernel_alive_and_small(page, server):
     choose_solvers(page, ["fabrik", "protores"])
-    page.locator(VIEWS).locator(".widget-dropdown", has_text="joint").first.locator("select").select_option("Hand_L")
+    page.locator(VIEWS).locator(".widget-dropdown", has_text="selected").first.locator("select").select_option("Hand_L")
     kernel = server.note_kernels()[0]
     result = rapid_updates(page, 1000, kernel)
     lat = result["latency_ms"]
