@@ -102,31 +102,38 @@ def solve_views(skeleton, solvers: dict, viewers: dict, labels: dict, start, eff
     rotations = {n: resolve_effectors(skeleton, [e]).rotation[0] for n, e in zip(names, effectors)
                  if e.kind == "rotation"}
     for name, solver in solvers.items():
-        viewers[name].set_targets(positions, looks, rotations)
-        if not effectors:
-            labels[name].value = "add an effector"
-            continue
-        kinds = getattr(solver, "kinds", ("position",))
-        use = [k for k, e in enumerate(effectors) if e.kind in kinds]
-        ignored = [e for e in effectors if e.kind not in kinds]
-        if not use:
-            results.pop(name, None)
-            labels[name].value = (f"<b>nothing to solve</b><br>{html.escape(name)} honours "
-                                  f"{', '.join(KIND_LABELS[k] for k in kinds)} effectors only: "
-                                  f"{', '.join(dict.fromkeys(KIND_LABELS[e.kind] for e in ignored))} ignored")
-            continue
-        t = time.perf_counter()
-        try:
-            res = solver.solve(start if getattr(solver, "needs_start", True) else None, [effectors[k] for k in use])
-        except Exception as err:  # noqa: BLE001 - a solver that fails says why in its view; the others go on
-            results[name] = err
-            what = "" if isinstance(err, ValueError) else f"{type(err).__name__}: "
-            labels[name].value = f"<b>✗ cannot solve</b><br>{html.escape(what + str(err))}"
-            continue
-        ms = (time.perf_counter() - t) * 1e3
-        results[name], times[name] = res, ms
-        viewers[name].set_pose(res.pose.global_pos)
-        labels[name].value = status_line(res, ms, [names[k] for k in use], ignored)
+        with viewers[name].drawing_once():
+            _solve_one(name, solver, viewers[name], labels[name], start, effectors, names, results, times,
+                       (positions, looks, rotations))
+
+
+def _solve_one(name, solver, viewer, label, start, effectors, names, results, times, targets):
+    """One solver of :func:`solve_views`: its targets drawn, its effectors solved, its view and label updated."""
+    viewer.set_targets(*targets)
+    if not effectors:
+        label.value = "add an effector"
+        return
+    kinds = getattr(solver, "kinds", ("position",))
+    use = [k for k, e in enumerate(effectors) if e.kind in kinds]
+    ignored = [e for e in effectors if e.kind not in kinds]
+    if not use:
+        results.pop(name, None)
+        label.value = (f"<b>nothing to solve</b><br>{html.escape(name)} honours "
+                       f"{', '.join(KIND_LABELS[k] for k in kinds)} effectors only: "
+                       f"{', '.join(dict.fromkeys(KIND_LABELS[e.kind] for e in ignored))} ignored")
+        return
+    t = time.perf_counter()
+    try:
+        res = solver.solve(start if getattr(solver, "needs_start", True) else None, [effectors[k] for k in use])
+    except Exception as err:  # noqa: BLE001 - a solver that fails says why in its view; the others go on
+        results[name] = err
+        what = "" if isinstance(err, ValueError) else f"{type(err).__name__}: "
+        label.value = f"<b>✗ cannot solve</b><br>{html.escape(what + str(err))}"
+        return
+    ms = (time.perf_counter() - t) * 1e3
+    results[name], times[name] = res, ms
+    viewer.set_pose(res.pose.global_pos)
+    label.value = status_line(res, ms, [names[k] for k in use], ignored)
 
 
 class SolverPanel:

@@ -9,8 +9,8 @@ a tolerance comes in as ``tolerance_of``).
   rotation; a look-at effector points the direction the character faces (in the joint's own frame) at a
   target 1 m ahead.
 * **Each effector's row** — its tolerance slider (``Lambda`` in [0, 1]: 0 exact, 1 loose), for a rotation
-  effector yaw / pitch / roll sliders (degrees, applied in the world frame on top of the rotation it was
-  added with), and *remove*.
+  effector yaw / pitch / roll sliders (degrees, 1° steps, applied in the world frame on top of the rotation
+  it was added with; the target rotation is drawn as an axes triad at the joint), and *remove*.
 * **Markers** — position targets are red; a look-at target is orange, with a ray from its joint.
 * **Move a target** — pick the effector's joint in the first view (double-click or the joint list) and
   drag the X/Y/Z sliders: a position target moves, or the point a look-at effector faces (a joint with
@@ -142,14 +142,16 @@ class EffectorEditor:
                             continuous_update=False, layout=w.Layout(width="260px"))
         remove = w.Button(description="remove", layout=w.Layout(width="80px"))
         parts = [w.HTML(f"<b>{name}</b> {kind.replace('_', '-')}", layout=w.Layout(width="180px")), tol]
-        if kind == "rotation":
-            row["angle_sliders"] = [w.FloatSlider(value=0.0, min=-180, max=180, step=1, description=a,
-                                                  continuous_update=False, layout=w.Layout(width="220px"))
+        row["tol"] = tol
+        row["widgets"] = w.HBox(parts + [remove])
+        if kind == "rotation":  # 360 px for 360 degrees: a pixel a degree, and the readout takes typed values
+            row["angle_sliders"] = [w.FloatSlider(value=0.0, min=-180, max=180, step=1, description=f"{a} °",
+                                                  continuous_update=False, readout_format=".0f",
+                                                  layout=w.Layout(width="460px"))
                                     for a in ("yaw", "pitch", "roll")]
-            parts += row["angle_sliders"]
             for s in row["angle_sliders"]:
                 s.observe(lambda ch, r=row: self._on_angles(r), names="value")
-        row["widgets"] = w.HBox(parts + [remove])
+            row["widgets"] = w.VBox([row["widgets"], w.HBox(row["angle_sliders"][:2]), row["angle_sliders"][2]])
         tol.observe(lambda ch, r=row: self.set_tolerance(self.rows.index(r), ch["new"]), names="value")
         remove.on_click(lambda _, r=row: self.remove(self.rows.index(r)))
         self.rows.append(row)
@@ -277,7 +279,7 @@ class EffectorEditor:
                 i = self.add(r["joint"], kind, lam=float(r.get("lam", 0.0)),
                              target=r.get("base") if kind == "rotation" else r.get("target"), axis=r.get("axis"))
                 row = self.rows[i]
-                row["widgets"].children[1].value = float(row["lam"])
+                row["tol"].value = float(row["lam"])
                 if kind == "rotation":
                     row["base"] = np.array(r["base"], dtype=float)  # as saved (a rotation, checked above)
                 if kind == "rotation" and "euler" in r:

@@ -98,10 +98,10 @@ class PosingStudio:
         self.keys, self.frames, self.timeline_viewer = [], [], None
         self._restoring, self._last_move = False, (None, -1e9)
 
-        self.checks = {n: w.Checkbox(value=False, description=n, indent=False, layout=w.Layout(width="150px"))
+        self.checks = {n: w.Checkbox(value=False, description=n, indent=False, layout=w.Layout(width="175px"))
                        for n in self.available}
         self.choose = w.GridBox(list(self.checks.values()),
-                                layout=w.Layout(grid_template_columns="repeat(5, 150px)", width="780px"))
+                                layout=w.Layout(grid_template_columns="repeat(5, 175px)", width="900px"))
         self.compare_button = w.Button(description="compare", button_style="info",
                                        tooltip=f"pose with the ticked {MIN_SOLVERS}-{MAX_SOLVERS} solvers")
         self.compare_button.on_click(lambda _: self._safely(lambda: self.set_solvers(self.chosen)))

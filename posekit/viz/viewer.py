@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import html
 import time
+from contextlib import contextmanager
 
 import numpy as np
 
@@ -92,9 +93,9 @@ class SkeletonViewer(DragTargets):
     """The X/Y/Z sliders reach this far (metres) either side of the selected joint's target (a slider
     pushed to an end re-centres on its new value)."""
     ECHO_S = 2.0
-    """For this many seconds after the kernel changes a slider, the browser sending back the value the kernel
-    set, the value it held before clamped into the new range, or an end of a new range is an echo, not a move
-    (the browser re-sends values when a slider's range changes)."""
+    """For this many seconds after the kernel gives a slider a new range, the browser sending back the value
+    it held before (clamped into the new range, so possibly an end of it) is an echo, not a move; each such
+    echo is taken once (the browser re-sends a slider's value when its range changes)."""
     VIEW_DIRECTION = np.array([0.35, 0.2, 1.0]) / np.linalg.norm([0.35, 0.2, 1.0])
     """From the pose towards the camera: in front of the character, a little right and above."""
     FOV = 40.0
@@ -118,7 +119,7 @@ class SkeletonViewer(DragTargets):
         self.aspect = width / height
         self._select_callbacks, self._target_callbacks, self._look_callbacks = [], [], []
         self._init_drag()
-        self._syncing = False
+        self._syncing, self._held = False, False
         self._echoes = [[], [], []]  # per slider: (time, value) the kernel set
         self.body = [int(j) for j in body_joints(skeleton)]  # what can be selected (not a helper root)
 
@@ -231,6 +232,8 @@ class SkeletonViewer(DragTargets):
 
     def _follow(self):
         """Step the camera back (and re-centre it) when the pose or a target leaves the framed region."""
+        if self._held:
+            return
         pts = self._shown_points()
         if self.follow and np.linalg.norm(pts - self._offset, axis=1).max() > 1.05 * self._radius:
             self.frame_camera(pts, keep_distance=True)
@@ -304,8 +307,25 @@ class SkeletonViewer(DragTargets):
         self._follow()
         self._sync_sliders()
 
+    @contextmanager
+    def drawing_once(self):
+        """Within the block, changes of pose and targets draw the rays and triads and move the camera once, at
+        the end (a live solve sets the targets, then the pose: one buffer message each instead of two)."""
+        if self._held:
+            yield
+            return
+        self._held = True
+        try:
+            yield
+        finally:
+            self._held = False
+            self._draw_rays()
+            self._follow()
+
     def _draw_rays(self):
         """Place the look-at rays (joint -> point) and the rotation triads (at their joints) on the current pose."""
+        if self._held:
+            return
         rots = getattr(self, "rotation_targets", {})
         if rots:
             at = self.pose[[self.skeleton.index(n) for n in rots]]  # (R, 3)
@@ -380,8 +400,8 @@ class SkeletonViewer(DragTargets):
     def _sync_sliders(self, recentre: bool = False):
         """Show the selected joint's handle (:meth:`_handle`) on the sliders, within ``SLIDER_SPAN`` of it (the
         range moves with a new selection, or when the point leaves it); with no selection the sliders are
-        disabled and show no number. Each slider's range and value go to the browser in one message, and
-        every value set is remembered for ``ECHO_S`` seconds as an echo to ignore."""
+        disabled and show no number. Each slider's range and value go to the browser in one message; after a
+        new range, the stale values the browser may send back are remembered for ``ECHO_S`` seconds."""
         active = self.selected is not None
         for s in self.sliders:
             s.disabled, s.readout = not active, active
@@ -406,14 +426,12 @@ class SkeletonViewer(DragTargets):
                         else:
                             s.min, s.max = lo, hi
                     s.value = float(np.clip(v, s.min, s.max))
-                if (s.min, s.max, s.value) != before:  # a change the browser may echo
-                    # what it may send back: the new value, and the value it held before clamped into the new
-                    # range (at an end, when the range moved past it)
-                    echoes = {s.value, float(np.clip(before[2], s.min, s.max))}
-                    if (s.min, s.max) != before[:2]:
-                        echoes |= {s.min, s.max}
+                if (s.min, s.max) != before[:2]:  # a new range: the browser may send back a stale value
+                    # what it may send: the value it held before, clamped into the new range (an end of it when
+                    # the range moved past it) -- never the value just set, which is where the handle is
+                    stale = {float(np.clip(before[2], s.min, s.max)), s.min, s.max} - {s.value}
                     self._echoes[axis] = [(t, x) for t, x in self._echoes[axis] if now - t < self.ECHO_S]
-                    self._echoes[axis] += [(now, x) for x in echoes]
+                    self._echoes[axis] += [(now, x) for x in stale]
         finally:
             self._syncing = False
         self._synced = np.array([s.value for s in self.sliders])
@@ -429,8 +447,10 @@ class SkeletonViewer(DragTargets):
         if abs(v - p[axis]) <= tol or (self._synced is not None and abs(v - self._synced[axis]) <= tol):
             return
         now = time.monotonic()
-        if any(now - t < self.ECHO_S and abs(v - x) <= tol for t, x in self._echoes[axis]):
-            self._sync_sliders()  # put the slider back where the handle is
+        echo = [(t, x) for t, x in self._echoes[axis] if now - t < self.ECHO_S and abs(v - x) <= tol]
+        if echo:  # a stale value sent back once: forget it, put the slider back where the handle is
+            self._echoes[axis] = [e for e in self._echoes[axis] if e not in echo]
+            self._sync_sliders()
             return
         p = np.array(p, dtype=float)
         p[axis] = v
@@ -450,7 +470,7 @@ class SkeletonViewer(DragTargets):
             raise ValueError(f"target for {name} contains NaN or inf")
         targets = dict(self.targets)
         targets[name] = position
-        self.set_targets(targets, self.look_targets)
+        self.set_targets(targets, self.look_targets, self.rotation_targets)
         self._show_handle_choice()
         self._update_status()
         for cb in self._target_callbacks:
@@ -466,7 +486,7 @@ class SkeletonViewer(DragTargets):
             raise ValueError(f"look-at target for {name} contains NaN or inf")
         looks = dict(self.look_targets)
         looks[name] = position
-        self.set_targets(self.targets, looks)
+        self.set_targets(self.targets, looks, self.rotation_targets)
         self._update_status()
         if not self._look_callbacks:  # nobody listens to look-at moves: the joint's target it is
             for cb in self._target_callbacks:

@@ -222,10 +222,18 @@ def test_viewer_renders_and_slider_moves_joint(lab, chromium):
         assert _foreground(after).mean() > 0.002
         page.screenshot(path=str(work / "after.png"))
 
-        # double-click a joint sphere of the playback viewer: the status line names it
+        # play the clip to its last frame, then double-click a joint sphere of the playback viewer: the status
+        # line names it (issue 27: picking used to stop once the pose had moved away from its first frame)
         first_viewer = page.locator(".jp-CodeCell", has=page.locator(".widget-play")).first
         view = first_viewer.locator("canvas").first
         view.scroll_into_view_if_needed()
+        frame0 = _pixels(view)
+        frame = first_viewer.locator(".widget-slider", has_text="frame").locator(".noUi-handle").first
+        frame.focus()
+        page.keyboard.press("End")
+        _wait_for(lambda: (np.abs(_pixels(view) - frame0).sum(-1) > 60).mean() > 0.0005 or None, 30,
+                  "the viewer to show the clip's last frame")
+        time.sleep(1.0)
         img = _pixels(view)
         # joint spheres are the light blue (#2e86c1 lit); bones are darker blue
         r, g, b = img[..., 0], img[..., 1], img[..., 2]
@@ -241,6 +249,20 @@ def test_viewer_renders_and_slider_moves_joint(lab, chromium):
         picked = row.locator("th").inner_text().strip()
         assert picked in SAMPLE_JOINTS, picked
         assert len(row.locator("td").all_inner_texts()) >= 3
+        # give the picked joint a target with its Y slider, then select two other joints and it again: the
+        # target stays where it was put (issue 27: re-ranged sliders used to send stale values back)
+        _drag(page, first_viewer.locator(".widget-slider", has_text="target y").locator(".noUi-handle").first, 50)
+        target = status.locator("tr", has_text="target")
+        _wait_for(lambda: target.count() == 1, 30, "a target for the picked joint")
+        time.sleep(1.5)
+        where = target.locator("td").all_inner_texts()[:3]
+        joints = first_viewer.locator(".widget-dropdown", has_text="selected").locator("select")
+        for j in ("left_knee", "chest", picked):
+            joints.select_option(j)
+            time.sleep(0.8)
+        time.sleep(2.0)
+        assert status.locator("tr").nth(1).locator("th").inner_text().strip() == picked
+        assert target.locator("td").all_inner_texts()[:3] == where, "selecting joints moved the target"
     finally:
         page.close()
 
@@ -260,6 +282,20 @@ def _open_panel(page, lab, notebook, views, what):
     return cell, labels, canvases, before
 
 
+def _select_others_and_back(page, cell, labels, what):
+    """Issue 27: choose two other joints in the first view's *selected* list, then the one selected before:
+    the sliders re-range each time, and nothing may move — no solver re-solves (every status line stays)."""
+    joints = cell.locator(".widget-dropdown", has_text="selected").first.locator("select")
+    orig = joints.input_value()
+    others = [o for o in joints.locator("option").all_inner_texts() if o not in (orig, "(none)")]
+    texts = [l.inner_text() for l in labels.all()]
+    for j in (others[1], others[len(others) // 2], orig or "(none)"):
+        joints.select_option(label=j)
+        time.sleep(0.8)
+    time.sleep(2.0)  # let any echo from the browser arrive
+    assert [l.inner_text() for l in labels.all()] == texts, f"{what}: selecting joints moved a target"
+
+
 def _views_moved(canvases, before):
     for c, im in zip(canvases.all(), before):
         _wait_for(lambda c=c, im=im: (np.abs(_pixels(c) - im).sum(-1) > 60).mean() > 0.0005 or None, 30,
@@ -275,6 +311,7 @@ def test_solvers_solve_live_side_by_side(lab, chromium, notebook, views):
     page = chromium.new_page(viewport={"width": 1500, "height": 1100})
     try:
         cell, labels, canvases, before = _open_panel(page, lab, notebook, views, "the solver panel")
+        _select_others_and_back(page, cell, labels, notebook)
         texts = [l.inner_text() for l in labels.all()]
         assert all("mm" in t and "ms" in t for t in texts)
         handle = cell.locator(".widget-slider", has_text="target y").locator(".noUi-handle").first
@@ -294,6 +331,7 @@ def test_effector_editor_adds_effectors_and_re_poses(lab, chromium):
     page = chromium.new_page(viewport={"width": 1500, "height": 1300})
     try:
         cell, labels, canvases, before = _open_panel(page, lab, PROTORES_NOTEBOOK, 2, "the effector editor")
+        _select_others_and_back(page, cell, labels, PROTORES_NOTEBOOK)
 
         def moved(texts, what):
             _wait_for(lambda: all(l.inner_text() != t for l, t in zip(labels.all(), texts)), 60, what)

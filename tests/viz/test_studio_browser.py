@@ -10,6 +10,7 @@ Needs Debian's ``chromium`` (``make test`` installs it) and Playwright's Python 
 
 from __future__ import annotations
 
+import time
 
 import numpy as np
 import pytest
@@ -82,6 +83,42 @@ def test_studio_loads_and_every_view_shows_a_skeleton(page):
     assert all(n in summary for n in ("fabrik", "dls", "protores")), summary
 
 
+def _joint_list(page):
+    """The first view's *selected* joint list (a select element)."""
+    return page.locator(VIEWS).locator(".widget-dropdown", has_text="selected").first.locator("select")
+
+
+def _status_rows(page):
+    """The first view's status table under its sliders: row label -> (x, y, z) in metres."""
+    table = page.locator(VIEWS).locator(".widget-html-content", has=page.locator("th", has_text="x m")).first
+    rows = {}
+    for tr in table.locator("tr").all()[1:]:
+        label = tr.locator("th").inner_text().strip()
+        rows[label] = tuple(float(t) for t in tr.locator("td").all_inner_texts()[:3])
+    return rows
+
+
+def _buttons_disabled(page):
+    return [page.locator(".widget-button", has_text=n).first.is_disabled() for n in ("undo", "redo")]
+
+
+def test_a_fresh_studio_has_no_history_and_selecting_moves_nothing(page):
+    """Issue 27: choosing joints one after another (the sliders re-range each time) never moves a target,
+    adds an effector or re-solves; the helper root is not offered; a fresh studio has nothing to undo or redo."""
+    assert _buttons_disabled(page) == [True, True]
+    joints = _joint_list(page)
+    assert "joint_Root" not in joints.locator("option").all_inner_texts()
+    n0, texts = update_number(page), _texts(page)
+    for j in ("Head", "Hand_R", "Foot_L", "Hand_R", "Chest", "Hand_L"):
+        joints.select_option(j)
+        time.sleep(0.8)
+    time.sleep(2.0)  # let any echo from the browser arrive
+    assert update_number(page) == n0, "selecting joints re-solved: a target moved or an effector was added"
+    assert _texts(page) == texts
+    assert _buttons_disabled(page) == [True, True]
+    assert "target" in _status_rows(page)  # the left hand (selected last) has its target, where it was
+
+
 def test_dragging_a_target_in_3d_resolves_every_view(page, server):
     first = _canvases(page)[0]
     first.scroll_into_view_if_needed()
@@ -106,6 +143,54 @@ def test_dragging_a_target_in_3d_resolves_every_view(page, server):
     assert float(ty) > 0.949 + 0.02, ty
     page.locator(VIEWS).get_by_role("button", name="drag in 3D").click()  # orbit again
     page.screenshot(path=str(server.folder / "studio_after_drag.png"))
+
+
+def _orange(img):
+    """Pixels of a lit orange look-at marker (not the yellow selection marker, not the red bones)."""
+    r, g, b = (img[..., k].astype(float) for k in range(3))
+    ratio = g / np.maximum(r, 1)
+    return (r > 150) & (ratio > 0.4) & (ratio < 0.68) & (b < 0.35 * r)
+
+
+def test_a_look_at_marker_drags_its_own_target(page, server):
+    """Issue 27: the head holds a position and a look-at effector. Pressing on the orange marker (drag in 3D)
+    moves the point it looks at and leaves its position target; the *sliders move* choice appears and, on
+    look-at, the X slider moves the look-at target too."""
+    _add(page, "Head", "look_at")
+    _joint_list(page).select_option("Head")
+    wait_for(lambda: "looks at" in _status_rows(page), 30, "the head's look-at target in the status table")
+    rows0 = _status_rows(page)
+    choice = page.locator(VIEWS).locator(".widget-toggle-buttons", has_text="sliders move")
+    assert choice.is_visible()
+    first = _canvases(page)[0]
+    first.scroll_into_view_if_needed()
+    img = _pixels(first)
+    ys, xs = np.nonzero(_orange(img))
+    assert len(xs) > 3, "the orange look-at marker is not on the canvas"
+    x, y = float(np.median(xs)), float(np.median(ys))
+    n0 = update_number(page)
+    page.locator(VIEWS).get_by_role("button", name="drag in 3D").click()
+    box = first.bounding_box()
+    page.mouse.move(box["x"] + x, box["y"] + y)
+    page.mouse.down()
+    page.mouse.move(box["x"] + x + 40, box["y"] + y - 20, steps=8)
+    page.mouse.up()
+    page.locator(VIEWS).get_by_role("button", name="drag in 3D").click()  # orbit again
+    _wait_update(page, n0, "a solve after dragging the orange marker")
+    rows1 = wait_for(lambda: (lambda r: r if r.get("looks at") != rows0["looks at"] else None)(_status_rows(page)),
+                     30, "the look-at target to move")
+    assert rows1["target"] == rows0["target"], "dragging the look-at marker moved the head's position target"
+    # the sliders: switch them to the look-at target and push X
+    choice.get_by_role("button", name="look-at").click()
+    time.sleep(1.0)
+    n0 = update_number(page)
+    _drag_slider(page, page.locator(".posekit-target-x .noUi-handle").first, 60)
+    _wait_update(page, n0, "a solve after the look-at slider")
+    rows2 = wait_for(lambda: (lambda r: r if r["looks at"][0] != rows1["looks at"][0] else None)(_status_rows(page)),
+                     30, "the look-at target to follow the X slider")
+    assert rows2["target"] == rows0["target"]
+    choice.get_by_role("button", name="target").click()
+    page.screenshot(path=str(server.folder / "studio_look_at.png"))
 
 
 def _add(page, joint, kind):
@@ -148,6 +233,10 @@ def test_rotation_and_look_at_effectors_change_the_pose(page):
     _wait_update(page, n0, "a solve after moving the look-at target")
     wait_for(lambda: all(a != b for a, b in zip(_texts(page)[1:], texts)), 60, "DLS and ProtoRes to look")
     wait_for(lambda: _all_changed(before, [_pixels(c) for c in _canvases(page)[1:]]), 30, "their views to turn")
+    # FABRIK honours positions only: its view names what it ignored and does not call it reached
+    fabrik = _texts(page)[0]
+    ignored = fabrik.split("reached")[1].split("ignored")[0] if "ignored" in fabrik else ""
+    assert "rotation" in ignored and "look-at" in ignored and "✓ reached" not in fabrik, fabrik
 
 
 def test_bvh_export_downloads_a_file_posekit_reads(page, tmp_path):

@@ -289,3 +289,77 @@ def test_dragging_an_orange_marker_moves_the_look_at_target():
     assert v.dragging == "Head" and not v.dragging_look
     v.drag_to(cam + 0.5 * (head + [0.0, 0.05, 0.0] - cam))
     assert not np.allclose(ed.rows[0]["target"], head) and np.allclose(ed.rows[1]["target"], goal)
+
+
+def test_stale_values_the_browser_sends_after_a_new_selection_move_nothing(sample):
+    """Issue 27: selecting a joint re-ranges the sliders; the browser may send back the previous joint's value
+    clamped into the new range. That is an echo (taken once), not a move; a real move changes one axis only,
+    and a slider pushed to an end re-centres on its value."""
+    s = sample.skeleton
+    v = SkeletonViewer(s, sample.global_pos[0])
+    seen = []
+    v.on_target_change(lambda name, p: seen.append((name, p.copy())))
+    v.select("left_wrist")
+    v.sliders[1].value += 0.3  # a user move: a target above the wrist
+    wrist = v.targets["left_wrist"].copy()
+    assert len(seen) == 1
+    for other in ("left_knee", "chest", "left_wrist"):
+        old = [sl.value for sl in v.sliders]
+        v.select(other)
+        for sl, x in zip(v.sliders, old):  # the browser's stale values, clamped into the new ranges
+            sl.value = float(np.clip(x, sl.min, sl.max))
+    assert len(seen) == 1 and set(v.targets) == {"left_wrist"}, seen
+    np.testing.assert_array_equal(v.targets["left_wrist"], wrist)
+    assert [sl.value for sl in v.sliders] == pytest.approx(wrist)  # put back where the target is
+    # a move: only that axis of the target changes, whatever the other sliders hold
+    v.sliders[2].value = wrist[2] + 0.1
+    np.testing.assert_allclose(v.targets["left_wrist"], wrist + [0.0, 0.0, 0.1])
+    # pushed to the top of its range: the range re-centres on the new value, so the next push goes further
+    # (later than ECHO_S after the selection: an end of a new range is taken as a stale echo only just after it)
+    v.ECHO_S = 0.0
+    top = v.sliders[1].max
+    v.sliders[1].value = top
+    assert v.targets["left_wrist"][1] == pytest.approx(top) and v.sliders[1].max > top + 0.4
+
+
+def test_helper_joints_are_not_selectable_and_markers_stay_pickable():
+    from posekit.data import load_bandai_mini
+    from posekit.viz.meshes import PICK_BOUND
+
+    m = load_bandai_mini()
+    v = SkeletonViewer(m.skeleton, m.global_pos[0])
+    assert "joint_Root" not in [o[0] for o in v.joint_select.options]
+    with pytest.raises(ValueError, match="helper joint"):
+        v.select("joint_Root")
+    assert v._nearest_joint(m.global_pos[0][0]) != "joint_Root"  # a double-click at the origin point
+    # every pickable mesh's buffer spans the far corners, so the browser's bounding sphere holds every pose
+    pos = np.asarray(v._joints.geometry.attributes["position"].array)
+    assert np.allclose(pos[-2:], [[-PICK_BOUND] * 3, [PICK_BOUND] * 3])
+    v.set_pose(m.global_pos[0] + [5.0, 0.0, 0.0])
+    assert np.allclose(np.asarray(v._joints.geometry.attributes["position"].array)[-2:], pos[-2:])
+
+
+def test_a_target_outside_the_view_brings_the_camera_along(sample):
+    v = SkeletonViewer(sample.skeleton, sample.global_pos[0])
+    r0 = v._radius
+    far = sample.global_pos[0][sample.skeleton.index("left_wrist")] + [0.0, 2.5, 0.0]
+    v.set_targets({"left_wrist": far})
+    assert np.linalg.norm(far - v._offset) <= 1.05 * v._radius and v._radius > r0
+
+
+def test_a_solver_that_ignores_a_kind_says_so_and_names_the_worst_joint():
+    from posekit.data import load_bandai_mini
+    from posekit.ik import Effector, Pose
+
+    m = load_bandai_mini()
+    s = m.skeleton
+    start = Pose.from_rotations(s, m.local_rot[0], m.root_pos[0])
+    P = start.global_pos
+    effs = [Effector("Hand_L", P[s.index("Hand_L")] + [0.0, 0.1, 0.0]),
+            Effector("Head", P[s.index("Head")] + [0.0, 0.0, 1.0], "look_at", axis=[0.0, 0.0, 1.0])]
+    panel = SolverPanel(s, {n: make_solver(n, s) for n in ("fabrik", "dls")}, start, effs)
+    fabrik, dls = panel.labels["fabrik"].value, panel.labels["dls"].value
+    assert "look-at ignored" in fabrik and "✓ reached" not in fabrik and "(Hand_L)" in fabrik
+    assert "ignored" not in dls and "°" in dls
+    assert panel.results["fabrik"].kinds == ("position",)  # FABRIK was given the position effector only
+    assert set(panel.viewers["dls"].look_targets) == {"Head"} and set(panel.viewers["dls"].targets) == {"Hand_L"}
