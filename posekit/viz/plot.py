@@ -20,7 +20,8 @@ def _to_mpl(p):
 
 def plot_pose(skeleton: Skeleton, global_pos, ax=None, color="C0", ghost=None, ghost_color="0.6",
               targets=None, title: str | None = None, elev: float = 12, azim: float = -70,
-              joints: bool = True, label: str | None = None):
+              joints: bool = True, label: str | None = None, ghost_label: str | None = None,
+              target_label: str | None = None):
     """Draw one pose (or several overlaid) as bones and joints on a 3D axes.
 
     Parameters
@@ -33,6 +34,8 @@ def plot_pose(skeleton: Skeleton, global_pos, ax=None, color="C0", ghost=None, g
         A second pose drawn in ``ghost_color`` (e.g. the ground truth).
     targets : ndarray, shape (T, 3), optional
         Target markers (red crosses).
+    label, ghost_label, target_label : str, optional
+        Legend entries for the pose, the ghost and the targets; a legend is drawn when any is given.
 
     Returns
     -------
@@ -60,15 +63,15 @@ def plot_pose(skeleton: Skeleton, global_pos, ax=None, color="C0", ghost=None, g
     if ghost is not None:
         g = np.asarray(ghost, dtype=float).reshape(-1, skeleton.n_joints, 3)
         everything.append(g.reshape(-1, 3))
-        for p in g:
-            draw(p, ghost_color, 0.8, 1.5)
+        for k, p in enumerate(g):
+            draw(p, ghost_color, 0.8, 1.5, ghost_label if k == 0 else None)
     for k, p in enumerate(poses):
         draw(p, color, 1.0 if len(poses) == 1 else 0.35 + 0.65 * (k + 1) / len(poses), 2.0,
              label if k == len(poses) - 1 else None)
     if targets is not None:
         t = np.asarray(targets, dtype=float).reshape(-1, 3)
         everything.append(t)
-        ax.scatter(*_to_mpl(t), color="red", marker="x", s=40, depthshade=False)
+        ax.scatter(*_to_mpl(t), color="red", marker="x", s=40, depthshade=False, label=target_label)
     pts = np.concatenate(everything)
     centre = 0.5 * (pts.min(0) + pts.max(0))
     half = 0.5 * max(float(np.ptp(pts, axis=0).max()), 0.5)
@@ -88,6 +91,8 @@ def plot_pose(skeleton: Skeleton, global_pos, ax=None, color="C0", ghost=None, g
     ax.view_init(elev=elev, azim=azim)
     if title:
         ax.set_title(title)
+    if label or ghost_label or target_label:
+        ax.legend(loc="upper left", fontsize=7, frameon=False, handlelength=1.2)
     return ax
 
 
@@ -110,13 +115,14 @@ def plot_strip(skeleton: Skeleton, poses, titles=None, elev: float = 12, azim: f
     for k, p in enumerate(poses):
         ax = fig.add_subplot(1, len(poses), k + 1, projection="3d")
         plot_pose(skeleton, p, ax=ax, title=None if titles is None else titles[k], elev=elev, azim=azim)
-        ax.set_xticklabels([])
+        ax.set_xticklabels([])  # a strip shows shapes: numbers and axis names on every small panel only crowd it
         ax.set_yticklabels([])
         ax.set_zticklabels([])
-        if k:  # axis names once, on the first panel: elsewhere they run into the next panel
-            ax.set_xlabel("")
-            ax.set_ylabel("")
-            ax.set_zlabel("")
+        ax.set_xlabel("")
+        ax.set_ylabel("")
+        ax.set_zlabel("")
     # tight_layout cannot measure 3D axes; fixed margins keep every panel whole
-    fig.subplots_adjust(left=0.0, right=1.0, bottom=0.02, top=0.92, wspace=0.02)
+    fig.subplots_adjust(left=0.0, right=1.0, bottom=0.08, top=0.92, wspace=0.02)
+    fig.text(0.5, 0.01, "each panel framed on its own pose, one scale for x, y and z (metres; y up)", ha="center",
+             fontsize=8, color="0.35")
     return fig

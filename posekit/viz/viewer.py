@@ -164,7 +164,7 @@ class SkeletonViewer(DragTargets):
         step = self.SLIDER_STEP
         self.sliders = [w.FloatSlider(value=0.0, min=-step, max=step, step=step, description=f"target {a}",
                                       continuous_update=True, readout_format=".3f", disabled=True, readout=False,
-                                      layout=w.Layout(width="340px"))
+                                      layout=w.Layout(width="480px"))
                         for a in "xyz"]
         self._synced = None
         for a, s in zip("xyz", self.sliders):
