@@ -71,7 +71,7 @@ def solver_views(skeleton, names, pose, truth=None, width: int = 300, height: in
     viewers, labels, boxes = {}, {}, []
     for k, name in enumerate(names):
         v = SkeletonViewer(skeleton, pose, ghost=truth, width=width, height=height, controls=(k == 0))
-        viewers[name], labels[name] = v, w.HTML()
+        viewers[name], labels[name] = v, w.HTML(layout=w.Layout(width=f"{width}px"))  # a long message wraps
         boxes.append(w.VBox([w.HTML(f"<b>{html.escape(str(name))}</b>"), v.renderer, labels[name]]))
     return viewers, labels, boxes
 

@@ -119,6 +119,16 @@ def test_a_fresh_studio_has_no_history_and_selecting_moves_nothing(page):
     assert "target" in _status_rows(page)  # the left hand (selected last) has its target, where it was
 
 
+def _drag_in_3d(page, canvas, at, by):
+    """Switch *drag in 3D* on, press at pixel ``at`` (x, y) of ``canvas`` and move the mouse ``by`` (dx, dy) pixels."""
+    page.locator(VIEWS).get_by_role("button", name="drag in 3D").click()
+    box = canvas.bounding_box()
+    page.mouse.move(box["x"] + at[0], box["y"] + at[1])
+    page.mouse.down()
+    page.mouse.move(box["x"] + at[0] + by[0], box["y"] + at[1] + by[1], steps=8)
+    page.mouse.up()
+
+
 def test_dragging_a_target_in_3d_resolves_every_view(page, server):
     first = _canvases(page)[0]
     first.scroll_into_view_if_needed()
@@ -128,13 +138,7 @@ def test_dragging_a_target_in_3d_resolves_every_view(page, server):
     r, g, b = img[..., 0], img[..., 1], img[..., 2]
     ys, xs = np.nonzero((r > 180) & (g > 120) & (g < 215) & (b < 90))
     assert len(xs) > 3, "the selected joint's yellow marker is not on the canvas"
-    x, y = float(np.median(xs)), float(np.median(ys))
-    page.locator(VIEWS).get_by_role("button", name="drag in 3D").click()
-    box = first.bounding_box()
-    page.mouse.move(box["x"] + x, box["y"] + y)
-    page.mouse.down()
-    page.mouse.move(box["x"] + x + 15, box["y"] + y - 45, steps=8)
-    page.mouse.up()
+    _drag_in_3d(page, first, (float(np.median(xs)), float(np.median(ys))), (15, -45))
     _wait_update(page, n0, "a solve after the drag")
     wait_for(lambda: all(a != b for a, b in zip(_texts(page), texts)), 60, "every view's status to change")
     wait_for(lambda: _all_changed(before, _images(page)), 30, "every view to re-pose")
@@ -167,14 +171,8 @@ def test_a_look_at_marker_drags_its_own_target(page, server):
     img = _pixels(first)
     ys, xs = np.nonzero(_orange(img))
     assert len(xs) > 3, "the orange look-at marker is not on the canvas"
-    x, y = float(np.median(xs)), float(np.median(ys))
     n0 = update_number(page)
-    page.locator(VIEWS).get_by_role("button", name="drag in 3D").click()
-    box = first.bounding_box()
-    page.mouse.move(box["x"] + x, box["y"] + y)
-    page.mouse.down()
-    page.mouse.move(box["x"] + x + 40, box["y"] + y - 20, steps=8)
-    page.mouse.up()
+    _drag_in_3d(page, first, (float(np.median(xs)), float(np.median(ys))), (40, -20))
     page.locator(VIEWS).get_by_role("button", name="drag in 3D").click()  # orbit again
     _wait_update(page, n0, "a solve after dragging the orange marker")
     rows1 = wait_for(lambda: (lambda r: r if r.get("looks at") != rows0["looks at"] else None)(_status_rows(page)),
