@@ -284,7 +284,7 @@ def run(motions, solvers=("fabrik", "ccd", "dls"), effector_sets=("2", "5"), n_c
     jobs = [(st, name, e) for st in starts for name in solvers for e in effector_sets]
     bar = None
     if progress:
-        from tqdm.auto import tqdm
+        from ..progress import tqdm
 
         bar = tqdm(total=len(jobs) + len(starts) * len(extras), desc="bench ik", unit="row")
     rows = []

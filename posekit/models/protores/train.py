@@ -35,6 +35,7 @@ import numpy as np
 import torch
 
 from ...learn import limit_threads, merge_settings
+from ...progress import finish
 from ...learn.trainers import register_trainer
 from ...plugins import arg
 from ...data.bandai_mini import LICENCE
@@ -202,7 +203,7 @@ def train_protores(motions=None, *, arch: str = "protores", seed: int = 0, out=N
     acc = {k: 0.0 for k in LOSSES}
     n_acc, done, bar = 0, 0, None
     if progress:
-        from tqdm.auto import tqdm
+        from ...progress import tqdm
 
         bar = tqdm(total=steps, desc=f"train {arch}", unit="step")
     train_seconds = 0.0
@@ -240,6 +241,7 @@ def train_protores(motions=None, *, arch: str = "protores", seed: int = 0, out=N
             if bar is not None:
                 bar.update()
     if bar is not None:
+        finish(bar)                    # a time budget stops it early: the bar ends at the steps that ran
         bar.close()
     net.eval()
     with torch.no_grad():  # evaluated as shipped: float16 weights
