@@ -3,7 +3,7 @@
 Introduced in ``notebooks/00_skeletons_and_poses.ipynb``. Axes: :mod:`posekit.conventions`
 (Y up, facing +Z, mirroring reflects x -> -x).
 
-The *root frame* follows Victor & Meyer 2020 (Sec. 3.2): its origin is the pelvis projected on the
+The *root frame* follows Victor et al. 2021 (Sec. 3.2): its origin is the pelvis projected on the
 floor (y = 0) and it faces +Z, so a pose expressed in it no longer depends on where the character
 stands or which way it looks.
 """
@@ -223,7 +223,7 @@ def facing_angle(skeleton: Skeleton, global_pos) -> np.ndarray:
 
 
 def root_frame(skeleton: Skeleton, global_pos):
-    """The root frame of each pose (Victor & Meyer 2020, Sec. 3.2).
+    """The root frame of each pose (Victor et al. 2021, Sec. 3.2).
 
     Returns
     -------

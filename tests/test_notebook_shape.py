@@ -87,3 +87,16 @@ def test_every_library_name_the_prose_mentions_exists(path):
     text = "\n".join("".join(c["source"]) for c in nb["cells"] if c["cell_type"] == "markdown")
     names = sorted({m.group(0) for m in re.finditer(r"posekit(\.[A-Za-z_]\w*)+", text)})
     assert [n for n in names if not resolves(n)] == []
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.name)
+def test_stored_progress_bars_end_finished(path):
+    """A stored tqdm bar shows how the loop ended (posekit.progress), never frozen at 0 % or midway."""
+    import re
+
+    nb = json.loads(path.read_text())
+    bars = [("".join(o.get("data", {}).get("text/plain", "")), k) for k, c in enumerate(nb["cells"])
+            for o in c.get("outputs", []) if re.search(r"\d+%\|", "".join(o.get("data", {}).get("text/plain", "")))]
+    frozen = [(k, text) for text, k in bars
+              if (m := re.search(r"(\d+)/(\d+) \[", text)) is None or m.group(1) != m.group(2)]
+    assert frozen == [], f"{path.name}: progress bars not finished in cells {frozen}"

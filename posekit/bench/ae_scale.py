@@ -1,4 +1,4 @@
-"""``posekit bench ae-scale``: lesson 03 (Victor & Meyer 2020) at full scale, on the whole Bandai Namco datasets.
+"""``posekit bench ae-scale``: lesson 03 (Victor et al. 2021) at full scale, on the whole Bandai Namco datasets.
 
 Introduced in ``notebooks/03_autoencoder_solvers.ipynb``. The lesson trains its pose autoencoder and
 latent-space solvers on the Bandai mini set (41,391 poses, frames subsampled); this benchmark asks

@@ -16,7 +16,7 @@ What it writes (``out``, a folder; by default ``data_samples/results``):
 * ``bench_all.md`` — what was measured, one Markdown table per start condition sorted by MPJPE, and how
   to read the scatter;
 * ``bench_all.png`` — median time per solve (ms) against median MPJPE (mm), both log, one point per
-  solver and start condition: a speed/quality scatter in the spirit of Fig. 5 of Victor & Meyer 2020.
+  solver and start condition: a speed/quality scatter in the spirit of Fig. 5 of Victor et al. 2021.
 
 Units: times in milliseconds on one thread; distances in millimetres (the library's metres times 1000).
 """

@@ -2,7 +2,7 @@
 
 Introduced in ``notebooks/06_posing_studio.ipynb`` with :mod:`posekit.bench.all`, which writes it as
 ``bench_all.png``: median time per solve (ms) against median MPJPE (mm), both log, in the spirit of Fig. 5
-of Victor & Meyer 2020; :func:`_label_points` places the solver names so that they overlap neither the
+of Victor et al. 2021; :func:`_label_points` places the solver names so that they overlap neither the
 points nor each other.
 """
 

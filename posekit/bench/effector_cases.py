@@ -1,4 +1,4 @@
-"""The two effector benchmarks of ProtoRes's Table 1 (Oreshkin et al. 2021, Sec. 4), on held-out Bandai poses.
+"""The two effector benchmarks of ProtoRes's Table 1 (Oreshkin et al. 2022, Sec. 4), on held-out Bandai poses.
 
 Introduced in ``notebooks/05_protores.ipynb``. Generated once from a seed (``posekit data
 build-benchmark protores``) and shipped as files in ``data_samples/benchmarks/`` so every solver, every

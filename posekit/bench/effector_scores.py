@@ -1,4 +1,4 @@
-"""Scoring solvers on ProtoRes's effector benchmarks (Oreshkin et al. 2021, Sec. 4), learned and classical alike.
+"""Scoring solvers on ProtoRes's effector benchmarks (Oreshkin et al. 2022, Sec. 4), learned and classical alike.
 
 Introduced in ``notebooks/05_protores.ipynb``; ``posekit bench protores`` prints these numbers. Every
 method is scored by :func:`scores` on the same cases (:mod:`posekit.bench.effector_cases`):

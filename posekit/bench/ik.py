@@ -26,7 +26,7 @@ nearest training pose) and ``natural_floor_mm_median`` (the true pose's own), ``
 (every effector within 1 mm), ``iterations_median``, ``memory_kb`` (peak Python allocation of one
 solve, tracemalloc), ``model_kb`` / ``solver_kb`` (a learned solver's networks in float32: all that
 one solve runs / the solver networks alone), ``solves_per_s`` and ``us_per_pose`` (batched),
-``paper_latency_ms`` and ``paper_kb`` (Victor & Meyer 2020, Table 1), ``start``.
+``paper_latency_ms`` and ``paper_kb`` (Victor et al. 2021, Table 1), ``start``.
 """
 
 from __future__ import annotations
@@ -51,7 +51,7 @@ __all__ = ["Method", "MethodContext", "register_method", "unregister_method", "m
            "resolve_solvers", "evaluate_solver", "run", "PAPER", "PAPER_KB", "TABLES", "TABLE_LABELS", "default_data"]
 
 PAPER = {
-    ("fabrik", "2"): 6.56,  # Victor & Meyer 2020, Table 1: full-body FABRIK runtime, ms
+    ("fabrik", "2"): 6.56,  # Victor et al. 2021, Table 1: full-body FABRIK runtime, ms
     ("fabrik", "5"): 6.74,
     ("neural", "2"): 1.47,  # ... and their neural solver (autoencoder + one solver)
     ("neural", "5"): 3.36,
@@ -59,7 +59,7 @@ PAPER = {
 """Paper figures shown beside ours (runtime in ms)."""
 
 PAPER_KB = {("neural", "2"): 442, ("neural", "5"): 826}
-"""Victor & Meyer 2020, Table 1: memory of the neural solver, kB."""
+"""Victor et al. 2021, Table 1: memory of the neural solver, kB."""
 
 
 # ---------------------------------------------------------------------------------------- methods
@@ -284,7 +284,7 @@ def run(motions, solvers=("fabrik", "ccd", "dls"), effector_sets=("2", "5"), n_c
     jobs = [(st, name, e) for st in starts for name in solvers for e in effector_sets]
     bar = None
     if progress:
-        from tqdm.auto import tqdm
+        from ..progress import tqdm
 
         bar = tqdm(total=len(jobs) + len(starts) * len(extras), desc="bench ik", unit="row")
     rows = []
@@ -386,7 +386,7 @@ _ALIAS_HELP = ", ".join(f"{a} = {b}" for a, b in START_ALIASES.items())
 
 register_benchmark(
     "ik", _cli_run,
-    help="IK solvers on held-out real poses, side by side (Victor & Meyer Table 1 style)",
+    help="IK solvers on held-out real poses, side by side (Table 1 of Victor et al. 2021, in its style)",
     args=[
         arg("--solvers", default="fabrik,ccd,dls",
             help="comma-separated registered solvers (posekit.ik.registry), e.g. fabrik, fabrik-constrained, "

@@ -3,7 +3,7 @@
 Introduced in ``notebooks/03_autoencoder_solvers.ipynb``. Registered with
 :func:`posekit.bench.ik.register_method`, they run when ``neural`` is among the run's solvers, on the
 same cases and with the same metric code as every solver (so ``posekit bench ik --solvers fabrik,neural
---effectors 2,5`` prints Victor & Meyer's Table 1 side by side in one run):
+--effectors 2,5`` prints Victor et al.'s Table 1 side by side in one run):
 
 * ``neural-variants`` — ``neural-raw`` (the decoded pose, no post-processing), ``neural-fabrik`` (that
   pose as FABRIK's start) and, for sets the chain covers with more than one stage (5 effectors),

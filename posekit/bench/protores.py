@@ -1,4 +1,4 @@
-"""``posekit bench protores``: ProtoRes's Tables 1 and 2 at CPU scale (Oreshkin et al. 2021), speed, training time.
+"""``posekit bench protores``: ProtoRes's Tables 1 and 2 at CPU scale (Oreshkin et al. 2022), speed, training time.
 
 Introduced in ``notebooks/05_protores.ipynb``. One run scores every method on the shipped 5-point and
 random benchmarks (:mod:`posekit.bench.effector_cases`) with one metric code
@@ -207,7 +207,7 @@ def run(cases: int | None = None, classical: bool = True, speed: bool = True, pr
 
 def _header(rows, args) -> str:
     n = {r["benchmark"]: None for r in rows if r.get("table") == 1}
-    return ("ProtoRes benchmarks (Oreshkin et al. 2021) on held-out Bandai mini-set poses: "
+    return ("ProtoRes benchmarks (Oreshkin et al. 2022) on held-out Bandai mini-set poses: "
             + ", ".join(n) + ". L_ikd-L2 and L_gpd-L2: 1e-3 m^2 (MSE over every body joint's coordinates); "
             "L_loc-geo: radians; effector errors: medians. Learned models: one pass each; FABRIK and DLS start "
             "from the rest pose fitted rigidly to the position targets (FABRIK gets the position effectors only).")
@@ -245,7 +245,7 @@ LABELS = {"ikd_l2_e3": "L_ikd-L2", "gpd_l2_e3": "L_gpd-L2", "loc_geo": "L_loc-ge
 
 register_benchmark(
     "protores", lambda args: run(cases=args.cases, classical=not args.no_classical, speed=not args.no_speed),
-    help="ProtoRes: Tables 1 and 2 of Oreshkin et al. 2021 at CPU scale, tolerance, speed and training time",
+    help="ProtoRes: Tables 1 and 2 of Oreshkin et al. 2022 at CPU scale, tolerance, speed and training time",
     args=[arg("--cases", type=int, default=None, help="cases per benchmark (default: all 1,000)"),
           arg("--no-classical", action="store_true", help="skip FABRIK and DLS"),
           arg("--no-speed", action="store_true", help="skip the timing rows")],

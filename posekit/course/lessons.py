@@ -3,7 +3,12 @@
 Every lesson stores its facts in its own notebook metadata, under ``posekit``::
 
     {"lesson": "03", "duration_min": 120, "prerequisites": ["00", "01"],
-     "paper": "Victor & Meyer, ... 2020", "reading": "..."}
+     "paper": "victor2021", "references": ["victor2021", "aristidou2011", "kobayashi2023"],
+     "reading": "..."}
+
+``paper`` and ``references`` are keys of :mod:`posekit.references` (the one bibliography);
+:attr:`Lesson.paper` is the paper's one-line citation drawn from it. ``reading`` is a key too, or a
+short free text.
 
 ``duration_min`` is the planned class time (lecture and practical), an author's plan; the time the
 notebook took to run is read from its stored execution timestamps (measured when its outputs were made).
@@ -36,6 +41,10 @@ class Lesson:
     reading: str | None
     run_s: float | None
     """Seconds from the first cell's start to the last cell's end in the stored outputs (None if unknown)."""
+    paper_key: str | None = None
+    """The paper's key in :mod:`posekit.references` (None for a lesson without one)."""
+    references: tuple[str, ...] = ()
+    """The keys of the lesson's reference list, in its order."""
 
     @property
     def stem(self) -> str:
@@ -83,8 +92,16 @@ def _lesson(path: Path) -> Lesson:
     for key in ("duration_min", "prerequisites"):
         if key not in meta:
             raise ValueError(f"{path}: the notebook metadata's 'posekit' entry lacks {key!r}")
-    return Lesson(number, path, title, int(meta["duration_min"]), tuple(meta["prerequisites"]), meta.get("paper"),
-                  meta.get("reading"), _run_seconds(nb))
+    return Lesson(number, path, title, int(meta["duration_min"]), tuple(meta["prerequisites"]),
+                  _cited(meta.get("paper")), _cited(meta.get("reading")), _run_seconds(nb),
+                  meta.get("paper"), tuple(meta.get("references", ())))
+
+
+def _cited(value: str | None) -> str | None:
+    """A bibliography key as its one-line citation; free text (or None) as it is."""
+    from ..references import REFERENCES, long_cite
+
+    return long_cite(value) if value in REFERENCES else value
 
 
 def lessons(folder=None) -> list[Lesson]:

@@ -23,8 +23,8 @@ Where the poses come from
 
   For one seed and case count the *targets* are the same under every start condition, so the
   conditions compare like with like.
-* Both poses are expressed in their root frame (pelvis above the origin, facing +Z; Victor & Meyer
-  2020, Sec. 3.2) and the start is shifted so that its pelvis sits on the target's: the solvers keep
+* Both poses are expressed in their root frame (pelvis above the origin, facing +Z; Victor et al.
+  2021, Sec. 3.2) and the start is shifted so that its pelvis sits on the target's: the solvers keep
   the pelvis in place, so every case is reachable and the target is one exact solution.
 """
 

@@ -128,7 +128,7 @@ def sample_pairs(motions: MotionSet, n: int, rng=None, max_gap: int | None = Non
     """Draw ``n`` (start, target) frame pairs from the same clip.
 
     The neural IK solvers learn to move the start pose so that chosen joints reach the target
-    pose's positions (Victor & Meyer 2020, Sec. 3.3.2).
+    pose's positions (Victor et al. 2021, Sec. 3.3.2).
 
     Parameters
     ----------

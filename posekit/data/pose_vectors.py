@@ -1,6 +1,6 @@
 """Poses as root-relative feature vectors: what every learned pose model of lessons 03-04 reads and writes.
 
-Introduced in ``notebooks/03_autoencoder_solvers.ipynb`` (Victor & Meyer 2020, Sec. 3.2) and reused by
+Introduced in ``notebooks/03_autoencoder_solvers.ipynb`` (Victor et al. 2021, Sec. 3.2) and reused by
 lesson 04's AE-GAN (:mod:`posekit.models.aegan.networks`). Units and
 axes: :mod:`posekit.conventions` (metres, Y up, facing +Z).
 

@@ -43,8 +43,8 @@ __all__ = ["Effector", "Pose", "IKResult", "Solver", "SolverBase", "EFFECTOR_SET
 
 EFFECTOR_SETS = {
     "2": ("left_hand", "right_hand"),
-    "5": ("left_hand", "right_hand", "left_foot", "right_foot", "head"),  # Victor & Meyer 2020
-    "5point": ("chest", "left_hand", "right_hand", "left_foot", "right_foot"),  # Oreshkin et al. 2021
+    "5": ("left_hand", "right_hand", "left_foot", "right_foot", "head"),  # Victor et al. 2021
+    "5point": ("chest", "left_hand", "right_hand", "left_foot", "right_foot"),  # Oreshkin et al. 2022
 }
 """Named effector sets, as joint roles."""
 

@@ -4,7 +4,7 @@ Introduced in ``notebooks/01_fabrik.ipynb``. Units, axes and the quaternion orde
 :mod:`posekit.conventions` (metres, radians, Y up, facing +Z, quaternions ``(x, y, z, w)``,
 column vectors).
 
-Three kinds of effector, each with its own error (Table 1 of Oreshkin et al. 2021 uses the same
+Three kinds of effector, each with its own error (Table 1 of Oreshkin et al. 2022 uses the same
 three for ProtoRes):
 
 ==============  =========================================  ===========================================

@@ -16,7 +16,7 @@ Units and axes: :mod:`posekit.conventions` (metres, Y up, facing +Z).
   parent bone (shoulders, hips, elbows, knees) and a hinge rule that knees do not bend forward. The
   kernel (:mod:`posekit.ik.fabrik_kernel`) is compiled with numba.
 * the backward pass alone, which restores bone lengths of predicted positions (the post-processing
-  of Victor & Meyer 2020, Sec. 3.4): :func:`posekit.ik.fix_bones.fix_bone_lengths`.
+  of Victor et al. 2021, Sec. 3.4): :func:`posekit.ik.fix_bones.fix_bone_lengths`.
 
 FABRIK moves positions only: it honours position effectors (``kinds = ("position",)``) and returns a
 :class:`~posekit.records.Pose` without rotations. Zero-length bones (CMU's ``LHipJoint``, ``LowerBack``,

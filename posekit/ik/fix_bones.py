@@ -1,7 +1,7 @@
 """Restoring bone lengths of predicted joint positions: the FABRIK backward pass alone.
 
 Introduced in ``notebooks/01_fabrik.ipynb``; lesson 03 uses it as the post-processing of the neural
-solvers (Victor & Meyer 2020, Sec. 3.4). Units: :mod:`posekit.conventions` (metres).
+solvers (Victor et al. 2021, Sec. 3.4). Units: :mod:`posekit.conventions` (metres).
 """
 
 from __future__ import annotations

@@ -88,7 +88,7 @@ def drift(s: Setup, guess: str = "previous", iterations: int = 3, progress: bool
         prev = np.tile(s.rig.default(), (n_clips, 1))
         frames = range(F)
         if progress:
-            from tqdm.auto import tqdm
+            from ..progress import tqdm
 
             frames = tqdm(frames, desc="optimising frame by frame", unit="frame")
         for f in frames:  # the clips advance together, frame by frame

@@ -162,7 +162,7 @@ def fit(model: torch.nn.Module, loss_fn, train_data, val_data=None, *, epochs: i
     best, best_state = math.inf, None
     it = range(epochs)
     if progress:
-        from tqdm.auto import tqdm
+        from ..progress import tqdm
 
         it = tqdm(it, desc=desc, unit="epoch")
     t0 = time.perf_counter()
@@ -197,6 +197,10 @@ def fit(model: torch.nn.Module, loss_fn, train_data, val_data=None, *, epochs: i
                 best_state = copy.deepcopy(model.state_dict())
         elif patience is not None and epoch - curves.best_epoch >= patience:
             curves.stopped_early = True
+            if progress:
+                from ..progress import finish
+
+                finish(it)                 # stopped on purpose: the bar ends at the epochs that ran
             break
     if best_state is not None:
         model.load_state_dict(best_state)

@@ -1,10 +1,10 @@
 """Learned posing models, one folder per paper (solver layer), in lesson order:
 
 * :mod:`posekit.models.pose_autoencoder` — lesson 03, learning-based IK with a pose autoencoder and
-  latent-space solvers (Victor & Meyer 2020), the ``"neural"`` solvers;
+  latent-space solvers (Victor et al. 2021), the ``"neural"`` solvers;
 * :mod:`posekit.models.aegan` — lesson 04, an AE-GAN latent space and IK by latent optimisation
   (Victor & Meyer, JFIG 2020), the ``"latent-opt"`` solvers;
-* :mod:`posekit.models.protores` — lesson 05, ProtoRes (Oreshkin et al. 2021), the ``"protores"``
+* :mod:`posekit.models.protores` — lesson 05, ProtoRes (Oreshkin et al. 2022), the ``"protores"``
   solvers and its two baselines.
 
 Every folder has the same inner shape: ``networks.py`` (the paper's networks, top to bottom),

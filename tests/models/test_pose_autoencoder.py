@@ -1,4 +1,4 @@
-"""Lesson 03: pose autoencoder, latent-space solvers (Victor & Meyer 2020) and the neural IK solver."""
+"""Lesson 03: pose autoencoder, latent-space solvers (Victor et al. 2021) and the neural IK solver."""
 
 import numpy as np
 import pytest

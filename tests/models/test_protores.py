@@ -1,4 +1,4 @@
-"""Lesson 05: ProtoRes (Oreshkin et al. 2021), its baselines, its data, losses, benchmarks and Solver wrapper."""
+"""Lesson 05: ProtoRes (Oreshkin et al. 2022), its baselines, its data, losses, benchmarks and Solver wrapper."""
 
 import json
 

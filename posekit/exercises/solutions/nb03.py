@@ -7,7 +7,7 @@ __all__ = ["exercise_pose_vector", "exercise_tied_decoder", "exercise_solver_los
 
 
 def exercise_pose_vector(skeleton, global_pos):
-    """One pose as the feature vector of the networks: its body joints in the root frame (Victor & Meyer 2020,
+    """One pose as the feature vector of the networks: its body joints in the root frame (Victor et al. 2021,
     Sec. 3.2).
 
     The root frame has its origin at the pelvis projected on the floor and faces +Z: subtract the
@@ -47,7 +47,7 @@ def exercise_pose_vector(skeleton, global_pos):
 
 
 def exercise_tied_decoder(z, W1, W2, W3):
-    """The tied decoder of the authors' code (Victor & Meyer 2020, Sec. 3.3.1): ``D(z) = W1^T relu(W2^T relu(W3^T z))``.
+    """The tied decoder of the authors' code (Victor et al. 2021, Sec. 3.3.1): ``D(z) = W1^T relu(W2^T relu(W3^T z))``.
 
     The decoder reuses the encoder's weight matrices transposed and has no biases. With codes as rows,
     ``W^T z`` for every code is ``z @ W``.
@@ -74,7 +74,7 @@ def exercise_tied_decoder(z, W1, W2, W3):
 
 
 def exercise_solver_loss(decoded, target, columns, k):
-    """Eq. (1) of Victor & Meyer 2020: ``MSE_t(D(z'), x_target) + k MSE_not_t(D(z'), x_target)``.
+    """Eq. (1) of Victor et al. 2021: ``MSE_t(D(z'), x_target) + k MSE_not_t(D(z'), x_target)``.
 
     The mean squared error over the target joints' feature columns, plus ``k`` times the mean squared
     error over all other features (z-scored units).

@@ -32,7 +32,7 @@ def exercise_depths(parents):
 
 
 def exercise_latent_loss(x, target, columns, scale):
-    """Eq. (6) of Victor & Meyer (AE-GAN, 2020) for one decoded pose, and its gradient with respect to the pose.
+    """Eq. (6) of Victor & Meyer 2020 (AE-GAN) for one decoded pose, and its gradient with respect to the pose.
 
     ``L = sum_c ((x_c - target_c) scale_c)^2`` over the target joints' feature columns ``c``: squared
     distances in metres, since a z-scored unit of column ``c`` is ``scale_c`` metres. The gradient is

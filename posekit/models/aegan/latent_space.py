@@ -1,7 +1,7 @@
 """Measuring a pose latent space: is it invertible, and is every point a pose?
 
 Introduced in ``notebooks/04_aegan_latent_space.ipynb``, where the AE-GAN (Victor & Meyer, JFIG 2020) is
-set against lesson 03's plain autoencoder (Victor & Meyer 2020) with the same code:
+set against lesson 03's plain autoencoder (Victor et al. 2021) with the same code:
 
 * **Invertibility** — ``x -> z -> x`` (poses back, mean per-joint error in mm) and ``z -> x -> z``
   (codes back, mean absolute error per number, for codes drawn from the space's prior);

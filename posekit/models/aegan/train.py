@@ -37,6 +37,7 @@ import torch.nn.functional as F
 from ...learn import limit_threads, merge_settings
 from ...learn.trainers import register_trainer
 from ...plugins import arg
+from ...progress import finish
 from ...data.pose_vectors import split_pose_data
 from ...data.bandai_mini import LICENCE
 from .networks import AEGAN, AEGANConfig, sample_prior, weights_path
@@ -130,7 +131,7 @@ def train_aegan(motions=None, *, seed: int = 0, out=None, progress: bool = True,
     n_acc = 0
     bar = None
     if progress:
-        from tqdm.auto import tqdm
+        from ...progress import tqdm
 
         bar = tqdm(total=int(st["steps"]), desc="AE-GAN", unit="step")
     done = 0
@@ -186,6 +187,7 @@ def train_aegan(motions=None, *, seed: int = 0, out=None, progress: bool = True,
             if bar is not None:
                 bar.update()
     if bar is not None:
+        finish(bar)                    # a time budget stops it early: the bar ends at the steps that ran
         bar.close()
     for net in (E, G, Dx, Dz):
         net.eval()

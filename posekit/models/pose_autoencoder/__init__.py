@@ -1,4 +1,4 @@
-"""Lesson 03, learning-based IK with a pose autoencoder (Victor & Meyer 2020), in one folder.
+"""Lesson 03, learning-based IK with a pose autoencoder (Victor et al. 2021), in one folder.
 
 Introduced in ``notebooks/03_autoencoder_solvers.ipynb``. The paper, section by section:
 

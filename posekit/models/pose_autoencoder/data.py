@@ -1,4 +1,4 @@
-"""Lesson 03's training data: (start, target) pairs of poses (Victor & Meyer 2020, Sec. 3.3.2).
+"""Lesson 03's training data: (start, target) pairs of poses (Victor et al. 2021, Sec. 3.3.2).
 
 Introduced in ``notebooks/03_autoencoder_solvers.ipynb``. The poses themselves are root-frame vectors
 (:mod:`posekit.data.pose_vectors`). Training pairs are two frames of one clip at most :data:`PAIR_MAX_S`

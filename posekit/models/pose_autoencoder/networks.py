@@ -1,4 +1,4 @@
-"""Victor & Meyer 2020, "Learning-based IK with a pose autoencoder": the networks, top to bottom.
+"""Victor et al. 2021, "Learning-based pose edition for efficient and interactive design": the networks, top to bottom.
 
 Introduced in ``notebooks/03_autoencoder_solvers.ipynb``. Poses are z-scored root-frame vectors
 ``x`` (:mod:`posekit.data.pose_vectors`); every network works on those.

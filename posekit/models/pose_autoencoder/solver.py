@@ -1,4 +1,4 @@
-"""The neural IK solver of Victor & Meyer 2020 behind the Solver API: encode, solve in latent space,
+"""The neural IK solver of Victor et al. 2021 behind the Solver API: encode, solve in latent space,
 decode, restore bone lengths.
 
 Introduced in ``notebooks/03_autoencoder_solvers.ipynb``; registered as ``"neural"`` and variants
@@ -285,7 +285,7 @@ def _variant(**fixed):
 
 _LESSON = "notebooks/03_autoencoder_solvers.ipynb"
 register("neural", NeuralIKSolver, lesson=_LESSON, data="bandai-mini",
-         description="pose autoencoder + latent solver (Victor & Meyer 2020), bone lengths restored")
+         description="pose autoencoder + latent solver (Victor et al. 2021), bone lengths restored")
 register("neural-raw", _variant(post="none"), lesson=_LESSON, data="bandai-mini",
          description="the neural solver's decoded pose, no post-processing")
 register("neural-chained", _variant(chain=True), lesson=_LESSON, data="bandai-mini",

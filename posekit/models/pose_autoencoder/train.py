@@ -1,4 +1,4 @@
-"""Training lesson 03's networks (Victor & Meyer 2020) and the command that makes the shipped weights.
+"""Training lesson 03's networks (Victor et al. 2021) and the command that makes the shipped weights.
 
 Introduced in ``notebooks/03_autoencoder_solvers.ipynb``; ``posekit train ae-solvers`` runs
 :func:`train_ae_solvers`. Every loop is :func:`posekit.learn.fit` (seeded mini-batches, tqdm). In order:
@@ -228,10 +228,10 @@ _WHAT = (("ae_epochs", "autoencoder epochs"), ("ae_lr", "autoencoder learning ra
          ("k", "weight of the non-target joints in the solver loss, Eq. (1)"))
 
 register_trainer(
-    "ae-solvers", _cli, help="pose autoencoder + latent-space solvers (lesson 03, Victor & Meyer 2020)",
+    "ae-solvers", _cli, help="pose autoencoder + latent-space solvers (lesson 03, Victor et al. 2021)",
     makes="data_samples/weights/ae_solvers.pt (CC BY-NC 4.0, like the Bandai mini set it is trained on)",
     what="pose autoencoder + latent-space solvers hands, feet, head, all five, chaining-aware copies "
-         "(Victor & Meyer 2020)",
+         "(Victor et al. 2021)",
     used_by="lesson 03 (03_autoencoder_solvers.ipynb), the neural solvers, posekit bench ik",
     takes="about 7 minutes on one core (it trains on one thread: 7 min 13 s measured)",
     args=[arg("--data", default="bandai-mini", help="training data: bandai-mini (default, its own split), "

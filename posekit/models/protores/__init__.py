@@ -1,4 +1,4 @@
-"""Lesson 05, ProtoRes: a full pose from a variable set of effectors (Oreshkin et al. 2021), in one folder.
+"""Lesson 05, ProtoRes: a full pose from a variable set of effectors (Oreshkin et al. 2022), in one folder.
 
 Introduced in ``notebooks/05_protores.ipynb``. The paper, section by section:
 

@@ -1,4 +1,4 @@
-"""The two baselines of ProtoRes's Table 1 (Oreshkin et al. 2021, Sec. 4): other encoders, the same decoders.
+"""The two baselines of ProtoRes's Table 1 (Oreshkin et al. 2022, Sec. 4): other encoders, the same decoders.
 
 Introduced in ``notebooks/05_protores.ipynb``. Each maps the same effector inputs as
 :class:`~posekit.models.protores.networks.ProtoResEncoder` to a pose code; :class:`~posekit.models.protores.networks.PosingNet`

@@ -1,4 +1,4 @@
-"""The parts ProtoRes (Oreshkin et al. 2021) and its baselines share: sizes, the effector inputs, the blocks.
+"""The parts ProtoRes (Oreshkin et al. 2022) and its baselines share: sizes, the effector inputs, the blocks.
 
 Introduced in ``notebooks/05_protores.ipynb``. Units and axes: :mod:`posekit.conventions` (metres,
 radians, Y up, facing +Z); 6D rotations are the first two columns of a matrix.

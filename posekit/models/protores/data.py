@@ -1,4 +1,4 @@
-"""ProtoRes's training data (Oreshkin et al. 2021, Sec. 2.3 and Appendix B): poses, and effectors drawn on them.
+"""ProtoRes's training data (Oreshkin et al. 2022, Sec. 2.3 and Appendix B): poses, and effectors drawn on them.
 
 Introduced in ``notebooks/05_protores.ipynb``. Units and axes: :mod:`posekit.conventions` (metres,
 radians, Y up, facing +Z).

@@ -1,4 +1,4 @@
-"""ProtoRes (Oreshkin et al. 2021, Sec. 2): a full pose from a variable set of effectors, top to bottom.
+"""ProtoRes (Oreshkin et al. 2022, Sec. 2): a full pose from a variable set of effectors, top to bottom.
 
 Introduced in ``notebooks/05_protores.ipynb``. Units and axes: :mod:`posekit.conventions` (metres,
 radians, Y up, facing +Z); 6D rotations are the first two columns of a matrix
@@ -68,7 +68,7 @@ def weights_path(arch: str = "protores", folder=None) -> Path:
 
 # ------------------------------------------------------------------------------------------ Eq. 2
 class ProtoResEncoder(nn.Module):
-    """Eq. 2 of Oreshkin et al. 2021: the proto-residual encoder, tokens (B, N, n_in) -> code (B, width).
+    """Eq. 2 of Oreshkin et al. 2022: the proto-residual encoder, tokens (B, N, n_in) -> code (B, width).
 
     Block ``r = 1..R`` (an :class:`FCBlock`) on every effector's input ``x_r``::
 

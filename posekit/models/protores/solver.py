@@ -65,7 +65,7 @@ def skeleton_span(skeleton) -> float:
 
 
 class ProtoResSolver(SolverBase):
-    """Effectors -> a full pose in one network pass (Oreshkin et al. 2021).
+    """Effectors -> a full pose in one network pass (Oreshkin et al. 2022).
 
     Parameters
     ----------
@@ -236,7 +236,7 @@ def _variant(arch):
 _LESSON = "notebooks/05_protores.ipynb"
 _COMMON = dict(kinds=KINDS, needs_start=False, lesson=_LESSON, data="bandai-mini")
 register("protores", _variant("protores"), **_COMMON,
-         description="ProtoRes (Oreshkin et al. 2021): any effectors -> a full pose in one pass")
+         description="ProtoRes (Oreshkin et al. 2022): any effectors -> a full pose in one pass")
 register("protores-masked-fcr", _variant("masked-fcr"), **_COMMON,
          description="ProtoRes's Masked-FCR baseline (fixed-size input with learned placeholders)")
 register("protores-transformer", _variant("transformer"), **_COMMON,

@@ -1,4 +1,4 @@
-"""Training ProtoRes and its baselines (Oreshkin et al. 2021, Sec. 2.2-2.3, Algorithm 1, Appendix B).
+"""Training ProtoRes and its baselines (Oreshkin et al. 2022, Sec. 2.2-2.3, Algorithm 1, Appendix B).
 
 Introduced in ``notebooks/05_protores.ipynb``; ``posekit train protores`` runs :func:`train_protores`.
 
@@ -35,6 +35,7 @@ import numpy as np
 import torch
 
 from ...learn import limit_threads, merge_settings
+from ...progress import finish
 from ...learn.trainers import register_trainer
 from ...plugins import arg
 from ...data.bandai_mini import LICENCE
@@ -202,7 +203,7 @@ def train_protores(motions=None, *, arch: str = "protores", seed: int = 0, out=N
     acc = {k: 0.0 for k in LOSSES}
     n_acc, done, bar = 0, 0, None
     if progress:
-        from tqdm.auto import tqdm
+        from ...progress import tqdm
 
         bar = tqdm(total=steps, desc=f"train {arch}", unit="step")
     train_seconds = 0.0
@@ -240,6 +241,7 @@ def train_protores(motions=None, *, arch: str = "protores", seed: int = 0, out=N
             if bar is not None:
                 bar.update()
     if bar is not None:
+        finish(bar)                    # a time budget stops it early: the bar ends at the steps that ran
         bar.close()
     net.eval()
     with torch.no_grad():  # evaluated as shipped: float16 weights
@@ -289,10 +291,10 @@ _WHAT = (("batch", "poses per step"), ("lr", "learning rate (Adam)"), ("warmup",
          ("log_every", "steps per point of the curves"))
 
 register_trainer(
-    "protores", _cli, help="ProtoRes or one of its baselines: effectors -> pose (lesson 05, Oreshkin et al. 2021)",
+    "protores", _cli, help="ProtoRes or one of its baselines: effectors -> pose (lesson 05, Oreshkin et al. 2022)",
     makes="data_samples/weights/protores.pt, protores_masked_fcr.pt, protores_transformer.pt (CC BY-NC 4.0, "
           "like the Bandai mini set they are trained on); one per --arch",
-    what="ProtoRes and its Masked-FCR and Transformer baselines (Oreshkin et al. 2021)",
+    what="ProtoRes and its Masked-FCR and Transformer baselines (Oreshkin et al. 2022)",
     used_by="lesson 05 (05_protores.ipynb), the protores solvers, posekit bench protores",
     takes="about 11-12 minutes each on one core (it trains on one thread)",
     args=[arg("--arch", choices=ARCHS, default="protores",
