@@ -36,14 +36,14 @@ def status_line(result, ms: float, joints=None, ignored=()) -> str:
         mark += f" · <span style='color:#b9770e'>{kinds} ignored</span>"
     else:
         mark = "✓ reached" if result.converged else "✗ not reached"
-    return status_table(f"<b>{mark}</b>", [("worst effector", worst_errors(result, joints)),
+    return status_table(f"<b>{mark}</b>", [("worst effector", worst_errors(result, joints, sep="<br>")),
                                            (f"iteration{'' if it == 1 else 's'}", str(it)), ("time", f"{ms:.2f} ms")])
 
 
-def worst_errors(result, joints=None) -> str:
+def worst_errors(result, joints=None, sep: str = ", ") -> str:
     """A result's worst effector errors as text: mm for positions, degrees for rotation and look-at effectors
     (each when there are any), each followed by its joint when ``joints`` (one name per effector, in the
-    result's order) is given, e.g. ``"2.1 mm (Hand_L), 0.7° (Head)"``."""
+    result's order) is given, e.g. ``"2.1 mm (Hand_L), 0.7° (Head)"``; ``sep`` joins the two."""
     err = np.asarray(result.effector_error, dtype=float)
     kinds = tuple(getattr(result, "kinds", ()) or ("position",) * len(err))
     angular = np.array([k != "position" for k in kinds], dtype=bool)
@@ -53,7 +53,7 @@ def worst_errors(result, joints=None) -> str:
             k = int(np.flatnonzero(mask)[np.argmax(err[mask])])
             value = err[k] * scale if scale else np.degrees(err[k])
             parts.append(f"{value:.1f}{unit}" + (f" ({html.escape(str(joints[k]))})" if joints is not None else ""))
-    return ", ".join(parts)
+    return sep.join(parts)
 
 
 def status_table(title: str, rows) -> str:

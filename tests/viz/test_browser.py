@@ -183,6 +183,7 @@ def _wait_visible(page, locator, timeout, url, token, work, what):
 
 
 def _drag(page, handle, dx):
+    handle.scroll_into_view_if_needed()
     box = handle.bounding_box()
     page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
     page.mouse.down()
