@@ -14,7 +14,7 @@ import numpy as np
 
 from ..ik.api import Effector, Pose
 from ..ik.effectors import resolve_effectors
-from .viewer import SkeletonViewer
+from .viewer import SkeletonViewer, show_widget
 
 __all__ = ["SolverPanel", "solver_views", "solve_views", "status_line", "status_table", "worst_errors",
            "KIND_LABELS"]
@@ -183,9 +183,8 @@ class SolverPanel:
         self.solve()
 
     def _ipython_display_(self):
-        from IPython.display import display
-
-        display(self.widget)
+        show_widget(self.widget, f"[live 3D views of {', '.join(self.solvers)}, posing one skeleton side by side. They "
+                                 "draw in a running Jupyter kernel; run the notebook to move the targets]")
 
     def _on_target(self, joint, position):
         # the viewer moves points: a position or look-at effector keeps its kind, tolerance and weight

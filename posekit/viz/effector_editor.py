@@ -30,6 +30,7 @@ from ..kinematics import fk
 from ..rotations import euler_to_quat, quat_to_matrix
 from ..transforms import facing_angle
 from .compare import solve_views, solver_views
+from .viewer import show_widget
 
 __all__ = ["EffectorEditor"]
 
@@ -100,9 +101,8 @@ class EffectorEditor:
         self.solve()
 
     def _ipython_display_(self):
-        from IPython.display import display
-
-        display(self.widget)
+        show_widget(self.widget, f"[effector editor: live 3D views of {', '.join(self.solvers)} on {len(self.rows)} "
+                                 "effectors. They draw in a running Jupyter kernel; run the notebook to edit them]")
 
     # ------------------------------------------------------------------ effectors
     def _current(self):

@@ -34,6 +34,7 @@ from ..ik.registry import make_solver, solver_names
 from .compare import status_table, worst_errors
 from .effector_editor import EffectorEditor
 from .setup_file import SetupError, parse_setup, save_setup
+from .viewer import show_widget
 
 __all__ = ["PosingStudio", "MIN_SOLVERS", "MAX_SOLVERS"]
 
@@ -158,9 +159,9 @@ class PosingStudio:
         self.history, self.position = [self.editor.setup()], 0
 
     def _ipython_display_(self):
-        from IPython.display import display
-
-        display(self.widget)
+        show_widget(self.widget, f"[posing studio: {', '.join(self.solvers)} side by side on {len(self.editor.rows)} "
+                                 "effectors, with undo, setups, export and a timeline. It runs in a live Jupyter "
+                                 "kernel: run the notebook, or serve it with make studio]")
 
     def _safely(self, action):
         """Run a button's action with the studio marked busy; a ValueError (bad input) becomes the message,

@@ -43,7 +43,7 @@ from ..skeleton import Skeleton
 from .drag import DragTargets
 from .meshes import Bones, Spheres, icosphere
 
-__all__ = ["SkeletonViewer", "icosphere", "TARGET_COLOUR", "LOOK_COLOUR"]
+__all__ = ["SkeletonViewer", "icosphere", "show_widget", "TARGET_COLOUR", "LOOK_COLOUR"]
 
 TARGET_COLOUR = "#d81b9c"
 """Position targets: magenta, apart from the right side's red bones and the look-at orange."""
@@ -51,6 +51,16 @@ LOOK_COLOUR = "#e67e22"
 """Look-at targets and their rays: orange."""
 TRIAD_LENGTH = 0.12
 """Length (metres) of each axis of a rotation target's triad."""
+
+
+def show_widget(widget, text: str) -> None:
+    """Display an ipywidget whose static rendering (a saved notebook, a page without a live kernel) is ``text``
+    — what would be there — instead of ipywidgets' ``VBox(children=...)``."""
+    from IPython.display import display
+
+    bundle = widget._repr_mimebundle_()
+    bundle["text/plain"] = text
+    display(bundle, raw=True)
 
 
 class SkeletonViewer(DragTargets):
@@ -208,9 +218,8 @@ class SkeletonViewer(DragTargets):
         return 0.5 * (lo + hi), float(max(0.5 * np.linalg.norm(hi - lo), 0.6))
 
     def _ipython_display_(self):
-        from IPython.display import display
-
-        display(self.widget)
+        show_widget(self.widget, f"[3D skeleton viewer: {self.skeleton.n_joints} joints. It draws in a running Jupyter "
+                                 "kernel; run the cell to see it and pose the skeleton]")
 
     # ------------------------------------------------------------------ drawing
     def set_pose(self, global_pos):

@@ -16,6 +16,7 @@ import subprocess
 import sys
 import time
 import urllib.request
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -146,6 +147,21 @@ def _diagnose(page, url, token, work, what):
             f"lab.log tail:\n{log}\nscreenshot: {work / 'stalled.png'}")
 
 
+def _dismiss_dialogs(page, seen):
+    """Close any JupyterLab dialog in the way (accepting its default: e.g. the kernel to start), noting its text."""
+    for _ in range(5):
+        dialog = page.locator(".jp-Dialog")
+        if not dialog.count():
+            return
+        seen.append(" ".join(dialog.first.inner_text().split())[:300])
+        accept = dialog.first.locator(".jp-Dialog-button.jp-mod-accept")
+        if accept.count():
+            accept.first.click()
+        else:
+            page.keyboard.press("Escape")
+        page.wait_for_timeout(500)
+
+
 def _open_and_run_all(page, url, token, work, notebook):
     page.goto(f"{url}/lab/tree/{notebook}?reset&token={token}", timeout=120_000)
     page.wait_for_selector(".jp-Notebook:visible .jp-Cell", timeout=120_000)
@@ -153,15 +169,20 @@ def _open_and_run_all(page, url, token, work, notebook):
                            "#jp-main-statusbar :text('Idle')", timeout=120_000)
     # Run All, then check that the kernel took the cells (a "[*]" prompt: the saved outputs already
     # carry numbers); a click lost while the page settles is repeated, not waited on for minutes
+    dialogs = []
     for _ in range(3):
+        _dismiss_dialogs(page, dialogs)
         page.locator(".lm-MenuBar-itemLabel", has_text="Run").first.click()
         page.locator(".lm-Menu-itemLabel", has_text="Run All Cells").first.click()
         try:
             page.wait_for_function(_RUNNING, timeout=60_000, polling=100)
+            if dialogs:  # say what was in the way (the run went on)
+                warnings.warn(f"{notebook}: JupyterLab dialogs closed before Run All: {dialogs}")
             return
         except Exception:  # noqa: BLE001 - playwright's TimeoutError; try the menu again
             page.keyboard.press("Escape")
-    pytest.fail(_diagnose(page, url, token, work, f"{notebook}: Run All Cells never started the kernel"))
+    pytest.fail(_diagnose(page, url, token, work, f"{notebook}: Run All Cells never started the kernel "
+                                                  f"(dialogs closed on the way: {dialogs or 'none'})"))
 
 
 def _wait_visible(page, locator, timeout, url, token, work, what):
