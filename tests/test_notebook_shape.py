@@ -100,3 +100,16 @@ def test_stored_progress_bars_end_finished(path):
     frozen = [(k, text) for text, k in bars
               if (m := re.search(r"(\d+)/(\d+) \[", text)) is None or m.group(1) != m.group(2)]
     assert frozen == [], f"{path.name}: progress bars not finished in cells {frozen}"
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.name)
+def test_a_stored_widget_says_what_would_be_there(path):
+    """Where a widget cannot draw (a saved notebook, a page without a kernel), its text says what it is and how to
+    see it (posekit.viz.viewer.show_widget), never ipywidgets' ``VBox(children=(...``."""
+    import re
+
+    nb = json.loads(path.read_text())
+    bare = [k for k, c in enumerate(nb["cells"]) for o in c.get("outputs", [])
+            if "application/vnd.jupyter.widget-view+json" in o.get("data", {})
+            and re.match(r"[A-Z]\w*\(", "".join(o["data"].get("text/plain", "")))]
+    assert bare == [], f"{path.name}: cells {bare} store a widget as its Python repr"
