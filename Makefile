@@ -75,7 +75,7 @@ studio: setup
 PYTEST_WORKERS ?= 2
 XDIST = $(if $(filter 0,$(PYTEST_WORKERS)),,-n $(PYTEST_WORKERS) --dist loadfile)
 test: setup browser-deps course-assets
-	$(PY) -m pytest $(XDIST) $(PYTEST_ARGS)
+	$(PY) -m pytest $(XDIST) --durations=15 $(PYTEST_ARGS)
 
 test-unit: setup
 	$(PY) -m pytest tests -m "not browser and not slow" $(XDIST) $(PYTEST_ARGS)

@@ -45,11 +45,12 @@ PROTORES_CELLS = ("solvers = {arch: ProtoResSolver", "benches = {name: load_benc
                   "EffectorEditor(")
 """Lesson 05's cells the browser test runs: set-up, the benchmarks, the Fig. 3 effectors, the editor."""
 RIG_NOTEBOOK = "02_inverse_rig_mapping.ipynb"
-RIG_CELLS = ("rig = HumanoidRig(skel)", "train, test, test_clip = standard_sets(", "s = Setup(seed=0",
-             "viewer = SkeletonViewer(skel, start_x")
-RIG_SHIM = "from posekit.invrig import refine\nnets = {'pca': s.net('pca')}   # what the skipped sections define"
-"""Lesson 02's cells the browser test runs: the rig, its data, the fitted models and the posing viewer; the shim
-defines the two names of the skipped sections the viewer cell uses (its studies take minutes)."""
+RIG_CELLS = ("rig = HumanoidRig(skel)", "train, test, test_clip = standard_sets(", "viewer = SkeletonViewer(skel, start_x")
+RIG_SHIM = ("from posekit.invrig import refine\nfrom posekit.invrig.nn import load_inverse_net, weights_path\n"
+            "nets = {'pca': load_inverse_net(weights_path('pca'), rig.names, skel.names)}  # as section 5 loads it")
+"""Lesson 02's cells the browser test runs: the rig, its data and the posing viewer; the shim defines the two names
+of the skipped sections the viewer cell uses, the shipped network loaded as they load it (their fits and studies
+take minutes)."""
 CHROMIUM = os.environ.get("POSEKIT_CHROMIUM", "/usr/bin/chromium")
 FLAGS = ["--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader", "--disable-background-networking",
          "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-quic"]
@@ -409,7 +410,8 @@ def test_rig_viewer_selection_moves_nothing(lab, chromium):
         _wait_for(lambda: target.count() == 1, 60, "the left wrist's target in the status table")
         time.sleep(1.5)
         where, said = target.locator("td").all_inner_texts()[:3], status.inner_text()
-        joints = cell.locator(".widget-dropdown", has_text="selected").first.locator("select")
+        joints = cell.locator("select").first  # the viewer's *selected* joint list, the cell's only list
+        joints.scroll_into_view_if_needed()
         for j in ("right_ankle", "chest", "left_wrist"):
             joints.select_option(j)
             time.sleep(0.8)
