@@ -16,11 +16,12 @@ from ..ik.api import Effector, Pose
 from ..ik.effectors import resolve_effectors
 from .viewer import SkeletonViewer, show_widget
 
-__all__ = ["SolverPanel", "solver_views", "solve_views", "status_line", "status_table", "worst_errors",
-           "KIND_LABELS"]
+__all__ = ["SolverPanel", "solver_views", "solve_views", "status_line", "status_table", "worst_errors"]
 
-KIND_LABELS = {"position": "position", "rotation": "rotation", "look_at": "look-at"}
-"""How an effector kind is written for a person."""
+
+def _kinds_text(kinds) -> str:
+    """Effector kinds as a person writes them, each once, in order: ``"rotation, look-at"``."""
+    return ", ".join(dict.fromkeys(k.replace("_", "-") for k in kinds))
 
 
 def status_line(result, ms: float, joints=None, ignored=()) -> str:
@@ -30,7 +31,7 @@ def status_line(result, ms: float, joints=None, ignored=()) -> str:
     their kind — the view says so ("look-at ignored") and never calls them reached."""
     it = result.iterations
     if ignored:
-        kinds = ", ".join(dict.fromkeys(KIND_LABELS[e.kind] for e in ignored))
+        kinds = _kinds_text(e.kind for e in ignored)
         used = len(result.effector_error)
         mark = (f"✓ {used} of {used + len(ignored)} reached" if result.converged else "✗ not reached")
         mark += f" · <span style='color:#b9770e'>{kinds} ignored</span>"
@@ -119,8 +120,7 @@ def _solve_one(name, solver, viewer, label, start, effectors, names, results, ti
     if not use:
         results.pop(name, None)
         label.value = (f"<b>nothing to solve</b><br>{html.escape(name)} honours "
-                       f"{', '.join(KIND_LABELS[k] for k in kinds)} effectors only: "
-                       f"{', '.join(dict.fromkeys(KIND_LABELS[e.kind] for e in ignored))} ignored")
+                       f"{_kinds_text(kinds)} effectors only: {_kinds_text(e.kind for e in ignored)} ignored")
         return
     t = time.perf_counter()
     try:

@@ -261,15 +261,14 @@ class SkeletonViewer(DragTargets, TargetSliders):
                 raise ValueError(f"rotation target for {name}: expected a finite (3, 3) matrix, got shape {R.shape}")
             rots[name] = R
         self.rotation_targets = rots
-        red = new
-        key = (tuple(red), tuple(looks), tuple(rots))
+        key = (tuple(new), tuple(looks), tuple(rots))
         rebuild = key != self._target_key or self._targets_mesh is None
         self.targets, self.look_targets, self._target_key = new, looks, key
         if rebuild:
             import pythreejs as three
 
-            self._targets_mesh = Spheres(max(len(red), 1), self._joints.radius * 1.3, TARGET_COLOUR)
-            self._targets_mesh.mesh.visible = bool(red)
+            self._targets_mesh = Spheres(max(len(new), 1), self._joints.radius * 1.3, TARGET_COLOUR)
+            self._targets_mesh.mesh.visible = bool(new)
             self._look_mesh = Spheres(max(len(looks), 1), self._joints.radius * 1.3, LOOK_COLOUR)
             self._look_mesh.mesh.visible = bool(looks)
             self._rays = three.LineSegments(
@@ -286,8 +285,8 @@ class SkeletonViewer(DragTargets, TargetSliders):
                 three.LineBasicMaterial(vertexColors="VertexColors", linewidth=2))
             self._triads.visible = bool(rots)
             self._target_group.children = [self._targets_mesh.mesh, self._look_mesh.mesh, self._rays, self._triads]
-        if red:
-            self._targets_mesh.set(np.array(list(red.values())))
+        if new:
+            self._targets_mesh.set(np.array(list(new.values())))
         if looks:
             self._look_mesh.set(np.array(list(looks.values())))
         self._draw_rays()
@@ -313,7 +312,7 @@ class SkeletonViewer(DragTargets, TargetSliders):
         """Place the look-at rays (joint -> point) and the rotation triads (at their joints) on the current pose."""
         if self._held:
             return
-        rots = getattr(self, "rotation_targets", {})
+        rots = self.rotation_targets
         if rots:
             at = self.pose[[self.skeleton.index(n) for n in rots]]  # (R, 3)
             tips = at[:, None, :] + TRIAD_LENGTH * np.stack(list(rots.values())).transpose(0, 2, 1)  # columns: axes

@@ -51,16 +51,12 @@ SAMPLE_JOINTS = {"root", "chest", "neck", "head"} | {f"{s}_{j}" for s in ("left"
     "shoulder", "elbow", "wrist", "hip", "knee", "ankle", "toe")}
 
 
-def _trimmed(src, dst, keep, shim=None):
-    """A copy of a notebook with only the code cells that contain one of ``keep`` (in order); ``shim``, code
-    defining what skipped cells would, goes before the last of them."""
+def _trimmed(src, dst, keep):
+    """A copy of a notebook with only the code cells that contain one of ``keep`` (in order)."""
     nb = json.loads(Path(src).read_text())
     nb["cells"] = [c for c in nb["cells"] if c["cell_type"] == "code" and any(k in "".join(c["source"]) for k in keep)]
     if len(nb["cells"]) != len(keep):
         pytest.fail(f"{Path(src).name}: expected one code cell for each of {keep}, found {len(nb['cells'])}")
-    if shim:
-        nb["cells"].insert(len(nb["cells"]) - 1, {"cell_type": "code", "execution_count": None, "id": "shim",
-                                                  "metadata": {}, "outputs": [], "source": shim})
     Path(dst).write_text(json.dumps(nb))
 
 
