@@ -115,7 +115,7 @@ def _convert(args) -> int:
 
 
 def _build_benchmark(args) -> int:
-    from .bench.effector_cases import BENCHMARKS, build_benchmark, save_benchmark
+    from .evaluation.effector_cases import BENCHMARKS, build_benchmark, save_benchmark
 
     for name in BENCHMARKS:
         b = build_benchmark(name, n_cases=args.cases, seed=args.seed)

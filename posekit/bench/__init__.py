@@ -2,6 +2,6 @@
 
 Each benchmark is a plug-in (:mod:`posekit.bench.plugin`): ``fk`` (:mod:`~posekit.bench.fk`), ``ik``
 (:mod:`~posekit.bench.ik`, whose extra methods live in :mod:`~posekit.bench.ik_methods`) and ``invrig``
-(:mod:`~posekit.bench.invrig`) register themselves; the cases and the metrics of the posing benchmarks
-come from the data layer (:mod:`posekit.data.cases`, :mod:`posekit.data.metrics`).
+(:mod:`~posekit.bench.invrig`) register themselves; the cases and the scores of the posing benchmarks
+come from the layers below (:mod:`posekit.data.cases`, :mod:`posekit.evaluation`).
 """

@@ -5,7 +5,7 @@ Introduced in ``notebooks/06_posing_studio.ipynb``. Nothing is measured here tha
 :func:`posekit.bench.ik.run` does not measure: this module calls it with every registered solver that
 honours position effectors (:func:`posekit.bench.ik.resolve_solvers` with ``"all"``), no extra methods
 and no peers, so every row comes from the same held-out cases (:func:`posekit.data.cases.build_cases`),
-the same start poses and the same metric code (:mod:`posekit.data.metrics`) as ``posekit bench ik``.
+the same start poses and the same metric code (:mod:`posekit.evaluation.pose_scores`) as ``posekit bench ik``.
 The data is the Bandai mini set, which the learned solvers were trained on
 (:func:`posekit.bench.ik.default_data`).
 

@@ -18,7 +18,7 @@ What it runs
   (the built-in ones live in :mod:`posekit.bench.ik_methods`) and called once per start condition with
   a :class:`MethodContext`.
 
-Metrics (JSON keys; definitions in :mod:`posekit.data.metrics`, the same code for every solver):
+Metrics (JSON keys; definitions in :mod:`posekit.evaluation.pose_scores`, the same code for every solver):
 ``latency_ms_median`` (one solve, one thread), ``effector_error_mm_median`` (worst effector of a
 case), ``mpjpe_mm_median`` (body joints, pelvis-relative), ``bone_length_error_mm_max``,
 ``rotation_error_deg_median`` (solvers that return rotations), ``natural_mm_median`` (distance to the
@@ -41,7 +41,8 @@ import numpy as np
 
 from .. import catalogue
 from ..data.cases import START_ALIASES, START_CONDITIONS, Cases, build_cases, start_condition
-from ..data.metrics import NaturalnessIndex, score_poses
+from ..data.metrics import NaturalnessIndex
+from ..evaluation.pose_scores import score_poses
 from ..ik.api import EFFECTOR_SETS, effector_set
 from ..ik.registry import make_solver, solver_info, solver_names
 from ..plugins import Registry
@@ -94,8 +95,7 @@ class MethodContext:
         c = self.cases if cases is None else cases
         n = len(result_pos)
         floor = None if self.natural_floor is None else self.natural_floor[:n]
-        return score_poses(_head(c, n), result_pos, effectors, result_rot, self.natural, floor,
-                           self.tolerance).summary()
+        return score_poses(_head(c, n), result_pos, effectors, result_rot, self.natural, floor).summary()
 
 
 def _head(cases: Cases, n: int) -> Cases:
@@ -179,7 +179,7 @@ def resolve_solvers(solvers) -> tuple:
 def evaluate_solver(solver, cases: Cases, effectors: str, tolerance: float = 1e-3,
                     natural: NaturalnessIndex | None = None, natural_floor=None) -> dict:
     """One row's numbers: every case solved once from its start pose, timed one solve at a time on
-    the calling thread, then scored by :func:`posekit.data.metrics.score_poses`."""
+    the calling thread, then scored by :func:`posekit.evaluation.pose_scores.score_poses`."""
     s = cases.skeleton
     effs = [effector_set(s, effectors, cases.target_pos[i], tolerance) for i in range(len(cases))]
     solver.solve(cases.pose(0), effs[0])  # warm-up (JIT)
@@ -197,7 +197,7 @@ def evaluate_solver(solver, cases: Cases, effectors: str, tolerance: float = 1e-
     peak = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
     rot = np.stack(rots) if all(r is not None for r in rots) else None
-    scores = score_poses(cases, np.stack(pos), effs, rot, natural, natural_floor, tolerance).summary()
+    scores = score_poses(cases, np.stack(pos), effs, rot, natural, natural_floor).summary()
     row = {"cases": len(cases), "latency_ms_median": float(np.median(lat) * 1e3), **scores,
            "iterations_median": float(np.median(iters)), "memory_kb": round(peak / 1024, 1)}
     if hasattr(solver, "sizes_kb"):  # a learned solver: the size of the networks one solve runs

@@ -3,9 +3,9 @@
 Introduced in ``notebooks/01_fabrik.ipynb``. Each function below is registered with
 :func:`posekit.bench.ik.register_method` and called once per start condition:
 
-* ``numpy-fabrik`` (group ``baseline``) — :func:`posekit.ik.fabrik_numpy.fabrik_numpy`, the same full-body FABRIK as
-  :class:`~posekit.ik.FabrikSolver` written the straightforward way; its latency is the yardstick of
-  the compiled solver (run only next to ``fabrik``);
+* ``numpy-fabrik`` (group ``baseline``) — the same full-body FABRIK as :class:`~posekit.ik.FabrikSolver` in
+  plain numpy, joint by joint, no compilation: :func:`posekit.ik.fabrik_batched.fabrik_batched` given one
+  problem at a time; its latency is the yardstick of the compiled solver (run only next to ``fabrik``);
 * ``fabrik-batched`` (group ``batched``) — :func:`posekit.ik.fabrik_batched.fabrik_batched`
   throughput over all cases at once;
 * ``ikpy`` (group ``peer``) — the ikpy library on one chain (pelvis -> left hand), beside posekit's
@@ -19,7 +19,7 @@ import time
 import numpy as np
 
 from ..ik.api import EFFECTOR_SETS, Effector
-from ..ik.fabrik_numpy import fabrik_numpy
+from ..ik.fabrik_batched import fabrik_batched
 from ..ik.registry import make_solver
 from .ik import MethodContext, register_method
 
@@ -46,7 +46,7 @@ def baseline_rows(ctx: MethodContext) -> list[dict]:
         lat = []
         for i in range(m):
             t = time.perf_counter()
-            fabrik_numpy(s, cases.start_pos[i], eff, cases.target_pos[i, eff], ctx.tolerance)
+            fabrik_batched(s, cases.start_pos[i:i + 1], eff, cases.target_pos[i:i + 1, eff], ctx.tolerance)
             lat.append(time.perf_counter() - t)
         rows.append({"method": "baseline: numpy per-joint FABRIK", "effectors": e, "cases": m,
                      "latency_ms_median": float(np.median(lat) * 1e3)})
@@ -55,8 +55,6 @@ def baseline_rows(ctx: MethodContext) -> list[dict]:
 
 def batched_rows(ctx: MethodContext) -> list[dict]:
     """Batched FABRIK over every case at once (repeated to about :data:`BATCH_SOLVES` problems)."""
-    from ..ik.fabrik_batched import fabrik_batched
-
     cases, s = ctx.cases, ctx.cases.skeleton
     rows = []
     for e in ctx.effector_sets:

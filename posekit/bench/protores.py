@@ -1,8 +1,8 @@
 """``posekit bench protores``: ProtoRes's Tables 1 and 2 at CPU scale (Oreshkin et al. 2022), speed, training time.
 
 Introduced in ``notebooks/05_protores.ipynb``. One run scores every method on the shipped 5-point and
-random benchmarks (:mod:`posekit.bench.effector_cases`) with one metric code
-(:mod:`posekit.bench.effector_scores`):
+random benchmarks (:mod:`posekit.evaluation.effector_cases`) with one metric code
+(:mod:`posekit.evaluation.effector_scores`):
 
 * **Table 1** — ProtoRes, Masked-FCR, Transformer (each its shipped weights) and the classical stand-ins
   for FinalIK: FABRIK and DLS from the fitted rest pose;
@@ -160,8 +160,9 @@ def _ablation_rows(rows, training) -> list[dict]:
 def run(cases: int | None = None, classical: bool = True, speed: bool = True, progress: bool = False) -> list[dict]:
     """Every table of the module docstring; one dict per row. ``cases`` limits each benchmark (default all)."""
     from ..data.bandai_mini import load_bandai_mini
-    from .effector_cases import BENCHMARKS, load_benchmark
-    from .effector_scores import run_classical, run_learned, scores
+    from ..evaluation.effector_cases import BENCHMARKS, load_benchmark
+    from ..evaluation.effector_scores import run_classical, scores
+    from ..models.protores.solver import run_learned
     from ..models.protores.networks import tolerance_to_sigma
     from ..models.protores.solver import ProtoResSolver
 

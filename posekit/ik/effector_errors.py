@@ -4,8 +4,8 @@ Introduced in ``notebooks/01_fabrik.ipynb``. The kinds and their errors are tabl
 :mod:`posekit.ik.effectors` (position: metres; rotation and look-at: radians). :func:`effector_errors`
 (one pose) and :func:`effector_errors_batch` (B poses) are the solvers' one implementation: every
 solver reports its errors through them and its iteration loop stops on the same compiled kernel
-(:func:`errors_into`). (The benchmark scores results independently, in :mod:`posekit.data.metrics`, so
-that a solver cannot grade itself.)
+(:func:`errors_into`). The benchmarks measure every returned pose with it again
+(:mod:`posekit.evaluation.pose_scores`), so no solver's own report is taken on trust.
 """
 
 from __future__ import annotations

@@ -1,8 +1,8 @@
 """The compiled kernel of :class:`posekit.ik.fabrik.FabrikSolver` (numba): full-body FABRIK with the
 near-extended chain step. Read :mod:`posekit.ik.fabrik` first — it describes the algorithm and has
-the readable numpy version of every step (:func:`~posekit.ik.single_chain.straighten_chain`); the
-plain-numpy twin :func:`posekit.ik.fabrik_numpy.fabrik_numpy` (the benchmark baseline) runs the same algorithm, and
-:func:`posekit.ik.fabrik_batched.fabrik_batched` the same arithmetic over a batch.
+the readable numpy version of every step (:func:`~posekit.ik.single_chain.straighten_chain`);
+:func:`posekit.ik.fabrik_batched.fabrik_batched` runs the same arithmetic in numpy over a batch (given one
+problem at a time, it is the benchmark's uncompiled baseline).
 
 Everything is written with scalar arithmetic and square roots only (no trigonometry), so the single
 and the batched solver agree to the last bits.

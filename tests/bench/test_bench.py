@@ -9,8 +9,7 @@ from posekit.bench.plugin import arg, register_benchmark, unregister_benchmark
 from posekit.cli import main
 from posekit.data import MotionSet, split_by_clip
 from posekit.data.cases import build_cases, case_split, placement_joints
-from posekit.data.metrics import (NaturalnessIndex, body_joints, bone_length_error, effector_errors, mpjpe,
-                                  rotation_error)
+from posekit.data.metrics import NaturalnessIndex, body_joints, bone_length_error, mpjpe, rotation_error
 from posekit.ik import registry
 from posekit.ik.api import Effector, IKResult, effector_set
 from posekit.kinematics import fk, rest_pose
@@ -252,22 +251,6 @@ def test_rotation_error_is_the_mean_geodesic_over_body_joints(mini):
     elbow = s.index("left_elbow")
     turned[elbow] = quat_multiply(q[elbow], axis_angle_to_quat([1.0, 0, 0], np.radians(30)))
     assert np.degrees(rotation_error(s, turned, q)) == pytest.approx(30 / 21, rel=1e-6)
-
-
-def test_effector_errors_measure_the_pose(mini):
-    s = mini.skeleton
-    pose, q = mini.global_pos[3], mini.local_rot[3]
-    effs = effector_set(s, "5", pose)
-    p, a = effector_errors(s, effs, pose + [0.0, 0.0, 0.0])
-    assert p.shape == (5,) and np.all(p == 0) and a.shape == (0,)
-    moved = pose.copy()
-    moved[s.index("head")] += [0, 0, 0.004]
-    assert effector_errors(s, effs, moved)[0].max() == pytest.approx(0.004)
-    G = fk(s, q)[1]
-    head = s.index("head")
-    look = Effector(head, pose[head] + G[head] @ np.array([0.0, 0.0, 1.0]), kind="look_at")
-    assert effector_errors(s, [look], pose, q)[1][0] == pytest.approx(0, abs=1e-6)
-    assert np.isnan(effector_errors(s, [look], pose)[1][0])  # no rotations, no angle
 
 
 def test_naturalness_is_zero_on_training_poses_and_the_floor_is_below_a_perturbed_pose(mini):

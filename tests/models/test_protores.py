@@ -12,7 +12,7 @@ from posekit.ik.bone_rotations import check_roundtrip, rotations_from_positions,
 from posekit.kinematics import bone_lengths_of, fk
 from posekit.models.protores.networks import (ARCHS, KIND_IDS, PosingNet, ProtoResConfig, ProtoResEncoder, centroid,
                                               sigma_to_tolerance, tolerance_to_sigma, weights_path)
-from posekit.bench.effector_cases import FIVE_POINT, ZONES, build_benchmark, load_benchmark
+from posekit.evaluation.effector_cases import FIVE_POINT, ZONES, build_benchmark, load_benchmark
 from posekit.models.protores.data import PoseBank, draw_batch
 from posekit.models.protores.solver import MAX_EFFECTORS, ProtoResSolver
 from posekit.models.protores.train import LOSSES, geodesic, losses, train_protores
@@ -227,7 +227,8 @@ def test_rotations_from_positions_put_bones_on_new_positions(mini):
 def test_shipped_weights_are_small_marked_and_beat_the_rest_pose(mini, five):
     total = sum(weights_path(a).stat().st_size for a in ARCHS)
     assert total <= 10 * 2 ** 20
-    from posekit.bench.effector_scores import rest_starts, run_learned, scores
+    from posekit.evaluation.effector_scores import rest_starts, scores
+    from posekit.models.protores.solver import run_learned
 
     q, root = rest_starts(five, mini)
     rest_mm = np.linalg.norm(fk(mini.skeleton, q, root)[0] - five.global_pos, axis=-1).mean() * 1000
@@ -252,7 +253,8 @@ def test_solver_api_and_batch_agree(mini, solver, random_bench):
 
 
 def test_tighter_tolerance_gives_smaller_effector_error(solver, random_bench):
-    from posekit.bench.effector_scores import run_learned, scores
+    from posekit.evaluation.effector_scores import scores
+    from posekit.models.protores.solver import run_learned
 
     errs = []
     for lam in (0.0, 1.0):

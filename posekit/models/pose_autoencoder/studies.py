@@ -25,7 +25,8 @@ import numpy as np
 import torch
 
 from ...data.cases import build_cases, case_split
-from ...data.metrics import NaturalnessIndex, score_poses
+from ...data.metrics import NaturalnessIndex
+from ...evaluation.pose_scores import score_poses
 from ...ik.api import EFFECTOR_SETS, effector_set
 from ...learn.trainers import register_trainer
 from ...plugins import arg

@@ -17,7 +17,7 @@ Introduced in ``notebooks/05_protores.ipynb``. The paper, section by section:
 * Table 2's ablations and the width trade-off — :mod:`~posekit.models.protores.studies`
   (``posekit train protores-studies``).
 
-Sec. 4's benchmarks (5-point and random effectors on held-out poses) and their scores are the
-benchmark layer's, shared by every solver: :mod:`posekit.bench.effector_cases`,
-:mod:`posekit.bench.effector_scores`.
+Sec. 4's benchmarks (5-point and random effectors on held-out poses) and their scores are shared by every
+solver, one layer down: :mod:`posekit.evaluation.effector_cases`, :mod:`posekit.evaluation.effector_scores`
+(:func:`~posekit.models.protores.solver.run_learned` feeds them a ProtoRes's predictions).
 """

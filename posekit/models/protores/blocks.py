@@ -22,14 +22,17 @@ import numpy as np
 import torch
 from torch import nn
 
+from ...ik.effectors import KIND_CODES
+
 __all__ = ["ARCHS", "KIND_IDS", "SIGMA_M", "ETA", "ProtoResConfig", "centroid", "effector_inputs", "Tokens",
            "FCBlock", "FCR", "tolerance_to_sigma", "sigma_to_tolerance"]
 
 ARCHS = ("protores", "masked-fcr", "transformer")
 """Encoders: the paper's model and its two baselines (Table 1)."""
 
-KIND_IDS = {"position": 0, "rotation": 1, "look_at": 2}
-"""Effector kind -> type id (the type embedding's row)."""
+KIND_IDS = KIND_CODES
+"""Effector kind -> type id (the type embedding's row): the solvers' own codes
+(:data:`posekit.ik.effectors.KIND_CODES`, position 0, rotation 1, look-at 2)."""
 
 SIGMA_M = 0.1
 """sigma_M: the noise scale of tolerance 1 (Appendix B): 0.1 m for positions, 0.1 rad for angles."""

@@ -34,7 +34,7 @@ from ...rotations import matrix_to_quat, matrix_to_sixd
 from .networks import ARCHS, KIND_IDS, SIGMA_M, PosingNet, sigma_to_tolerance, weights_path
 from .fast import NumpyPosingNet
 
-__all__ = ["ProtoResSolver", "load_protores", "skeleton_span", "MAX_EFFECTORS"]
+__all__ = ["ProtoResSolver", "load_protores", "skeleton_span", "run_learned", "MAX_EFFECTORS"]
 
 NUMPY_BATCH = 8
 """Up to this many requests go through :class:`~posekit.models.protores.fast.NumpyPosingNet` (no torch
@@ -241,3 +241,25 @@ register("protores-masked-fcr", _variant("masked-fcr"), **_COMMON,
          description="ProtoRes's Masked-FCR baseline (fixed-size input with learned placeholders)")
 register("protores-transformer", _variant("transformer"), **_COMMON,
          description="ProtoRes's Transformer baseline (torch nn.Transformer encoder)")
+
+
+def run_learned(solver, bench, tolerance=None) -> dict:
+    """Predict every case of an effector benchmark (:class:`posekit.evaluation.effector_cases.EffectorBenchmark`)
+    with a :class:`ProtoResSolver`'s array path (one pass per effector count), for
+    :func:`posekit.evaluation.effector_scores.scores`. ``tolerance``: a Lambda for every effector instead of the cases' own
+    (their metres/radians turned into Lambda). Returns the arrays ``global_pos``, ``local_rot``,
+    ``global_rot``, ``gpd_pos`` (C, ...) and ``out_of_range`` (count)."""
+    C, J = len(bench), bench.skeleton.n_joints
+    res = {"global_pos": np.empty((C, J, 3)), "local_rot": np.empty((C, J, 4)), "global_rot": np.empty((C, J, 3, 3)),
+           "gpd_pos": np.empty((C, J, 3)) if solver.net.gpd is not None else None, "out_of_range": 0}
+    lam = sigma_to_tolerance(np.minimum(bench.tolerance, 0.1)) if tolerance is None else np.full(bench.tolerance.shape,
+                                                                                                  float(tolerance))
+    for n in np.unique(bench.n):
+        idx = np.nonzero(bench.n == n)[0]
+        r = solver.predict(bench.joint[idx, :n], bench.kind[idx, :n], bench.value[idx, :n], lam[idx, :n])
+        for k in ("global_pos", "local_rot", "global_rot"):
+            res[k][idx] = r[k]
+        if res["gpd_pos"] is not None:
+            res["gpd_pos"][idx] = r["gpd_pos"]
+        res["out_of_range"] += int(r["out_of_range"].any(1).sum())
+    return res

@@ -41,9 +41,9 @@ def studies_path():
 def score_net(net, motions=None) -> dict:
     """Both benchmarks' L_ikd-L2 (1e-3 m^2), L_loc-geo (rad) and MPJPE (mm) of a network, and its one-pose time."""
     from ...learn.threads import limit_threads
-    from ...bench.effector_cases import BENCHMARKS, load_benchmark
-    from ...bench.effector_scores import run_learned, scores
-    from .solver import ProtoResSolver
+    from ...evaluation.effector_cases import BENCHMARKS, load_benchmark
+    from ...evaluation.effector_scores import scores
+    from .solver import ProtoResSolver, run_learned
 
     solver = ProtoResSolver(net.skeleton, net=net)
     out = {}

@@ -1,7 +1,7 @@
 """Scoring solvers on ProtoRes's effector benchmarks (Oreshkin et al. 2022, Sec. 4), learned and classical alike.
 
 Introduced in ``notebooks/05_protores.ipynb``; ``posekit bench protores`` prints these numbers. Every
-method is scored by :func:`scores` on the same cases (:mod:`posekit.bench.effector_cases`):
+method is scored by :func:`scores` on the same cases (:mod:`posekit.evaluation.effector_cases`):
 
 * ``ikd_l2`` — the paper's L_ikd-L2: mean squared error of the final pose's positions over every body
   joint's coordinates, m^2 (world frame, nothing aligned);
@@ -25,11 +25,10 @@ import numpy as np
 
 from ..data.metrics import body_joints
 from ..ik.effector_errors import errors_of
-from ..ik.effectors import resolve_effectors
+from ..ik.effectors import KIND_CODES, resolve_effectors
 from ..rotations import geodesic_distance, quat_to_matrix
-from ..models.protores.networks import KIND_IDS, sigma_to_tolerance
 
-__all__ = ["scores", "run_learned", "run_classical", "rest_starts", "effector_error_table"]
+__all__ = ["scores", "run_classical", "rest_starts", "effector_error_table"]
 
 
 def effector_error_table(bench, global_pos, global_rot) -> np.ndarray:
@@ -69,27 +68,6 @@ def scores(bench, global_pos, local_rot, global_rot, gpd_pos=None) -> dict:
     return out
 
 
-def run_learned(solver, bench, tolerance=None) -> dict:
-    """Predict every case of ``bench`` with a :class:`~posekit.models.protores.solver.ProtoResSolver`'s array path
-    (one pass per effector count). ``tolerance``: a Lambda for every effector instead of the cases' own
-    (their metres/radians turned into Lambda). Returns the arrays ``global_pos``, ``local_rot``,
-    ``global_rot``, ``gpd_pos`` (C, ...) and ``out_of_range`` (count)."""
-    C, J = len(bench), bench.skeleton.n_joints
-    res = {"global_pos": np.empty((C, J, 3)), "local_rot": np.empty((C, J, 4)), "global_rot": np.empty((C, J, 3, 3)),
-           "gpd_pos": np.empty((C, J, 3)) if solver.net.gpd is not None else None, "out_of_range": 0}
-    lam = sigma_to_tolerance(np.minimum(bench.tolerance, 0.1)) if tolerance is None else np.full(bench.tolerance.shape,
-                                                                                                  float(tolerance))
-    for n in np.unique(bench.n):
-        idx = np.nonzero(bench.n == n)[0]
-        r = solver.predict(bench.joint[idx, :n], bench.kind[idx, :n], bench.value[idx, :n], lam[idx, :n])
-        for k in ("global_pos", "local_rot", "global_rot"):
-            res[k][idx] = r[k]
-        if res["gpd_pos"] is not None:
-            res["gpd_pos"][idx] = r["gpd_pos"]
-        res["out_of_range"] += int(r["out_of_range"].any(1).sum())
-    return res
-
-
 def rest_starts(bench, motions):
     """The classical methods' start per case: the rest pose (:func:`posekit.data.cases.rest_start`) placed by
     the rigid motion — a turn about the vertical and a translation — that best fits its position-effector
@@ -105,7 +83,7 @@ def rest_starts(bench, motions):
     C = len(bench)
     angle, shift = np.zeros(C), np.zeros((C, 3))
     for i in range(C):
-        sel = (bench.kind[i] == KIND_IDS["position"]) & (bench.joint[i] >= 0)
+        sel = (bench.kind[i] == KIND_CODES["position"]) & (bench.joint[i] >= 0)
         a, t = p0[bench.joint[i, sel]], bench.value[i, sel, :3]
         ca, ct = a.mean(0), t.mean(0)
         da, dt = a - ca, t - ct

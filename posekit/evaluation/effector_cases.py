@@ -23,11 +23,10 @@ from pathlib import Path
 import numpy as np
 
 from ..data.metrics import body_joints
-from ..ik.effectors import DEFAULT_TOLERANCE, Effector
+from ..ik.effectors import DEFAULT_TOLERANCE, KIND_CODES, Effector
 from ..kinematics import fk
 from ..paths import samples_dir
 from ..rotations import matrix_to_sixd, quat_to_matrix
-from ..models.protores.networks import KIND_IDS
 
 __all__ = ["BENCHMARKS", "FIVE_POINT", "ZONES", "EffectorBenchmark", "build_benchmark", "load_benchmark",
            "benchmark_path", "MAX_EFFECTORS"]
@@ -45,7 +44,7 @@ ZONES = {"left leg": ("left_hip", "left_knee", "left_foot", "left_toe"),
 """The random benchmark's main zones (roles): one position effector on one joint of each."""
 
 MAX_EFFECTORS = 12
-KIND_NAMES = {v: k for k, v in KIND_IDS.items()}
+KIND_NAMES = {v: k for k, v in KIND_CODES.items()}
 FORMAT_VERSION = 1
 
 
@@ -69,7 +68,7 @@ class EffectorBenchmark:
     joint : ndarray of int, shape (C, K)
         Skeleton joint index; -1 past ``n``.
     kind : ndarray of int, shape (C, K)
-        :data:`~posekit.models.protores.networks.KIND_IDS`.
+        :data:`~posekit.ik.effectors.KIND_CODES`.
     value : ndarray, shape (C, K, 6)
         Position + zeros; 6D world rotation; look-at target + local direction (metres, world frame).
     tolerance : ndarray, shape (C, K)
@@ -216,12 +215,12 @@ def load_benchmark(name: str, motions=None, path=None) -> EffectorBenchmark:
             raise ValueError(f"{path}: frames outside the test clips of {motions.source}; rebuild the benchmark")
         joint, kind = z["joint"].astype(np.int64), z["kind"].astype(np.int64)
         value, tol = z["value"].astype(np.float64), z["tolerance"].astype(np.float64)
-    rot6 = kind == KIND_IDS["rotation"]
+    rot6 = kind == KIND_CODES["rotation"]
     if rot6.any():  # stored as float32: back to an exact rotation's columns
         from ..rotations import sixd_to_matrix
 
         value[rot6] = matrix_to_sixd(sixd_to_matrix(value[rot6]))
-    look = kind == KIND_IDS["look_at"]
+    look = kind == KIND_CODES["look_at"]
     value[look, 3:] /= np.linalg.norm(value[look, 3:], axis=-1, keepdims=True)
     R, G, root, P = _truth(motions, frames)
     return EffectorBenchmark(name, s, frames, (joint >= 0).sum(1), joint, kind, value, tol, R, G, root, P)
