@@ -7,7 +7,7 @@ rig to get their joint positions, and train :func:`~posekit.invrig.nn.train_inve
 
 from __future__ import annotations
 
-from ..learn.trainers import register_trainer
+from ..learn.trainers import print_written, register_trainer
 from ..plugins import arg
 from .nn import save_inverse_net, train_inverse_net, weights_path
 from .sampling import METHODS, sample_controls
@@ -58,7 +58,7 @@ def _cli(args) -> int:
     paths = train_all(methods=args.methods.split(","), samples=args.samples, epochs=args.epochs, seed=args.seed,
                       out=args.out, progress=sys.stderr.isatty())
     for m, p in paths.items():
-        print(f"wrote {p} ({p.stat().st_size / 1e3:.0f} kB)")
+        print_written(p)
     return 0
 
 

@@ -14,7 +14,8 @@ from typing import Callable
 from .. import catalogue
 from ..plugins import Arg, Registry
 
-__all__ = ["Trainer", "register_trainer", "unregister_trainer", "get_trainer", "trainer_names"]
+__all__ = ["Trainer", "register_trainer", "unregister_trainer", "get_trainer", "trainer_names", "cli_settings",
+           "cli_data", "print_written"]
 
 
 @dataclass(frozen=True)
@@ -83,3 +84,25 @@ def get_trainer(name: str) -> Trainer:
 def trainer_names() -> list[str]:
     """Every registered trainer, the built-in ones first, in lesson order."""
     return _TRAINERS.names()
+
+
+def cli_settings(args, defaults: dict) -> dict:
+    """The training settings a ``posekit train NAME`` command line changed from the trainer's ``defaults``
+    (only those, so a weight file's recorded command shows what was asked for)."""
+    return {k: getattr(args, k) for k in defaults if hasattr(args, k) and getattr(args, k) != defaults[k]}
+
+
+def cli_data(args):
+    """The :class:`~posekit.data.MotionSet` named by ``--data`` (a shipped set's name or a BVH folder,
+    :func:`posekit.data.open_dataset`) and the ``--out`` path (None: the shipped file's place)."""
+    import sys
+    from pathlib import Path
+
+    from ..data.sources import open_dataset
+
+    return open_dataset(args.data, progress=sys.stderr.isatty()), (Path(args.out) if args.out else None)
+
+
+def print_written(path) -> None:
+    """The last line of every trainer: which file it wrote, and its size."""
+    print(f"wrote {path} ({path.stat().st_size / 1e3:.0f} kB)")

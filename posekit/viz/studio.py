@@ -21,7 +21,6 @@ Files are written under ``export_dir`` (default ``studio_exports/`` beside the n
 
 from __future__ import annotations
 
-import base64
 import html
 import time
 from contextlib import contextmanager
@@ -33,6 +32,8 @@ from ..ik.api import Effector, Pose
 from ..ik.registry import make_solver, solver_names
 from .compare import status_table, worst_errors
 from .effector_editor import EffectorEditor
+from .studio_export import StudioExport, link
+from .studio_timeline import StudioTimeline
 from .setup_file import SetupError, parse_setup, save_setup
 from .viewer import show_widget
 
@@ -43,17 +44,11 @@ COALESCE_S = 1.0
 """Moves of one effector less than this many seconds apart are one undo step (a drag, a slider)."""
 
 
-def _link(path: Path, mime: str) -> str:
-    data = base64.b64encode(Path(path).read_bytes()).decode()
-    name = html.escape(Path(path).name)
-    return f"<a download='{name}' href='data:{mime};base64,{data}'>download {name}</a>"
-
-
 def _error(text: str) -> str:
     return f"<span style='color:#b03a2e'>{html.escape(text)}</span>"
 
 
-class PosingStudio:
+class PosingStudio(StudioExport, StudioTimeline):
     """Registered solvers side by side on shared effectors, with undo, setups, export and a timeline.
 
     Parameters
@@ -303,7 +298,7 @@ class PosingStudio:
     def save(self, path) -> Path:
         """Write the effectors and the solvers as a setup JSON file; the message links a download."""
         path = save_setup(path, self.skeleton, self.editor.setup(), self.solvers)
-        self.message.value = f"saved {html.escape(str(path))} ({len(self.editor.rows)} effectors) — {_link(path, 'application/json')}"
+        self.message.value = f"saved {html.escape(str(path))} ({len(self.editor.rows)} effectors) — {link(path, 'application/json')}"
         return path
 
     def load(self, path):
@@ -352,131 +347,3 @@ class PosingStudio:
                 self.load_text(text, source=name)
         except ValueError as err:
             self.message.value = _error(str(err))
-
-    # ------------------------------------------------------------------ files out and in
-    def _pose_of(self, name):
-        res = self.editor.results.get(name)
-        if res is None or isinstance(res, Exception):
-            raise ValueError(f"{name} has no pose to export" + (f" (it failed: {res})" if res is not None else ""))
-        return res.pose
-
-    def export_bvh(self, path=None, solver=None) -> Path:
-        """Write ``solver``'s (default: the export choice's) pose as a one-frame BVH, read it back and say how
-        far the read-back joints are from the view's."""
-        from ..ik.keyframes import write_poses_bvh
-        from ..io.bvh import read_bvh
-
-        name = solver or self.export_solver.value
-        pose = self._pose_of(name)
-        path = Path(path or self.export_dir / f"pose_{name}.bvh")
-        path.parent.mkdir(parents=True, exist_ok=True)
-        write_poses_bvh(path, self.skeleton, [pose], self.start)
-        back = read_bvh(path).global_positions()[0]
-        diff = np.abs(back - pose.global_pos).max() * 1000
-        self.message.value = (f"wrote {html.escape(str(path))}: {html.escape(name)}'s pose, read back within "
-                              f"{diff:.3f} mm — {_link(path, 'text/plain')}")
-        return path
-
-    def export_png(self, path=None) -> Path:
-        """Draw every view's pose (matplotlib, one 3D axes each, titled with its errors) into a PNG."""
-        import matplotlib
-
-        from matplotlib.figure import Figure
-
-        from .plot import plot_pose
-
-        matplotlib.rcParams.setdefault("figure.dpi", 100)
-        names = self.solvers
-        fig = Figure(figsize=(3.2 * len(names), 3.6))
-        targets = [r["target"] for r in self.editor.rows if r["kind"] == "position"]
-        for k, name in enumerate(names):
-            ax = fig.add_subplot(1, len(names), k + 1, projection="3d")
-            res = self.editor.results.get(name)
-            if res is None or isinstance(res, Exception):
-                ax.set_title(f"{name}\n(no pose)", fontsize=9)
-                continue
-            plot_pose(self.skeleton, res.pose.global_pos, ax=ax, targets=np.array(targets) if targets else None,
-                      title=f"{name}\n{self.editor.times.get(name, 0):.1f} ms")
-        path = Path(path or self.export_dir / "views.png")
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(path, dpi=100)
-        self.message.value = f"wrote {html.escape(str(path))} — {_link(path, 'image/png')}"
-        return path
-
-    def load_start_bvh(self, path, frame: int = 0):
-        """Use frame ``frame`` of a BVH file (this skeleton's joints) as the start pose; re-solve. A malformed
-        file or another skeleton raises ValueError naming the file (and line) and changes nothing."""
-        from ..io.bvh import read_bvh
-
-        motion = read_bvh(path)
-        names = list(motion.skeleton.names)
-        if names != list(self.skeleton.names):
-            raise ValueError(f"{path}: its skeleton ({len(names)} joints: {', '.join(names[:4])}, ...) is not the "
-                             f"studio's ({self.skeleton.n_joints}: {', '.join(self.skeleton.names[:4])}, ...)")
-        if not 0 <= frame < motion.n_frames:
-            raise ValueError(f"{path}: frame {frame} out of range (the file has {motion.n_frames})")
-        lp = None if motion.local_pos is None else motion.local_pos[frame]
-        self.start = Pose.from_rotations(self.skeleton, motion.local_rot[frame], motion.root_pos[frame], lp)
-        self.editor.start = self.start
-        self.editor.solve()
-        self._refresh()
-        self.message.value = f"start pose: frame {frame} of {html.escape(str(path))}"
-
-    # ------------------------------------------------------------------ timeline
-    def add_key(self):
-        """Store the current effectors as the next key of the timeline."""
-        if not self.editor.rows:
-            raise ValueError("add an effector before adding a key")
-        if self.keys and [(r["joint"], r["kind"]) for r in self.keys[0][0]] != \
-                [(r["joint"], r["kind"]) for r in self.editor.rows]:
-            raise ValueError("every key needs the same effectors as the first (same joints and kinds): "
-                             "move them, do not add or remove them, or clear the keys")
-        self.keys.append((self.editor.setup(), self.editor.effectors))
-        self.keys_label.value = f"{len(self.keys)} key{'s' if len(self.keys) > 1 else ''}"
-
-    def clear_keys(self):
-        """Forget every key and the built animation."""
-        self.keys, self.frames = [], []
-        self.keys_label.value = "no keys yet"
-        self.timeline_box.children = ()
-
-    def build_animation(self, solver=None):
-        """Pose the keys and their in-betweens with ``solver`` (default the export choice), each frame from
-        the previous one, and show them in a player. Returns the results, one per frame."""
-        from ..ik.keyframes import inbetween_effectors, solve_sequence
-        from .viewer import SkeletonViewer
-
-        name = solver or self.export_solver.value
-        if len(self.keys) < 2:
-            raise ValueError(f"a timeline needs at least two keys, got {len(self.keys)}: pose, add key, pose, add key")
-        s = self.editor.solvers[name]
-        kinds = getattr(s, "kinds", ("position",))
-        frames = inbetween_effectors(self.skeleton, [[e for e in k[1] if e.kind in kinds] for k in self.keys],
-                                     int(self.inbetweens.value), self.ease.value)
-        self.frames = solve_sequence(s, self.start, frames, progress=True)
-        self._frames_solver = name
-        h = self.size[1]
-        v = SkeletonViewer(self.skeleton, self.frames[0].pose.global_pos, width=2 * (self.size[0] or 420), height=h,
-                           controls=False)
-        v.player(np.stack([r.pose.global_pos for r in self.frames]))
-        self.timeline_viewer = v
-        self.timeline_box.children = (v.widget,)
-        self.message.value = f"{len(self.frames)} frames posed by {html.escape(name)}"
-        return self.frames
-
-    def export_animation(self, path=None, frame_time: float = 1 / 30) -> Path:
-        """Write the built animation as a BVH (``frame_time`` seconds per frame) and read it back."""
-        from ..ik.keyframes import write_poses_bvh
-        from ..io.bvh import read_bvh
-
-        if not self.frames:
-            raise ValueError("build the animation first (two keys or more, then build animation)")
-        path = Path(path or self.export_dir / f"animation_{self._frames_solver}.bvh")
-        path.parent.mkdir(parents=True, exist_ok=True)
-        poses = [r.pose for r in self.frames]
-        write_poses_bvh(path, self.skeleton, poses, self.start, frame_time)
-        back = read_bvh(path)
-        diff = np.abs(back.global_positions() - np.stack([p.global_pos for p in poses])).max() * 1000
-        self.message.value = (f"wrote {html.escape(str(path))}: {back.n_frames} frames at {1 / frame_time:.0f} fps, "
-                              f"read back within {diff:.3f} mm — {_link(path, 'text/plain')}")
-        return path

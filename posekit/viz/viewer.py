@@ -39,6 +39,7 @@ import numpy as np
 
 from ..data.metrics import body_joints
 from ..skeleton import Skeleton
+from .camera import FramedCamera
 from .drag import DragTargets
 from .meshes import Bones, Spheres, icosphere
 from .sliders import TargetSliders
@@ -63,7 +64,7 @@ def show_widget(widget, text: str) -> None:
     display(bundle, raw=True)
 
 
-class SkeletonViewer(DragTargets, TargetSliders):
+class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
     """A pythreejs scene of one skeleton with a ghost, targets, picking, dragging and sliders.
 
     Parameters
@@ -96,11 +97,6 @@ class SkeletonViewer(DragTargets, TargetSliders):
     dragging : str or None
         The joint whose target the mouse is dragging (:class:`~posekit.viz.drag.DragTargets`).
     """
-
-    VIEW_DIRECTION = np.array([0.35, 0.2, 1.0]) / np.linalg.norm([0.35, 0.2, 1.0])
-    """From the pose towards the camera: in front of the character, a little right and above."""
-    FOV = 40.0
-    """Vertical field of view, degrees."""
 
     def __init__(self, skeleton: Skeleton, pose=None, ghost=None, targets=None, width: int = 560,
                  height: int = 420, joint_radius: float = 0.025, controls: bool = True,
@@ -181,20 +177,6 @@ class SkeletonViewer(DragTargets, TargetSliders):
             raise ValueError(f"{what} contains NaN or inf")
         return pos
 
-    def _camera_position(self, radius):
-        """Camera position (scene frame) that fits a sphere of ``radius`` metres around the pivot in the view."""
-        half = np.radians(self.FOV) / 2
-        half = min(half, np.arctan(np.tan(half) * self.aspect))  # the narrower of the two fields of view
-        return [float(c) for c in self.VIEW_DIRECTION * (1.08 * radius / np.sin(half))]
-
-    @staticmethod
-    def _frame(pos):
-        """Centre and radius (metres) of the box around joint positions ``(..., J, 3)`` and the floor below them."""
-        pts = np.asarray(pos, float).reshape(-1, 3)
-        lo, hi = pts.min(0), pts.max(0)
-        lo[1] = min(lo[1], 0.0)  # keep the floor under the feet in view
-        return 0.5 * (lo + hi), float(max(0.5 * np.linalg.norm(hi - lo), 0.6))
-
     def _ipython_display_(self):
         show_widget(self.widget, f"[3D skeleton viewer: {self.skeleton.n_joints} joints. It draws in a running Jupyter "
                                  "kernel; run the cell to see it and pose the skeleton]")
@@ -211,19 +193,6 @@ class SkeletonViewer(DragTargets, TargetSliders):
         if self.selected is not None:
             self._selected_marker.set(self.pose[[self.skeleton.index(self.selected)]])
             self._update_status()
-
-    def _shown_points(self):
-        """Everything the view should keep in frame: the pose, the targets and the look-at targets, (N, 3)."""
-        return np.concatenate([self.pose.reshape(-1, 3), *[np.array(list(d.values())).reshape(-1, 3)
-                                                          for d in (self.targets, self.look_targets) if d]])
-
-    def _follow(self):
-        """Step the camera back (and re-centre it) when the pose or a target leaves the framed region."""
-        if self._held:
-            return
-        pts = self._shown_points()
-        if self.follow and np.linalg.norm(pts - self._offset, axis=1).max() > 1.05 * self._radius:
-            self.frame_camera(pts, keep_distance=True)
 
     def set_ghost(self, global_pos=None):
         """Show (shape (J, 3)) or hide (None) the ghost pose."""
@@ -323,21 +292,6 @@ class SkeletonViewer(DragTargets, TargetSliders):
             joints = self.pose[[self.skeleton.index(n) for n in looks]]
             seg = np.stack([joints, np.array(list(looks.values()))], axis=1).reshape(-1, 3)
             self._rays.geometry.attributes["position"].array = seg.astype(np.float32)
-
-    def frame_camera(self, poses=None, keep_distance: bool = False):
-        """Frame the view on ``poses`` (shape (..., J, 3) or (N, 3) points; default the current pose): the orbit pivot moves
-        to their middle and the camera steps back along its current direction until they fit (with
-        ``keep_distance``, only further back, never closer)."""
-        centre, radius = self._frame(self.pose if poses is None else poses)
-        self._offset = centre.copy()
-        self._world.position = [float(-c) for c in centre]
-        current = np.asarray(self.camera.position, float) - np.asarray(self.orbit.target, float)
-        dist = float(np.linalg.norm(self._camera_position(radius)))
-        if keep_distance:
-            dist = max(dist, float(np.linalg.norm(current)))
-        direction = current / np.linalg.norm(current) if np.linalg.norm(current) > 1e-9 else self.VIEW_DIRECTION
-        self.camera.position = [float(c) for c in np.asarray(self.orbit.target, float) + direction * dist]
-        self._radius = max(radius, self._radius) if keep_distance else radius
 
     # ------------------------------------------------------------------ selection and targets
     def select(self, joint):

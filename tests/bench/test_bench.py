@@ -11,7 +11,7 @@ from posekit.data import MotionSet, split_by_clip
 from posekit.data.cases import build_cases, case_split, placement_joints
 from posekit.data.metrics import NaturalnessIndex, body_joints, bone_length_error, mpjpe, rotation_error
 from posekit.ik import registry
-from posekit.ik.api import Effector, IKResult, effector_set
+from posekit.ik.api import IKResult
 from posekit.kinematics import fk, rest_pose
 from posekit.rotations import axis_angle_to_quat, quat_multiply
 from posekit.transforms import to_root_space

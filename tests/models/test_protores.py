@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 import torch
 
-from posekit.data.metrics import body_joints
 from posekit.ik import Effector, make_solver
 from posekit.ik.bone_rotations import check_roundtrip, rotations_from_positions, shortest_rotation
 from posekit.kinematics import bone_lengths_of, fk

@@ -204,7 +204,7 @@ def test_effector_editor_edits_every_kind_and_re_solves():
     """Lesson 05's EffectorEditor: effectors of all three kinds added, turned, loosened and removed; every
     change re-solves each solver; a solver that refuses a kind gets only the kinds it honours."""
     from posekit.data import load_bandai_mini
-    from posekit.ik import Effector, Pose
+    from posekit.ik import Pose
     from posekit.evaluation.effector_scores import rest_starts
     from posekit.evaluation.effector_cases import load_benchmark
     from posekit.rotations import geodesic_distance

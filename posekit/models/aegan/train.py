@@ -35,7 +35,7 @@ import torch
 import torch.nn.functional as F
 
 from ...learn import limit_threads, merge_settings
-from ...learn.trainers import register_trainer
+from ...learn.trainers import cli_data, cli_settings, print_written, register_trainer
 from ...plugins import arg
 from ...progress import finish
 from ...data.pose_vectors import split_pose_data
@@ -211,14 +211,11 @@ def train_aegan(motions=None, *, seed: int = 0, out=None, progress: bool = True,
 def _cli(args) -> int:
     """``posekit train aegan``."""
     import sys
-    from pathlib import Path
 
     from ...data.metrics import body_joints
-    from ...data.sources import open_dataset
 
-    settings = {k: getattr(args, k) for k in DEFAULTS if getattr(args, k) != DEFAULTS[k]}
-    motions = open_dataset(args.data, progress=sys.stderr.isatty())
-    out = Path(args.out) if args.out else None
+    settings = cli_settings(args, DEFAULTS)
+    motions, out = cli_data(args)
     config = AEGANConfig(len(body_joints(motions.skeleton)), structured=not args.dense)
     model, report = train_aegan(motions, seed=args.seed, out=out, config=config, progress=sys.stderr.isatty(),
                                 **settings)
@@ -227,7 +224,7 @@ def _cli(args) -> int:
     print(f"trained {report['steps']} steps in {report['seconds']:.0f} s; held-out reconstruction "
           f"{report['val_rec_mm']:.1f} mm; last interval: pose discriminator accuracy {c['acc_x'][-1]:.2f}, "
           f"latent discriminator accuracy {c['acc_z'][-1]:.2f}")
-    print(f"wrote {path} ({path.stat().st_size / 1e3:.0f} kB)")
+    print_written(path)
     return 0
 
 

@@ -26,7 +26,7 @@ import torch
 
 from ...data.bandai_mini import LICENCE
 from ...learn import fit, merge_settings
-from ...learn.trainers import register_trainer
+from ...learn.trainers import cli_data, cli_settings, print_written, register_trainer
 from ...plugins import arg
 from ...data.pose_vectors import split_pose_data
 from .data import training_pairs
@@ -200,14 +200,11 @@ def train_ae_solvers(motions=None, *, seed: int = 0, out=None, groups=tuple(GROU
 def _cli(args) -> int:
     """``posekit train ae-solvers``."""
     import sys
-    from pathlib import Path
 
-    from ...data.sources import open_dataset
     from ...learn.threads import single_thread
 
-    settings = {k: getattr(args, k) for k in DEFAULTS if getattr(args, k) != DEFAULTS[k]}
-    motions = open_dataset(args.data, progress=sys.stderr.isatty())
-    out = Path(args.out) if args.out else None
+    settings = cli_settings(args, DEFAULTS)
+    motions, out = cli_data(args)
     with single_thread():  # these small layers gain little from a second thread, and one thread repeats exactly
         model, report = train_ae_solvers(motions, seed=args.seed, out=out, tied=args.tied, latent=args.latent,
                                          progress=sys.stderr.isatty(), **settings)
@@ -217,7 +214,7 @@ def _cli(args) -> int:
           + ")")
     print(f"autoencoder validation MSE {report['autoencoder']['val'][-1]:.5f} (z-scored units); solvers: "
           + ", ".join(f"{g} {c['val'][-1]:.5f}" for g, c in report["solvers"].items()))
-    print(f"wrote {path} ({path.stat().st_size / 1e3:.0f} kB)")
+    print_written(path)
     return 0
 
 

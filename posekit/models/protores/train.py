@@ -36,7 +36,7 @@ import torch
 
 from ...learn import limit_threads, merge_settings
 from ...progress import finish
-from ...learn.trainers import register_trainer
+from ...learn.trainers import cli_settings, print_written, register_trainer
 from ...plugins import arg
 from ...data.bandai_mini import LICENCE
 from .networks import ARCHS, PosingNet, ProtoResConfig, weights_path
@@ -269,7 +269,7 @@ def _cli(args) -> int:
     from ...data.bandai_mini import load_bandai_mini
     from ...data.metrics import body_joints
 
-    settings = {k: getattr(args, k) for k in DEFAULTS if hasattr(args, k) and getattr(args, k) != DEFAULTS[k]}
+    settings = cli_settings(args, DEFAULTS)
     if args.fixed_weights:
         settings["weighted"] = False
     motions = load_bandai_mini()
@@ -282,7 +282,7 @@ def _cli(args) -> int:
           f"{report['seconds']:.0f} s ({report['seconds_per_step'] * 1000:.0f} ms/step); validation: L_ikd-L2 "
           f"{v['ikd_l2'] * 1000:.2f}e-3 m^2, L_loc-geo {v['loc_geo']:.3f} rad, MPJPE {v['mpjpe_mm']:.1f} mm")
     path = out or weights_path(args.arch)
-    print(f"wrote {path} ({path.stat().st_size / 1e3:.0f} kB)")
+    print_written(path)
     return 0
 
 

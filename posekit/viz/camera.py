@@ -1,0 +1,67 @@
+"""The skeleton viewer's camera: it keeps the pose, and the targets set on it, framed.
+
+Introduced in ``notebooks/00_skeletons_and_poses.ipynb`` with :class:`posekit.viz.viewer.SkeletonViewer`, whose
+mixin this is. The scene content sits in a group shifted by minus the framed centre, so the orbit pivot (the
+origin, where pythreejs' OrbitControls starts) is the middle of what is shown; framing moves that group and
+steps the camera along its current direction until a sphere around the points fits the narrower field of
+view. Units: metres (:mod:`posekit.conventions`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["FramedCamera"]
+
+
+class FramedCamera:
+    """Camera framing for :class:`~posekit.viz.viewer.SkeletonViewer` (a mixin: the viewer holds ``camera``,
+    ``orbit``, ``_world``, ``aspect``, ``pose``, ``targets``, ``look_targets``, ``follow``, ``_held``,
+    ``_offset`` and ``_radius``)."""
+
+    VIEW_DIRECTION = np.array([0.35, 0.2, 1.0]) / np.linalg.norm([0.35, 0.2, 1.0])
+    """From the pose towards the camera: in front of the character, a little right and above."""
+    FOV = 40.0
+    """Vertical field of view, degrees."""
+
+    def _camera_position(self, radius):
+        """Camera position (scene frame) that fits a sphere of ``radius`` metres around the pivot in the view."""
+        half = np.radians(self.FOV) / 2
+        half = min(half, np.arctan(np.tan(half) * self.aspect))  # the narrower of the two fields of view
+        return [float(c) for c in self.VIEW_DIRECTION * (1.08 * radius / np.sin(half))]
+
+    @staticmethod
+    def _frame(pos):
+        """Centre and radius (metres) of the box around joint positions ``(..., J, 3)`` and the floor below them."""
+        pts = np.asarray(pos, float).reshape(-1, 3)
+        lo, hi = pts.min(0), pts.max(0)
+        lo[1] = min(lo[1], 0.0)  # keep the floor under the feet in view
+        return 0.5 * (lo + hi), float(max(0.5 * np.linalg.norm(hi - lo), 0.6))
+
+    def _shown_points(self):
+        """Everything the view should keep in frame: the pose, the targets and the look-at targets, (N, 3)."""
+        return np.concatenate([self.pose.reshape(-1, 3), *[np.array(list(d.values())).reshape(-1, 3)
+                                                          for d in (self.targets, self.look_targets) if d]])
+
+    def _follow(self):
+        """Step the camera back (and re-centre it) when the pose or a target leaves the framed region."""
+        if self._held:
+            return
+        pts = self._shown_points()
+        if self.follow and np.linalg.norm(pts - self._offset, axis=1).max() > 1.05 * self._radius:
+            self.frame_camera(pts, keep_distance=True)
+
+    def frame_camera(self, poses=None, keep_distance: bool = False):
+        """Frame the view on ``poses`` (shape (..., J, 3) or (N, 3) points; default the current pose): the orbit pivot moves
+        to their middle and the camera steps back along its current direction until they fit (with
+        ``keep_distance``, only further back, never closer)."""
+        centre, radius = self._frame(self.pose if poses is None else poses)
+        self._offset = centre.copy()
+        self._world.position = [float(-c) for c in centre]
+        current = np.asarray(self.camera.position, float) - np.asarray(self.orbit.target, float)
+        dist = float(np.linalg.norm(self._camera_position(radius)))
+        if keep_distance:
+            dist = max(dist, float(np.linalg.norm(current)))
+        direction = current / np.linalg.norm(current) if np.linalg.norm(current) > 1e-9 else self.VIEW_DIRECTION
+        self.camera.position = [float(c) for c in np.asarray(self.orbit.target, float) + direction * dist]
+        self._radius = max(radius, self._radius) if keep_distance else radius
