@@ -4,7 +4,7 @@ Solvers (:mod:`posekit.ik.registry`), trainers (:mod:`posekit.learn.trainers`), 
 (:mod:`posekit.bench.plugin`) and the extra methods of ``posekit bench ik`` (:mod:`posekit.bench.ik`) are
 each a :class:`Registry`: the first time one is asked, it imports the built-in modules that
 :mod:`posekit.catalogue` names, and each of them registers itself. A name is taken once: registering it
-again is an error unless ``replace=True`` is asked for (a notebook redefining its own solver). Command-line arguments of a plug-in are :class:`Arg` specs (:func:`arg`), added to its
+again is an error unless ``replace=True`` is asked for (a notebook redefining its own solver); the message names the module that holds the name. Command-line arguments of a plug-in are :class:`Arg` specs (:func:`arg`), added to its
 subparser by :func:`add_arguments`.
 """
 
@@ -37,6 +37,7 @@ class Registry:
         self.modules = tuple(modules)
         self.load_on_add = load_on_add
         self._entries: dict = {}
+        self._owners: dict = {}
         self._loading = False
         self._loaded = False
 
@@ -64,12 +65,16 @@ class Registry:
         if self.load_on_add and owner not in self.modules:
             self.load()
         if name in self._entries and not replace:
-            raise ValueError(f"a {self.what} named {name!r} is already registered; pass replace=True to redefine it")
+            by = self._owners.get(name)
+            raise ValueError(f"a {self.what} named {name!r} is already registered" + (f" (by {by})" if by else "")
+                             + "; pass replace=True to redefine it")
         self._entries[name] = entry
+        self._owners[name] = owner
         return entry
 
     def remove(self, name: str) -> None:
         self._entries.pop(name, None)
+        self._owners.pop(name, None)
 
     def __contains__(self, name) -> bool:
         return name in self._entries

@@ -179,3 +179,14 @@ def test_missing_shared_data_names_only_real_options(monkeypatch, capsys):
     assert main(["data", "inspect", "bandai1"]) == 2
     err = capsys.readouterr().err
     assert "POSEKIT_DATA_DIR" in err and "--data" not in err
+
+
+def test_a_name_is_registered_once_unless_replace_is_asked_for():
+    from posekit.plugins import Registry
+
+    r = Registry("thing", modules=())
+    r.add("a", 1, owner="lesson_a")
+    with pytest.raises(ValueError, match="a thing named 'a' is already registered \\(by lesson_a\\); pass replace=True"):
+        r.add("a", 3, owner="lesson_b")
+    r.add("a", 4, owner="lesson_b", replace=True)
+    assert r.get("a") == 4

@@ -347,4 +347,4 @@ register_benchmark(
             help="JSON file of the run (default: data_samples/results/ae_scale_PROTOCOL.json; none: do not write)"),
     ],
     tables=TABLES, labels=TABLE_LABELS, header=_header, group_by="start", group_title=_group_title, wide=True,
-    lesson="notebooks/03_autoencoder_solvers.ipynb", replace=True)
+    lesson="notebooks/03_autoencoder_solvers.ipynb")

@@ -322,4 +322,4 @@ register_benchmark(
                  "do not write)"),
     ],
     tables=TABLES, labels={**TABLE_LABELS, "lesson": "lesson", "method": "solver"}, header=_header,
-    group_by="start", group_title=_group_title, lesson="notebooks/06_posing_studio.ipynb", replace=True)
+    group_by="start", group_title=_group_title, lesson="notebooks/06_posing_studio.ipynb")

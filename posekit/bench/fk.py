@@ -104,4 +104,4 @@ register_benchmark(
     args=[arg("--poses", type=int, default=20_000, help="poses per FK call"),
           arg("--repeats", type=int, default=5, help="timed repeats (the best counts)"),
           arg("--seed", type=int, default=0, help="seed of the random skeleton and rotations")],
-    tables=TABLES, labels=TABLE_LABELS, lesson="notebooks/00_skeletons_and_poses.ipynb", replace=True)
+    tables=TABLES, labels=TABLE_LABELS, lesson="notebooks/00_skeletons_and_poses.ipynb")

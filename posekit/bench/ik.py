@@ -408,4 +408,4 @@ register_benchmark(
         arg("--no-peers", action="store_true", help="skip peer libraries (ikpy)"),
     ],
     tables=TABLES, labels=TABLE_LABELS, header=_header, group_by="start", group_title=_group_title, wide=True,
-    lesson="notebooks/01_fabrik.ipynb", replace=True)
+    lesson="notebooks/01_fabrik.ipynb")

@@ -62,7 +62,7 @@ def batched_rows(ctx: MethodContext) -> list[dict]:
     return rows
 
 
-register_method("latent-variants", variant_rows, group="latent", needs=("latent-opt",), replace=True,
+register_method("latent-variants", variant_rows, group="latent", needs=("latent-opt",),
                 description="latent optimisation without post-processing and with L-BFGS (lesson 04)")
-register_method("latent-batched", batched_rows, group="batched", needs=("latent-opt",), replace=True,
+register_method("latent-batched", batched_rows, group="batched", needs=("latent-opt",),
                 description="latent optimisation of all cases at once: solves/s and us per pose (lesson 04)")

@@ -126,9 +126,9 @@ def ikpy_rows(ctx: MethodContext) -> list[dict]:
     return rows
 
 
-register_method("numpy-fabrik", baseline_rows, group="baseline", needs=("fabrik",), replace=True,
+register_method("numpy-fabrik", baseline_rows, group="baseline", needs=("fabrik",),
                 description="the same FABRIK in plain numpy, one joint at a time (the speed yardstick)")
-register_method("fabrik-batched", batched_rows, group="batched", needs=("fabrik",), replace=True,
+register_method("fabrik-batched", batched_rows, group="batched", needs=("fabrik",),
                 description="batched FABRIK: solves/s over all cases at once")
-register_method("ikpy", ikpy_rows, group="peer", replace=True,
+register_method("ikpy", ikpy_rows, group="peer",
                 description="ikpy on the pelvis -> left hand chain, beside FABRIK on the same chain")

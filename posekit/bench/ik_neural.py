@@ -93,7 +93,7 @@ def batched_rows(ctx: MethodContext) -> list[dict]:
     return rows
 
 
-register_method("neural-variants", variant_rows, group="neural", needs=("neural",), replace=True,
+register_method("neural-variants", variant_rows, group="neural", needs=("neural",),
                 description="neural without post-processing, chained, and as FABRIK's start (lesson 03)")
-register_method("neural-batched", batched_rows, group="batched", needs=("neural",), replace=True,
+register_method("neural-batched", batched_rows, group="batched", needs=("neural",),
                 description="the neural solver on all cases at once: solves/s and us per pose (lesson 03)")

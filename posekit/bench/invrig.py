@@ -119,5 +119,4 @@ register_benchmark(
     args=[arg("--seed", type=int, default=0, help="seed of the animation and the GPR fit"),
           arg("--budget", type=int, default=500, help="GPR training poses after greedy subsampling"),
           arg("--weights", default=None, help="folder of invrig_nn_*.pt (default data_samples/weights)")],
-    tables=TABLES, labels=TABLE_LABELS, header=_header, lesson="notebooks/02_inverse_rig_mapping.ipynb",
-    replace=True)
+    tables=TABLES, labels=TABLE_LABELS, header=_header, lesson="notebooks/02_inverse_rig_mapping.ipynb")

@@ -250,4 +250,4 @@ register_benchmark(
     args=[arg("--cases", type=int, default=None, help="cases per benchmark (default: all 1,000)"),
           arg("--no-classical", action="store_true", help="skip FABRIK and DLS"),
           arg("--no-speed", action="store_true", help="skip the timing rows")],
-    tables=TABLES, labels=LABELS, header=_header, lesson="notebooks/05_protores.ipynb", replace=True)
+    tables=TABLES, labels=LABELS, header=_header, lesson="notebooks/05_protores.ipynb")

@@ -439,7 +439,7 @@ class RestPose(SolverBase):
 def test_a_registered_solver_is_everywhere_and_may_need_no_start(skel, cases, monkeypatch):
     monkeypatch.setattr(registry._REGISTRY, "_entries", dict(registry._REGISTRY._entries))  # undone after the test
     register("rest", RestPose, description="the rest pose", lesson="tests")
-    with pytest.raises(ValueError, match="a solver named 'rest' is already registered; pass replace=True"):
+    with pytest.raises(ValueError, match="a solver named 'rest' is already registered \\(by tests.ik.test_ik\\); pass replace=True"):
         register("rest", RestPose)
     with pytest.raises(ValueError, match="a solver named 'fabrik' is already registered"):  # built-ins too
         register("fabrik", RestPose)
