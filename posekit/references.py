@@ -99,7 +99,8 @@ REFERENCES: dict[str, Reference] = {
     "oreshkin2022": Reference(
         ("B. N. Oreshkin", "F. Bocquelet", "F. G. Harvey", "B. Raitt", "D. Laflamme"),
         "ProtoRes: Proto-Residual Network for Pose Authoring via Learned Inverse Kinematics",
-        "ICLR", 2022, arxiv="2106.01981"),
+        "ICLR", 2022, arxiv="2106.01981",
+        note="code and the authors' result notebooks: https://github.com/Unity-Technologies/Labs, Projects/ProtoRes"),
     "oreshkin2020": Reference(
         ("B. N. Oreshkin",), "N-BEATS: Neural basis expansion analysis for interpretable time series forecasting",
         "ICLR", 2020, et_al=True),
