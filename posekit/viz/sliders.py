@@ -8,8 +8,9 @@ joint itself when it has neither (a move then creates a target). They step 1 mm 
 point can be reached.
 
 Selecting never moves anything. A new selection gives every slider a new range; the kernel sends each slider's
-range and value in one message, and for :attr:`TargetSliders.ECHO_S` seconds a value the browser sends back
-that it held before (clamped into the new range) is an echo, taken once, not a move. A real move changes its
+range and value in one message, and for :attr:`TargetSliders.ECHO_S` seconds after a new range a value the
+browser sends back that the slider held in the last seconds (clamped into the new range, so possibly an end
+of it) is an echo, not a move: under load the browser can send back a value from two selections ago. A real move changes its
 own axis of the handle only. Units: metres, world frame (:mod:`posekit.conventions`).
 """
 
@@ -42,15 +43,17 @@ class TargetSliders:
     """The X/Y/Z sliders reach this far (metres) either side of the selected joint's target (a slider
     pushed to an end re-centres on its new value)."""
     ECHO_S = 2.0
-    """For this many seconds after the kernel gives a slider a new range, the browser sending back the value
-    it held before (clamped into the new range, so possibly an end of it) is an echo, not a move; each such
-    echo is taken once (the browser re-sends a slider's value when its range changes)."""
+    """For this many seconds after the kernel gives a slider a new range, the browser sending back a value the
+    slider held in the last ``ECHO_S`` seconds (set by the kernel or sent by the browser; clamped into the new
+    range, so possibly an end of it) is an echo, not a move (the browser re-sends a slider's value when its
+    range changes, sometimes after the next selection has already begun)."""
 
     def _init_sliders(self):
         import ipywidgets as w
 
         self._syncing = False
-        self._echoes = [[], [], []]  # per slider: (time, value) the browser may send back stale
+        self._held_values = [[], [], []]  # per slider: (time, value) it held lately, what the browser may send back
+        self._ranges = [[], [], []]  # per slider: (time, min, max) of its ranges lately, the last one newest
         step = self.SLIDER_STEP
         self.sliders = [w.FloatSlider(value=0.0, min=-step, max=step, step=step, description=f"target {a}",
                                       continuous_update=True, readout_format=".3f", disabled=True, readout=False,
@@ -83,7 +86,7 @@ class TargetSliders:
         """Show the selected joint's handle (:meth:`_handle`) on the sliders, within ``SLIDER_SPAN`` of it (the
         range moves with a new selection, or when the point leaves it); with no selection the sliders are
         disabled and show no number. Each slider's range and value go to the browser in one message; after a
-        new range, the stale values the browser may send back are remembered for ``ECHO_S`` seconds."""
+        new range, values the browser sends back that the slider held lately are echoes for ``ECHO_S`` seconds."""
         active = self.selected is not None
         for s in self.sliders:
             s.disabled, s.readout = not active, active
@@ -108,15 +111,31 @@ class TargetSliders:
                         else:
                             s.min, s.max = lo, hi
                     s.value = float(np.clip(v, s.min, s.max))
+                self._remember(axis, before[2], now)
                 if (s.min, s.max) != before[:2]:  # a new range: the browser may send back a stale value
-                    # what it may send: the value it held before, clamped into the new range (an end of it when
-                    # the range moved past it) -- never the value just set, which is where the handle is
-                    stale = {float(np.clip(before[2], s.min, s.max)), s.min, s.max} - {s.value}
-                    self._echoes[axis] = [(t, x) for t, x in self._echoes[axis] if now - t < self.ECHO_S]
-                    self._echoes[axis] += [(now, x) for x in stale]
+                    self._ranges[axis] = [r for r in self._ranges[axis] if now - r[0] < self.ECHO_S]
+                    self._ranges[axis] += [(now, *before[:2]), (now, s.min, s.max)]
         finally:
             self._syncing = False
         self._synced = np.array([s.value for s in self.sliders])
+
+    def _remember(self, axis, value, now):
+        """Note that slider ``axis`` held ``value`` at ``now`` (only the last ``ECHO_S`` seconds are kept)."""
+        self._held_values[axis] = [(t, x) for t, x in self._held_values[axis] if now - t < self.ECHO_S]
+        self._held_values[axis].append((now, float(value)))
+
+    def _is_echo(self, axis, v, tol, now) -> bool:
+        """Whether ``v``, sent by the browser for slider ``axis``, is a stale value and not a move: within
+        ``ECHO_S`` of a new range, a value the slider held lately, or an end of a recent range, as the browser
+        may have clamped it into any recent range (the browser can lag a selection behind)."""
+        ranges = [(lo, hi) for t, lo, hi in self._ranges[axis] if now - t < self.ECHO_S]
+        if not ranges:
+            return False
+        held = [x for t, x in self._held_values[axis] if now - t < self.ECHO_S]
+        held += [end for r in ranges for end in r]
+        s = self.sliders[axis]
+        stale = {float(np.clip(np.clip(x, lo, hi), s.min, s.max)) for x in held for lo, hi in ranges}
+        return any(abs(v - x) <= tol for x in stale)
 
     def _on_slider(self, change):
         """A slider moved in the browser: move the handle along that axis only (the other coordinates stay the
@@ -129,9 +148,7 @@ class TargetSliders:
         if abs(v - p[axis]) <= tol or (self._synced is not None and abs(v - self._synced[axis]) <= tol):
             return
         now = time.monotonic()
-        echo = [(t, x) for t, x in self._echoes[axis] if now - t < self.ECHO_S and abs(v - x) <= tol]
-        if echo:  # a stale value sent back once: forget it, put the slider back where the handle is
-            self._echoes[axis] = [e for e in self._echoes[axis] if e not in echo]
+        if self._is_echo(axis, v, tol, now):  # a stale value sent back: put the slider back where the handle is
             self._sync_sliders()
             return
         p = np.array(p, dtype=float)

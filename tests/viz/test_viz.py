@@ -293,7 +293,7 @@ def test_dragging_an_orange_marker_moves_the_look_at_target():
 
 def test_stale_values_the_browser_sends_after_a_new_selection_move_nothing(sample):
     """Issue 27: selecting a joint re-ranges the sliders; the browser may send back the previous joint's value
-    clamped into the new range. That is an echo (taken once), not a move; a real move changes one axis only,
+    clamped into the new range. That is an echo, not a move; a real move changes one axis only,
     and a slider pushed to an end re-centres on its value."""
     s = sample.skeleton
     v = SkeletonViewer(s, sample.global_pos[0])
@@ -320,6 +320,32 @@ def test_stale_values_the_browser_sends_after_a_new_selection_move_nothing(sampl
     top = v.sliders[1].max
     v.sliders[1].value = top
     assert v.targets["left_wrist"][1] == pytest.approx(top) and v.sliders[1].max > top + 0.4
+
+
+def test_a_stale_value_that_arrives_after_the_next_selection_moves_nothing(sample):
+    """Seen in JupyterLab under load (lesson 02): selecting left_wrist, then right_ankle, then chest, the browser
+    sent the wrist's height clamped into the *ankle's* range at the ankle's selection and once more after chest
+    was selected, and chest got a target 45 cm below it. A value clamped into any recent range is an echo too."""
+    s = sample.skeleton
+    v = SkeletonViewer(s, sample.global_pos[0])
+    seen = []
+    v.on_target_change(lambda name, p: seen.append(name))
+    v.select("head")
+    wrist = [sl.value for sl in v.sliders]
+    v.select("right_ankle")
+    lagged = [float(np.clip(x, sl.min, sl.max)) for sl, x in zip(v.sliders, wrist)]  # what the browser clamped
+    assert any(not np.isclose(x, w) for x, w in zip(lagged, wrist))
+    for sl, x in zip(v.sliders, lagged):  # the browser sends them once, at the ankle's selection ...
+        sl.value = x
+    v.select("right_knee")
+    for sl, x in zip(v.sliders, lagged):  # ... and again after the knee's ranges, inside them
+        assert sl.min < x < sl.max
+        sl.value = x
+    assert seen == [] and v.targets == {}
+    knee = sample.global_pos[0][s.index("right_knee")]
+    assert [sl.value for sl in v.sliders] == pytest.approx(knee)  # put back where the joint is
+    v.sliders[0].value = knee[0] + 0.05  # a real move still moves
+    assert seen == ["right_knee"]
 
 
 def test_helper_joints_are_not_selectable_and_markers_stay_pickable():
