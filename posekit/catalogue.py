@@ -17,6 +17,7 @@ SOLVERS = (
     "posekit.models.pose_autoencoder.solver",  # lesson 03
     "posekit.models.aegan.solver",  # lesson 04
     "posekit.models.protores.solver",  # lesson 05
+    "posekit.ik.finish",  # lesson 06: each learned solver with an exact finish (after the learned ones)
 )
 """Modules that register solvers (``make_solver(NAME, ...)``), in lesson order."""
 

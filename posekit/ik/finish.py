@@ -1,0 +1,150 @@
+"""A learned pose with an exact finish: a learned solver's pose, then damped least squares until every effector
+of every kind is met.
+
+Introduced in ``notebooks/06_posing_studio.ipynb``; registered as ``"<learned>+dls"`` for each learned solver
+(``"neural+dls"``, ``"latent-opt+dls"``, ``"protores+dls"``), so a user sees both parts in the name.
+
+Why two stages. A learned solver (lessons 03-05) proposes a *plausible* whole pose from a few effectors — its
+prior fills in the joints no effector constrains — but misses its effectors by millimetres to centimetres. DLS
+(:mod:`posekit.ik.dls`) meets effectors of all three kinds exactly, but from a poor start it bends whatever joints
+reach the targets fastest. Started from the learned pose, DLS only has to close the learned solver's small
+misses, so the pose keeps most of what the prior chose (DLS's damping keeps each step small: it changes the
+learned pose as little as it must).
+
+The stages
+----------
+1. the learned solver is given the effectors of the kinds it honours (``"protores"``: all three; the lesson 03
+   and 04 solvers: positions), from the start pose when it needs one;
+2. a positions-only learned pose gets rotations that turn the start's bones onto its positions
+   (:func:`posekit.ik.bone_rotations.rotations_from_positions`; bone lengths are the skeleton's);
+3. :class:`~posekit.ik.dls.DLSSolver` from that pose with every effector.
+
+``info`` says what each stage did: ``learned_ms`` and ``finish_ms`` (wall clock), ``learned_converged``,
+``finish_iterations``. Targets DLS cannot meet (out of reach, conflicting) give the best pose it found; when
+that pose is further from the effectors than the learned one (its worst effector, each kind in its own unit:
+position errors in metres, angles in radians, compared kind by kind), the learned pose is returned instead and
+``info["kept"] = "learned"`` says so. Never NaN, never a hang: both stages have iteration limits.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+
+import numpy as np
+
+from .api import SolverBase
+from .bone_rotations import rotations_from_positions
+from .dls import DLSSolver
+from .effectors import KINDS, ResolvedEffectors
+from .registry import make_solver, solver_info
+from ..records import Pose
+from ..rotations import matrix_to_quat, quat_to_matrix
+
+__all__ = ["FinishedSolver", "finished_name", "FINISHED"]
+
+FINISHED = ("neural", "latent-opt", "protores")
+"""The learned solvers (lessons 03, 04, 05) registered with an exact finish, ``NAME+dls``."""
+
+
+def finished_name(learned: str) -> str:
+    """The registered name of ``learned`` with the exact finish: ``"protores"`` -> ``"protores+dls"``."""
+    return f"{learned}+dls"
+
+
+def _subset(res: ResolvedEffectors, keep) -> ResolvedEffectors:
+    """The effectors of ``res`` where ``keep`` (K,) is True."""
+    keep = np.asarray(keep, bool)
+    idx = np.nonzero(keep)[0]
+    return replace(res, joints=res.joints[idx], kinds=tuple(res.kinds[i] for i in idx), codes=res.codes[idx],
+                   position=res.position[idx], rotation=res.rotation[idx], axis=res.axis[idx],
+                   tolerance=res.tolerance[idx], weight=res.weight[idx],
+                   names=tuple(res.names[i] for i in idx) if res.names else ())
+
+
+def _worse(finished: np.ndarray, learned: np.ndarray, codes: np.ndarray) -> bool:
+    """Whether the finished errors are worse than the learned ones: a larger worst error of some kind."""
+    for c in np.unique(codes):
+        sel = codes == c
+        if finished[sel].max() > learned[sel].max() + 1e-12:
+            return True
+    return False
+
+
+class FinishedSolver(SolverBase):
+    """A registered learned solver followed by DLS from its pose (see the module docstring).
+
+    Parameters
+    ----------
+    skeleton : Skeleton
+    learned : str
+        A registered learned solver's name (``"neural"``, ``"latent-opt"``, ``"protores"`` ...).
+    max_iter : int
+        DLS iterations of the finish.
+    **learned_options
+        Passed to the learned solver (``make_solver(learned, skeleton, **learned_options)``).
+    """
+
+    kinds = KINDS
+
+    def __init__(self, skeleton, learned: str, max_iter: int = 100, **learned_options):
+        self.skeleton = skeleton
+        self.learned = make_solver(learned, skeleton, **learned_options)
+        self.finisher = DLSSolver(skeleton, max_iter=max_iter)
+        self.name = finished_name(learned)
+        self.needs_start = self.learned.needs_start
+        self.batch_atol = max(self.learned.batch_atol, 1e-9) * 10
+
+    def _solve(self, start, res) -> object:
+        t0 = time.perf_counter()
+        mine = np.array([k in self.learned.kinds for k in res.kinds])
+        if mine.any():
+            lr = self.learned.solve(start, _subset(res, mine))
+            pose, learned_conv = lr.pose, bool(lr.converged) and mine.all()
+        else:  # nothing the learned solver reads: the finish starts from the start pose
+            pose, learned_conv = start, False
+        if pose.local_rot is None:  # a positions-only learned pose: rotations that put the start's bones there
+            L, root = rotations_from_positions(self.skeleton, quat_to_matrix(np.asarray(start.local_rot, float))[None],
+                                               np.asarray(pose.global_pos, float)[None, 0],
+                                               np.asarray(pose.global_pos, float)[None])
+            pose = Pose.from_rotations(self.skeleton, matrix_to_quat(L[0]), root[0])
+        t1 = time.perf_counter()
+        fr = self.finisher.solve(pose, res)
+        t2 = time.perf_counter()
+        info = {"learned_ms": (t1 - t0) * 1e3, "finish_ms": (t2 - t1) * 1e3, "learned_converged": learned_conv,
+                "finish_iterations": fr.iterations}
+        if not fr.converged and start is not None and start.local_rot is not None:
+            # stuck near the learned pose (a limb stretched to its end, a local minimum): DLS from the start too
+            fs = self.finisher.solve(start, res)
+            info["finish_ms"] = (time.perf_counter() - t1) * 1e3
+            if fs.converged or not _worse(fs.effector_error, fr.effector_error, res.codes):
+                info["kept"] = "start"
+                fr = fs
+        if not fr.converged:
+            before = self.result(pose, res, 0)
+            if _worse(fr.effector_error, before.effector_error, res.codes):
+                info["kept"] = "learned"
+                return self.result(pose, res, fr.iterations, info)
+        return self.result(fr.pose, res, fr.iterations, info)
+
+
+def _factory(learned):
+    def make(skeleton, **options):
+        return FinishedSolver(skeleton, learned, **options)
+
+    make.__name__ = f"finished_{learned.replace('-', '_')}"
+    return make
+
+
+def register_finished(learned: str):
+    """Register ``learned+dls`` (every effector kind; a start pose when the learned solver needs one)."""
+    from .registry import register
+
+    info = solver_info(learned)
+    register(finished_name(learned), _factory(learned), kinds=KINDS, needs_start=info.needs_start,
+             description=f"{learned}, then DLS from its pose until every effector is met (an exact finish)",
+             lesson="notebooks/06_posing_studio.ipynb", data=info.data)
+
+
+for _name in FINISHED:
+    register_finished(_name)

@@ -1,0 +1,64 @@
+"""A learned pose with an exact finish (posekit.ik.finish): the learned solver, then DLS from its pose."""
+
+import numpy as np
+import pytest
+
+from posekit.data.cases import build_cases
+from posekit.ik import Effector, effector_set, make_solver, solver_info, solver_names
+from posekit.ik.finish import FINISHED, finished_name
+
+
+@pytest.fixture(scope="module")
+def cases(mini):
+    return build_cases(mini, n_cases=12, seed=3, start="other-clip")
+
+
+def test_every_learned_solver_has_a_finished_twin_for_every_kind():
+    for learned in FINISHED:
+        name = finished_name(learned)
+        assert name in solver_names()
+        info = solver_info(name)
+        assert set(info.kinds) == {"position", "rotation", "look_at"}
+        assert info.needs_start == solver_info(learned).needs_start
+
+
+@pytest.mark.parametrize("learned", FINISHED)
+def test_the_finish_meets_every_effector_the_learned_pose_misses(learned, cases):
+    s = cases.skeleton
+    solver, raw = make_solver(finished_name(learned), s), make_solver(learned, s)
+    met = 0
+    for i in range(len(cases)):
+        effs = effector_set(s, "5", cases.target_pos[i])
+        start = cases.pose(i) if raw.needs_start else None
+        r, r0 = solver.solve(cases.pose(i), effs), raw.solve(start, effs)
+        assert np.all(np.isfinite(r.pose.global_pos)) and r.pose.local_rot is not None
+        assert r.effector_error.max() <= r0.effector_error.max() + 1e-12  # never worse than the learned pose
+        assert {"learned_ms", "finish_ms", "learned_converged", "finish_iterations"} <= set(r.info)
+        met += r.converged
+    assert met == len(cases)
+
+
+def test_rotation_and_look_at_effectors_are_met_after_a_positions_only_learned_solver(cases):
+    s = cases.skeleton
+    solver = make_solver("neural+dls", s)
+    true = cases.target_pos[0]
+    from posekit.kinematics import fk
+
+    G = fk(s, cases.target_rot[0], cases.target_root[0], cases.target_local_pos[0]
+           if cases.target_local_pos is not None else None)[1]  # the true pose's world rotations
+    effs = effector_set(s, "2", true)
+    head = s.index("head")
+    effs.append(Effector("head", true[head] + np.array([0.0, 0.0, 1.0]), kind="look_at"))
+    effs.append(Effector("left_hand", G[s.index("left_hand")], kind="rotation"))
+    r = solver.solve(cases.pose(0), effs)
+    assert r.converged and r.kinds == ("position", "position", "look_at", "rotation")
+
+
+def test_unreachable_targets_give_the_best_pose_found_never_nan(cases):
+    s = cases.skeleton
+    solver = make_solver("protores+dls", s)
+    far = [Effector("left_hand", [30.0, 1.0, 0.0]), Effector("right_hand", [-30.0, 1.0, 0.0])]
+    r = solver.solve(cases.pose(0), far)
+    assert not r.converged and np.all(np.isfinite(r.pose.global_pos))
+    raw = make_solver("protores", s).solve(None, far)
+    assert r.effector_error.max() <= raw.effector_error.max() + 1e-12
