@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._jit import njit
 from ..kinematics import fk
 from ..rotations import matrix_to_quat, quat_to_matrix
 from ..skeleton import Skeleton
@@ -60,6 +61,61 @@ def _kabsch(src, dst) -> np.ndarray:
     return np.swapaxes(Vt, -1, -2) @ D @ np.swapaxes(U, -1, -2)
 
 
+def _bone_children(skeleton):
+    """Each joint's children with a bone (offset longer than 1e-9 m), as CSR arrays (start (J + 1,), index)."""
+    off = np.asarray(skeleton.offsets, dtype=float)
+    kids = [[c for c in skeleton.children(j) if np.linalg.norm(off[c]) > 1e-9] for j in range(skeleton.n_joints)]
+    start = np.zeros(len(kids) + 1, dtype=np.int64)
+    start[1:] = np.cumsum([len(k) for k in kids])
+    return start, np.array([c for k in kids for c in k], dtype=np.int64)
+
+
+@njit
+def _rotations_one(parents, off, kid_start, kids, L0, P, L, G):
+    """:func:`rotations_from_positions` for one pose, the same steps joint by joint (compiled: the exact finish
+    of :mod:`posekit.ik.finish` runs it once per solve). Writes local ``L`` and world ``G`` (J, 3, 3)."""
+    J = parents.shape[0]
+    for j in range(J):
+        if parents[j] < 0:
+            R = L0[j].copy()
+        else:
+            R = G[parents[j]] @ L0[j]
+        n = kid_start[j + 1] - kid_start[j]
+        if n == 1:
+            c = kids[kid_start[j]]
+            a = R @ off[c]
+            b = P[c] - P[j]
+            a = a / max(np.sqrt((a * a).sum()), 1e-12)
+            b = b / max(np.sqrt((b * b).sum()), 1e-12)
+            v = np.cross(a, b)
+            cs = (a * b).sum()
+            K = np.zeros((3, 3))
+            K[0, 1], K[0, 2], K[1, 2] = -v[2], v[1], -v[0]
+            K[1, 0], K[2, 0], K[2, 1] = v[2], -v[1], v[0]
+            if cs < -1.0 + 1e-9:  # opposite: pi about an axis perpendicular to a
+                helper = np.array([1.0, 0.0, 0.0]) if abs(a[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+                ax = np.cross(a, helper)
+                ax = ax / np.sqrt((ax * ax).sum())
+                Q = 2.0 * np.outer(ax, ax) - np.eye(3)
+            else:
+                Q = np.eye(3) + K + (K @ K) / max(1.0 + cs, 1e-12)
+            R = Q @ R
+        elif n > 1:
+            H = np.zeros((3, 3))
+            for k in range(kid_start[j], kid_start[j + 1]):
+                c = kids[k]
+                H += np.outer(R @ off[c], P[c] - P[j])
+            U, _, Vt = np.linalg.svd(H)
+            D = np.eye(3)
+            D[2, 2] = np.sign(np.linalg.det(Vt.T @ U.T))
+            R = Vt.T @ D @ U.T @ R
+        G[j] = R
+        if parents[j] < 0:
+            L[j] = R
+        else:
+            L[j] = G[parents[j]].T @ R
+
+
 def rotations_from_positions(skeleton: Skeleton, local_rot, root_pos, global_pos):
     """Local rotations that move a pose's bones onto new joint positions (see the module docstring).
 
@@ -87,6 +143,11 @@ def rotations_from_positions(skeleton: Skeleton, local_rot, root_pos, global_pos
     par = skeleton.parents
     G = np.empty_like(L0)
     L = np.empty_like(L0)
+    if len(L0) == 1:  # one pose: the compiled twin (numpy's per-call overhead dominates at B = 1)
+        start, kids = _bone_children(skeleton)
+        _rotations_one(np.asarray(par, dtype=np.int64), np.ascontiguousarray(off), start, kids,
+                       np.ascontiguousarray(L0[0]), np.ascontiguousarray(P[0]), L[0], G[0])
+        return L, P[:, 0].copy()
     for j in range(J):
         R = L0[:, j] if par[j] < 0 else G[:, par[j]] @ L0[:, j]
         kids = skeleton.children(j)

@@ -62,3 +62,18 @@ def test_unreachable_targets_give_the_best_pose_found_never_nan(cases):
     assert not r.converged and np.all(np.isfinite(r.pose.global_pos))
     raw = make_solver("protores", s).solve(None, far)
     assert r.effector_error.max() <= raw.effector_error.max() + 1e-12
+
+
+def test_one_pose_rotations_are_the_batched_ones(mini):
+    """rotations_from_positions for one pose (the finish's compiled path) equals the numpy path of a batch."""
+    from posekit.ik.bone_rotations import rotations_from_positions
+    from posekit.rotations import quat_to_matrix
+
+    s = mini.skeleton
+    for i in (0, 500, 1500):
+        L0 = quat_to_matrix(mini.local_rot[i])[None]
+        P = mini.global_pos[[i + 40]]
+        one = rotations_from_positions(s, L0, P[:, 0], P)[0]
+        two = rotations_from_positions(s, np.concatenate([L0, L0]), np.concatenate([P[:, 0]] * 2),
+                                       np.concatenate([P, P]))[0]
+        np.testing.assert_allclose(one[0], two[0], atol=1e-12)

@@ -72,15 +72,15 @@ def _wait_update(page, n0, what, timeout=60):
 
 def test_studio_loads_and_every_view_shows_a_skeleton(page):
     canvases = _canvases(page)
-    assert len(canvases) == 3  # the notebook compares FABRIK, DLS and ProtoRes
+    assert len(canvases) == 4  # the notebook compares FABRIK, DLS, ProtoRes and ProtoRes with an exact finish
     for c in canvases:
         img = wait_for(lambda c=c: (lambda im: im if (np.abs(im - BACKGROUND).sum(-1) > 60).mean() > 0.002
                                      else None)(_pixels(c)), 60, "a skeleton on every canvas")
         assert (np.abs(img - BACKGROUND).sum(-1) > 60).mean() > 0.002
     texts = _texts(page)
-    assert len(texts) == 3 and all("worst effector" in t and "ms" in t for t in texts), texts
+    assert len(texts) == 4 and all("worst effector" in t and "ms" in t for t in texts), texts
     summary = page.locator(".posekit-summary").inner_text()
-    assert all(n in summary for n in ("fabrik", "dls", "protores")), summary
+    assert all(n in summary for n in ("fabrik", "dls", "protores", "protores+dls")), summary
 
 
 def _joint_list(page):
