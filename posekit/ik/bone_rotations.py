@@ -143,22 +143,21 @@ def rotations_from_positions(skeleton: Skeleton, local_rot, root_pos, global_pos
     par = skeleton.parents
     G = np.empty_like(L0)
     L = np.empty_like(L0)
+    start, kids = _bone_children(skeleton)
     if len(L0) == 1:  # one pose: the compiled twin (numpy's per-call overhead dominates at B = 1)
-        start, kids = _bone_children(skeleton)
         _rotations_one(np.asarray(par, dtype=np.int64), np.ascontiguousarray(off), start, kids,
                        np.ascontiguousarray(L0[0]), np.ascontiguousarray(P[0]), L[0], G[0])
         return L, P[:, 0].copy()
     for j in range(J):
         R = L0[:, j] if par[j] < 0 else G[:, par[j]] @ L0[:, j]
-        kids = skeleton.children(j)
-        kids = [c for c in kids if np.linalg.norm(off[c]) > 1e-9]
-        if len(kids) == 1:
-            c = kids[0]
+        mine = kids[start[j]:start[j + 1]]
+        if len(mine) == 1:
+            c = mine[0]
             Q = shortest_rotation(R @ off[c], P[:, c] - P[:, j])
             R = Q @ R
-        elif len(kids) > 1:
-            src = np.stack([R @ off[c] for c in kids], axis=1)
-            dst = np.stack([P[:, c] - P[:, j] for c in kids], axis=1)
+        elif len(mine) > 1:
+            src = np.stack([R @ off[c] for c in mine], axis=1)
+            dst = np.stack([P[:, c] - P[:, j] for c in mine], axis=1)
             R = _kabsch(src, dst) @ R
         G[:, j] = R
         L[:, j] = R if par[j] < 0 else np.swapaxes(G[:, par[j]], -1, -2) @ R

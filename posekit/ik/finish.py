@@ -17,7 +17,9 @@ The stages
    and 04 solvers: positions), from the start pose when it needs one;
 2. a positions-only learned pose gets rotations that turn the start's bones onto its positions
    (:func:`posekit.ik.bone_rotations.rotations_from_positions`; bone lengths are the skeleton's);
-3. :class:`~posekit.ik.dls.DLSSolver` from that pose with every effector.
+3. :class:`~posekit.ik.dls.DLSSolver` from that pose with every effector; when it gets stuck there (a limb
+   stretched to its end, a local minimum), DLS from the start pose as well, and the better of the two
+   (``info["kept"] = "start"`` when it is the latter).
 
 ``info`` says what each stage did: ``learned_ms`` and ``finish_ms`` (wall clock), ``learned_converged``,
 ``finish_iterations``. Targets DLS cannot meet (out of reach, conflicting) give the best pose it found; when
@@ -33,11 +35,11 @@ from dataclasses import replace
 
 import numpy as np
 
-from .api import SolverBase
+from .api import IKResult, SolverBase
 from .bone_rotations import rotations_from_positions
 from .dls import DLSSolver
 from .effectors import KINDS, ResolvedEffectors
-from .registry import make_solver, solver_info
+from .registry import make_solver, register, solver_info
 from ..records import Pose
 from ..rotations import matrix_to_quat, quat_to_matrix
 
@@ -95,7 +97,7 @@ class FinishedSolver(SolverBase):
         self.needs_start = self.learned.needs_start
         self.batch_atol = max(self.learned.batch_atol, 1e-9) * 10
 
-    def _solve(self, start, res) -> object:
+    def _solve(self, start, res) -> IKResult:
         t0 = time.perf_counter()
         mine = np.array([k in self.learned.kinds for k in res.kinds])
         if mine.any():
@@ -138,8 +140,6 @@ def _factory(learned):
 
 def register_finished(learned: str):
     """Register ``learned+dls`` (every effector kind; a start pose when the learned solver needs one)."""
-    from .registry import register
-
     info = solver_info(learned)
     register(finished_name(learned), _factory(learned), kinds=KINDS, needs_start=info.needs_start,
              description=f"{learned}, then DLS from its pose until every effector is met (an exact finish)",
