@@ -1,5 +1,5 @@
-"""``posekit bench all``: every registered IK solver in one report — a table per start condition and a
-speed/quality scatter.
+"""``posekit bench all``: every registered IK solver in one report — a table per effector set and start
+condition, who wins where, and a speed/quality scatter.
 
 Introduced in ``notebooks/06_posing_studio.ipynb``. Nothing is measured here that
 :func:`posekit.bench.ik.run` does not measure: this module calls it with every registered solver that
@@ -7,16 +7,20 @@ honours position effectors (:func:`posekit.bench.ik.resolve_solvers` with ``"all
 and no peers, so every row comes from the same held-out cases (:func:`posekit.data.cases.build_cases`),
 the same start poses and the same metric code (:mod:`posekit.evaluation.pose_scores`) as ``posekit bench ik``.
 The data is the Bandai mini set, which the learned solvers were trained on
-(:func:`posekit.bench.ik.default_data`).
+(:func:`posekit.bench.ik.default_data`). Effector sets: any of ``posekit bench ik``'s, several in one report
+(``2``, ``5`` and ``random``, lesson 05's mixed kinds, say how the ranking changes with how much the effectors
+say); a solver is given the effectors of the kinds it honours and scored on all of them, and a solver that
+refuses a set (a lesson 03 network exists for its trained joint sets only) is listed as not measured there.
 
 What it writes (``out``, a folder; by default ``data_samples/results``):
 
 * ``bench_all.json`` — the rows and how they were made (command, cases, seed, data, machine); no
   date, so two runs differ only in their timings;
-* ``bench_all.md`` — what was measured, one Markdown table per start condition sorted by MPJPE, and how
-  to read the scatter;
-* ``bench_all.png`` — median time per solve (ms) against median MPJPE (mm), both log, one point per
-  solver and start condition: a speed/quality scatter in the spirit of Fig. 5 of Victor et al. 2021.
+* ``bench_all.md`` — what was measured, one Markdown table per effector set and start condition sorted by
+  MPJPE, the best solver of each (:func:`winners`), and how to read the scatter;
+* ``bench_all.png`` — median time per solve (ms) against median MPJPE (mm), both log, one panel per effector
+  set, one point per solver and start condition: a speed/quality scatter in the spirit of Fig. 5 of Victor
+  et al. 2021.
 
 Units: times in milliseconds on one thread; distances in millimetres (the library's metres times 1000).
 """
@@ -28,28 +32,30 @@ import os
 import platform
 import re
 import time
+import warnings
 from pathlib import Path
 
 from ..data.cases import START_CONDITIONS, start_condition
 from ..ik.api import EFFECTOR_SETS
 from ..ik.registry import solver_info
-from .ik import TABLE_LABELS, _group_title, default_data, resolve_solvers
+from .ik import RANDOM, TABLE_LABELS, _group_title, default_data, effector_set_names, resolve_solvers
 from .ik import run as run_ik
 from .all_plot import plot
 from .plugin import arg, register_benchmark
 
-__all__ = ["run", "write_report", "markdown", "plot", "pareto", "default_out", "FILES", "KEYS"]
+__all__ = ["run", "write_report", "markdown", "plot", "pareto", "winners", "default_out", "FILES", "KEYS"]
 
 FILES = ("bench_all.json", "bench_all.md", "bench_all.png")
 """What :func:`write_report` writes into its folder."""
 
 KEYS = ("method", "start", "effectors", "lesson", "kinds", "latency_ms_median", "mpjpe_mm_median",
-        "effector_error_mm_median", "natural_mm_median", "converged_fraction", "bone_length_error_mm_max",
-        "cases", "data")
+        "effector_error_mm_median", "effector_error_deg_median", "natural_mm_median", "converged_fraction",
+        "bone_length_error_mm_max", "cases", "data")
 """The keys of every row (definitions in :mod:`posekit.bench.ik`)."""
 
-_DIGITS = {"latency_ms_median": 4, "mpjpe_mm_median": 3, "effector_error_mm_median": 3, "natural_mm_median": 3,
-           "converged_fraction": 4, "bone_length_error_mm_max": 4}
+_DIGITS = {"latency_ms_median": 4, "mpjpe_mm_median": 3, "effector_error_mm_median": 3,
+           "effector_error_deg_median": 3, "natural_mm_median": 3, "converged_fraction": 4,
+           "bone_length_error_mm_max": 4}
 """Decimals kept in the rows (0.1 us, 1 um): beyond them the numbers are noise."""
 
 
@@ -68,20 +74,17 @@ def _lesson(notebook: str) -> str:
 
 
 def _check(n_cases, starts, effectors) -> tuple:
-    """The run's start conditions and effector set, refused before any work with a sentence that says why."""
+    """The run's start conditions and effector sets, refused before any work with a sentence that says why."""
     if isinstance(n_cases, bool) or int(n_cases) != n_cases or int(n_cases) < 1:
         raise ValueError(f"cases must be a whole number of at least 1, got {n_cases!r}")
     names = starts.split(",") if isinstance(starts, str) else list(starts)
     names = tuple(dict.fromkeys(start_condition(n.strip()) for n in names if n.strip()))  # raises on unknown names
     if not names:
         raise ValueError(f"no start condition given; valid: {', '.join(START_CONDITIONS)}")
-    e = str(effectors).strip()
-    if e not in EFFECTOR_SETS:
-        raise ValueError(f"unknown effector set {e!r} (one set per report); valid: {', '.join(EFFECTOR_SETS)}")
-    return names, e
+    return names, effector_set_names(effectors)
 
 
-def run(n_cases: int = 200, starts=("same-clip", "rest"), effectors: str = "5", seed: int = 0, out=None,
+def run(n_cases: int = 200, starts=("rest", "other-clip"), effectors=("2", "5", RANDOM), seed: int = 0, out=None,
         progress: bool = True) -> list[dict]:
     """Benchmark every registered solver on the same held-out cases; one row per solver and start condition.
 
@@ -91,8 +94,9 @@ def run(n_cases: int = 200, starts=("same-clip", "rest"), effectors: str = "5", 
         Held-out (start, target) cases per start condition (the same targets under every start).
     starts : str or sequence of str
         Start conditions (comma-separated or a sequence): ``same-clip``, ``other-clip``, ``rest``.
-    effectors : str
-        One effector set (:data:`posekit.ik.api.EFFECTOR_SETS`): ``2``, ``5`` or ``5point``.
+    effectors : str or sequence of str
+        Effector sets (comma-separated or a sequence; :data:`posekit.bench.ik.EFFECTOR_CHOICES`): ``2``, ``5``,
+        ``5point``, ``random``.
     seed : int
         Seed of the case draw and of the naturalness index (:func:`posekit.bench.ik.run`).
     out : str, Path or None
@@ -103,7 +107,8 @@ def run(n_cases: int = 200, starts=("same-clip", "rest"), effectors: str = "5", 
     Returns
     -------
     list of dict
-        The :data:`KEYS` of each row, sorted by start condition (in the order given), then by MPJPE.
+        The :data:`KEYS` of each row, sorted by effector set and start condition (in the order given), then
+        by MPJPE.
         ``lesson`` is the number of the notebook that introduces the solver, ``kinds`` the effector kinds
         it honours; times in ms, distances in mm, ``converged_fraction`` in [0, 1].
 
@@ -111,17 +116,21 @@ def run(n_cases: int = 200, starts=("same-clip", "rest"), effectors: str = "5", 
     ------
     ValueError
         For ``n_cases < 1``, an unknown start condition or an unknown effector set (before any work).
+        A solver that refuses a set's effectors is left out of that set (``meta["refused"]``), not an error.
     """
     from ..data.sources import open_dataset
 
-    starts, effectors = _check(n_cases, starts, effectors)
+    starts, sets = _check(n_cases, starts, effectors)
     names = resolve_solvers("all")
     data = default_data(names)
     t0 = time.perf_counter()
     motions = open_dataset(data)
-    raw = run_ik(motions, solvers="all", effector_sets=(effectors,), n_cases=int(n_cases), start=starts,
-                 seed=int(seed), baseline=False, batched=False, peers=False, methods="none", natural=True,
-                 progress=progress)
+    refused = {}
+    with warnings.catch_warnings():  # the refusals go into the report instead
+        warnings.filterwarnings("ignore", message="bench ik: not measured")
+        raw = run_ik(motions, solvers="all", effector_sets=sets, n_cases=int(n_cases), start=starts,
+                     seed=int(seed), baseline=False, batched=False, peers=False, methods="none", natural=True,
+                     progress=progress, refused=refused)
     seconds = time.perf_counter() - t0
     rows = []
     for r in raw:
@@ -133,17 +142,19 @@ def run(n_cases: int = 200, starts=("same-clip", "rest"), effectors: str = "5", 
             row[k] = None if v is None else round(float(v), digits)
         row["cases"], row["data"] = int(r["cases"]), data
         rows.append(row)
-    rows.sort(key=lambda r: (starts.index(r["start"]), r["mpjpe_mm_median"], r["method"]))
+    rows.sort(key=lambda r: (sets.index(r["effectors"]), starts.index(r["start"]), r["mpjpe_mm_median"], r["method"]))
     if out is not None:
         floors = {}
         for r in raw:
             floors.setdefault(r["start"], round(float(r["natural_floor_mm_median"]), 3))
         meta = {"benchmark": "all",
                 "command": (f"posekit bench all --cases {int(n_cases)} --start {','.join(starts)} "
-                            f"--effectors {effectors} --seed {int(seed)}"),
-                "cases": int(n_cases), "starts": list(starts), "effectors": effectors,
-                "effector_roles": list(EFFECTOR_SETS[effectors]), "seed": int(seed), "data": data, "threads": 1,
+                            f"--effectors {','.join(sets)} --seed {int(seed)}"),
+                "cases": int(n_cases), "starts": list(starts), "effectors": list(sets),
+                "effector_roles": {e: list(EFFECTOR_SETS[e]) for e in sets if e in EFFECTOR_SETS},
+                "seed": int(seed), "data": data, "threads": 1,
                 "solvers": list(names), "skipped": [n for n in names if n not in {r["method"] for r in rows}],
+                "refused": {f"{n} / {e}": why for (n, e), why in refused.items()},
                 "natural_floor_mm_median": floors, "seconds": round(seconds, 1), "machine": _machine()}
         write_report(rows, meta, out)
     return rows
@@ -196,72 +207,152 @@ def _mm(v) -> str:
     return "" if v is None else f"{v:.2f}" if v < 10 else f"{v:.1f}"
 
 
-_COLUMNS = ("solver", "lesson", "ms per solve", "MPJPE mm", "effector mm", "natural mm", "converged")
+EXACT = 0.99
+"""A solver "meets its effectors" in a report cell when at least this share of the cases converged."""
+
+SET_TEXT = {"2": "two hands", "5": "hands, feet and head", "5point": "chest, hands and feet",
+            RANDOM: ("6-12 effectors of three kinds: a position on one joint of each main zone (legs, arms, hips, "
+                     "head), the rest positions, rotations and look-ats on random body joints (lesson 05's "
+                     "random benchmark rule, drawn on these cases)")}
+"""What each effector set asks for, in words."""
+
+
+def _columns(angular: bool) -> tuple:
+    return ("solver", "lesson", "ms per solve", "MPJPE mm", "effector mm") + (("effector deg",) if angular else ()) \
+        + ("natural mm", "converged")
 
 
 def _table(rows: list[dict]) -> str:
-    lines = ["| " + " | ".join(_COLUMNS) + " |", "|:--|:-:|" + "--:|" * (len(_COLUMNS) - 2)]
+    angular = any(r.get("effector_error_deg_median") is not None for r in rows)
+    cols = _columns(angular)
+    lines = ["| " + " | ".join(cols) + " |", "|:--|:-:|" + "--:|" * (len(cols) - 2)]
     for r in sorted(rows, key=lambda r: (r["mpjpe_mm_median"], r["method"])):
-        cells = (f"`{r['method']}`", r["lesson"], _ms(r["latency_ms_median"]), f"{r['mpjpe_mm_median']:.1f}",
-                 _mm(r["effector_error_mm_median"]), _mm(r["natural_mm_median"]),
-                 f"{100 * r['converged_fraction']:.0f}%")
+        cells = [f"`{r['method']}`", r["lesson"], _ms(r["latency_ms_median"]), f"{r['mpjpe_mm_median']:.1f}",
+                 _mm(r["effector_error_mm_median"])]
+        if angular:
+            deg = r.get("effector_error_deg_median")
+            cells.append("n/a" if deg is None or deg != deg else f"{deg:.2f}" if deg < 10 else f"{deg:.1f}")
+        cells += [_mm(r["natural_mm_median"]), f"{100 * r['converged_fraction']:.0f}%"]
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
 
+def winners(rows: list[dict], sets, starts) -> list[dict]:
+    """Who wins where: per effector set and start condition, the solver with the closest pose (lowest median
+    MPJPE), the closest among those that meet their effectors (converged in at least :data:`EXACT` of the
+    cases), and plain DLS's and FABRIK's rows for reference (None when absent)."""
+    out = []
+    for e in sets:
+        for st in starts:
+            cell = [r for r in rows if r["effectors"] == e and r["start"] == st]
+            if not cell:
+                continue
+            best = min(cell, key=lambda r: (r["mpjpe_mm_median"], r["method"]))
+            exact = [r for r in cell if r["converged_fraction"] >= EXACT]
+            by = {r["method"]: r for r in cell}
+            out.append({"effectors": e, "start": st, "closest": best,
+                        "closest_exact": min(exact, key=lambda r: (r["mpjpe_mm_median"], r["method"])) if exact else None,
+                        "dls": by.get("dls"), "fabrik": by.get("fabrik")})
+    return out
+
+
+def _cell(r) -> str:
+    if r is None:
+        return "—"
+    return f"`{r['method']}` {r['mpjpe_mm_median']:.1f} mm, {100 * r['converged_fraction']:.0f}%, {_ms(r['latency_ms_median'])} ms"
+
+
+def _winners_table(rows, sets, starts) -> str:
+    lines = ["| effectors | start | closest pose | closest that meets its effectors | `dls` | `fabrik` |",
+             "|:-:|:--|:--|:--|:--|:--|"]
+    for w in winners(rows, sets, starts):
+        lines.append(f"| `{w['effectors']}` | {w['start']} | {_cell(w['closest'])} | {_cell(w['closest_exact'])} | "
+                     f"{_cell(w['dls'])} | {_cell(w['fabrik'])} |")
+    return "\n".join(lines)
+
+
+def _sets(meta) -> list:
+    e = meta["effectors"]
+    return [e] if isinstance(e, str) else list(e)
+
+
 def markdown(rows: list[dict], meta: dict) -> str:
-    """The report ``bench_all.md``: how the numbers were measured, a table per start condition (sorted by
-    MPJPE) and a paragraph on reading ``bench_all.png``."""
-    starts = list(meta["starts"])
+    """The report ``bench_all.md``: how the numbers were measured, who wins where, a table per effector set
+    and start condition (sorted by MPJPE) and a paragraph on reading ``bench_all.png``."""
+    starts, sets = list(meta["starts"]), _sets(meta)
     solvers = list(dict.fromkeys(r["method"] for r in rows))
-    roles = ", ".join(r.replace("_", " ") for r in EFFECTOR_SETS[meta["effectors"]])
     floors = meta.get("natural_floor_mm_median", {})
     floor = next(iter(floors.values()), None)
     m = meta["machine"]
+    set_list = "; ".join(f"`{e}`, {SET_TEXT.get(e, ', '.join(EFFECTOR_SETS.get(e, ())))}" for e in sets)
     out = ["# Every posekit IK solver on the same cases", "",
            f"Made by `{meta['command']}` (rows: `bench_all.json`; figure: `bench_all.png`). "
            "The numbers come from `posekit bench ik`'s cases and metric code.", "",
            f"**What was measured.** {len(solvers)} registered solvers, each on the same {meta['cases']} held-out "
-           f"cases of `{meta['data']}` per start condition ({', '.join(f'`{s}`' for s in starts)}). "
-           f"A case's target is a real pose of a test clip; the solver gets the true positions of effector "
-           f"set `{meta['effectors']}` ({roles}) and the case's start pose, and is timed one solve at a time "
-           "on one thread after a warm-up solve.", "",
+           f"cases of `{meta['data']}` per start condition ({', '.join(f'`{s}`' for s in starts)}) and effector "
+           f"set ({set_list}). A case's target is a real pose of a test clip; the effectors are placed at it "
+           "(positions, rotations and look-ats of the true pose), the solver gets the effectors of the kinds it "
+           "honours and the case's start pose, is scored on every effector, and is timed one solve at a time on "
+           "one thread after a warm-up solve.", "",
            "**Columns** (medians over the cases): *ms per solve*; *MPJPE mm*, the mean distance of the body "
-           "joints to the true pose's, pelvis-relative; *effector mm*, the worst effector of a case; "
-           "*natural mm*, the distance to the nearest training pose"
+           "joints to the true pose's, pelvis-relative; *effector mm*, the worst position effector of a case"
+           + ("; *effector deg*, the worst rotation or look-at effector (n/a: the solver returns no rotations)"
+              if RANDOM in sets else "")
+           + "; *natural mm*, the distance to the nearest training pose"
            + (f" (the true poses' own: {floor:.1f} mm)" if floor is not None else "")
-           + "; *converged*, the share of cases with every effector within 1 mm. *lesson*: the notebook "
-           "that introduces the solver.", "",
+           + "; *converged*, the share of cases with every effector within its tolerance (1 mm, 1 degree). "
+           "*lesson*: the notebook that introduces the solver.", "",
            f"Machine: {m['platform']}, {m['processor']}, {m['cpu_count']} CPUs; the run took "
            f"{meta.get('seconds', float('nan')) / 60:.1f} min. Times depend on the machine and its load; "
            "the errors do not (same seed, same numbers)."]
     if meta.get("skipped"):
         out += ["", "Not measured (the solver refused this data): "
                 + ", ".join(f"`{n}`" for n in meta["skipped"]) + "."]
-    for st in starts:
-        out += ["", f"## Start: {st} — {START_CONDITIONS.get(st, st)}", "",
-                _table([r for r in rows if r["start"] == st])]
+    refused = meta.get("refused") or {}
+    if refused:
+        by_set = {}
+        for key in refused:
+            n, e = key.split(" / ")
+            by_set.setdefault(e, []).append(n)
+        reason = next(iter(refused.values()))
+        out += ["", "Not measured on a set (the solver refused its effectors): "
+                + "; ".join(f"`{e}`: " + ", ".join(f"`{n}`" for n in ns) for e, ns in by_set.items())
+                + f". The first refusal said: \"{reason[:300]}{'...' if len(reason) > 300 else ''}\""]
+    out += ["", "## Who wins where", "",
+            f"Per effector set and start: the closest pose of any solver, the closest of those that meet their "
+            f"effectors (converged in at least {100 * EXACT:.0f}% of the cases), and plain DLS and FABRIK "
+            "(MPJPE, converged, ms per solve).", "", _winners_table(rows, sets, starts)]
+    for e in sets:
+        for st in starts:
+            cell = [r for r in rows if r["effectors"] == e and r["start"] == st]
+            if cell:
+                out += ["", f"## Effectors {e}, start {st} — {START_CONDITIONS.get(st, st)}", "", _table(cell)]
     out += ["", "## Reading the scatter", "", "![time per solve against MPJPE](bench_all.png)", "",
-            _reading(rows, starts)]
+            _reading(rows, starts, sets)]
     return "\n".join(out) + "\n"
 
 
-def _reading(rows: list[dict], starts: list) -> str:
-    text = ("Each point is one solver under one start condition (marker and colour: the start); a thin grey "
-            "line joins a solver's points. Left is faster and lower is closer to the true pose (both axes log: "
-            "equal steps are equal ratios), so the useful solvers sit on the lower-left edge, where no "
-            "other solver is both faster and closer: ")
+def _reading(rows: list[dict], starts: list, sets: list) -> str:
+    text = ("One panel per effector set. Each point is one solver under one start condition (marker and colour: "
+            "the start); a thin grey line joins a solver's points. Left is faster and lower is closer to the true "
+            "pose (both axes log: equal steps are equal ratios), so the useful solvers sit on the lower-left edge, "
+            "where no other solver is both faster and closer: ")
     fronts = []
-    for st in starts:
-        front = pareto([r for r in rows if r["start"] == st])
-        fronts.append(f"under `{st}`, "
-                      + ", ".join(f"`{r['method']}` ({_ms(r['latency_ms_median'])} ms, "
-                                  f"{r['mpjpe_mm_median']:.1f} mm)" for r in front))
+    for e in sets:
+        for st in starts:
+            cell = [r for r in rows if r["start"] == st and r["effectors"] == e]
+            if cell:
+                fronts.append(f"`{e}` from `{st}`, "
+                              + ", ".join(f"`{r['method']}` ({_ms(r['latency_ms_median'])} ms, "
+                                          f"{r['mpjpe_mm_median']:.1f} mm)" for r in pareto(cell)))
     text += "; ".join(fronts) + ". "
-    mpjpe = {}
-    for r in rows:
-        mpjpe.setdefault(r["method"], set()).add(r["mpjpe_mm_median"])
-    free = [n for n, v in mpjpe.items() if len(v) == 1 and not solver_info(n).needs_start]
+    free = []
+    for n in dict.fromkeys(r["method"] for r in rows):
+        if solver_info(n).needs_start:
+            continue
+        if all(len({r["mpjpe_mm_median"] for r in rows if r["method"] == n and r["effectors"] == e}) <= 1
+               for e in sets):
+            free.append(n)
     if free and len(starts) > 1:
         text += (f"Solvers that predict a whole pose without a start pose ({', '.join(f'`{n}`' for n in free)}) "
                  "give the same MPJPE under every start, so their grey lines are flat: only the time changes. ")
@@ -296,14 +387,14 @@ def _header(rows, args) -> str:
     out = _out(args.out)
     files = f"report: {out / FILES[1]} (and .json, .png)" if out is not None else "report: not written (--out none)"
     return (f"Every registered IK solver: {data}, {args.cases} held-out cases per start condition (the same "
-            f"targets), effector set {args.effectors}, one thread; {files}\n"
-            "errors in mm; MPJPE and natural: body joints, pelvis-relative; effector: the worst of a case; "
-            "converged: every effector within 1 mm; sorted by MPJPE")
+            f"targets), effector sets {args.effectors}, one thread; {files}\n"
+            "errors in mm and degrees; MPJPE and natural: body joints, pelvis-relative; effector: the worst of a "
+            "case; converged: every effector within its tolerance (1 mm, 1 degree); sorted by MPJPE")
 
 
-TABLES = [("Speed and quality (medians over cases; bone error: the worst case)",
-           ["method", "lesson", "latency_ms_median", "mpjpe_mm_median", "effector_error_mm_median",
-            "natural_mm_median", "converged_fraction", "bone_length_error_mm_max"])]
+TABLES = [("Speed and quality (medians over cases)",
+           ["method", "effectors", "latency_ms_median", "mpjpe_mm_median", "effector_error_mm_median",
+            "effector_error_deg_median", "natural_mm_median", "converged_fraction"])]
 """The table ``posekit bench all`` prints per start condition (fits 100 columns)."""
 
 register_benchmark(
@@ -312,10 +403,11 @@ register_benchmark(
          "scatter",
     args=[
         arg("--cases", type=int, default=200, help="held-out (start, target) cases per start condition"),
-        arg("--start", default="same-clip,rest",
+        arg("--start", default="rest,other-clip",
             help="comma-separated start conditions: " + ", ".join(START_CONDITIONS)),
-        arg("--effectors", default="5", help="one effector set: 2 (hands), 5 (hands, feet, head), "
-                                             "5point (hands, feet, chest)"),
+        arg("--effectors", default="2,5,random",
+            help="comma-separated effector sets: 2 (hands), 5 (hands, feet, head), 5point (hands, feet, chest), "
+                 "random (6-12 effectors of three kinds, lesson 05's rule)"),
         arg("--seed", type=int, default=0, help="seed of the case draw"),
         arg("--out", default=None,
             help="folder for bench_all.json, .md and .png (default: data_samples/results; none or '': "

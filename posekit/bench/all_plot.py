@@ -1,4 +1,5 @@
-"""The speed/quality scatter of ``posekit bench all``: one point per solver and start condition, labelled.
+"""The speed/quality scatter of ``posekit bench all``: one panel per effector set, one point per solver and start
+condition, labelled.
 
 Introduced in ``notebooks/06_posing_studio.ipynb`` with :mod:`posekit.bench.all`, which writes it as
 ``bench_all.png``: median time per solve (ms) against median MPJPE (mm), both log, in the spirit of Fig. 5
@@ -19,8 +20,9 @@ _STYLE = {"same-clip": ("o", "C0"), "other-clip": ("s", "C2"), "rest": ("^", "C3
 
 
 def plot(rows: list[dict], meta: dict, path=None):
-    """The speed/quality scatter: median ms per solve against median MPJPE mm (both log), one labelled point
-    per solver and start condition. Rendered with Agg at :data:`DPI`; saved to ``path`` when given.
+    """The speed/quality scatter: median ms per solve against median MPJPE mm (both log), one panel per effector
+    set, one labelled point per solver and start condition. Rendered with Agg at :data:`DPI`; saved to ``path``
+    when given.
 
     Returns
     -------
@@ -28,13 +30,29 @@ def plot(rows: list[dict], meta: dict, path=None):
     """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
+
+    sets = [meta["effectors"]] if isinstance(meta["effectors"], str) else list(meta["effectors"])
+    sets = [e for e in sets if any(r.get("effectors", e) == e for r in rows)] or sets[:1]
+    fig = Figure(figsize=(10, 6.5 * len(sets)), dpi=DPI)
+    FigureCanvasAgg(fig)
+    axes = [fig.add_subplot(len(sets), 1, i + 1) for i in range(len(sets))]
+    starts = list(meta["starts"])
+    colours = {st: _STYLE.get(st, ("D", f"C{4 + i}"))[1] for i, st in enumerate(starts)}
+    for ax, e in zip(axes, sets):
+        _panel(ax, [r for r in rows if r.get("effectors", e) == e], starts, meta, e)
+    fig.tight_layout()
+    for ax, e in zip(axes, sets):
+        _label_points(fig, ax, [r for r in rows if r.get("effectors", e) == e], colours)
+    if path is not None:
+        fig.savefig(path, dpi=DPI)
+    return fig
+
+
+def _panel(ax, rows: list[dict], starts: list, meta: dict, effectors: str) -> None:
+    """One effector set's scatter on ``ax`` (points, grey lines joining a solver's starts, axes, legend)."""
     from matplotlib.lines import Line2D
     from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
-    fig = Figure(figsize=(10, 6.5), dpi=DPI)
-    FigureCanvasAgg(fig)
-    ax = fig.add_subplot()
-    starts = list(meta["starts"])
     for name in dict.fromkeys(r["method"] for r in rows):
         mine = [r for r in rows if r["method"] == name]
         if len(mine) > 1:
@@ -59,17 +77,12 @@ def plot(rows: list[dict], meta: dict, path=None):
     ax.set_axisbelow(True)
     ax.set_xlabel("median time per solve, ms (one thread, log scale)")
     ax.set_ylabel("median MPJPE, mm (body joints, pelvis-relative; log scale)")
-    ax.set_title(f"Speed and quality of every posekit IK solver: {meta['data']}, {meta['cases']} held-out cases "
-                 f"per start, effector set {meta['effectors']}", fontsize=10)
+    ax.set_title(f"Effector set {effectors}: every posekit IK solver, {meta['data']}, {meta['cases']} held-out "
+                 "cases per start", fontsize=10)
     handles, _ = ax.get_legend_handles_labels()
     if len(starts) > 1:
         handles.append(Line2D([], [], color="0.75", lw=0.8, label="one solver, its starts joined"))
     ax.legend(handles=handles, loc="upper left", fontsize=8, frameon=False)
-    fig.tight_layout()
-    _label_points(fig, ax, rows, {st: _STYLE.get(st, ("D", f"C{4 + i}"))[1] for i, st in enumerate(starts)})
-    if path is not None:
-        fig.savefig(path, dpi=DPI)
-    return fig
 
 
 def _label_points(fig, ax, rows: list[dict], colours: dict, fontsize: float = 6.5) -> None:

@@ -49,7 +49,8 @@ from ..plugins import Registry
 from .plugin import arg, register_benchmark
 
 __all__ = ["Method", "MethodContext", "register_method", "unregister_method", "method_names", "get_method",
-           "resolve_solvers", "evaluate_solver", "run", "PAPER", "PAPER_KB", "TABLES", "TABLE_LABELS", "default_data"]
+           "resolve_solvers", "evaluate_solver", "case_effectors", "effector_set_names", "SolverRefused", "RANDOM",
+           "EFFECTOR_CHOICES", "run", "PAPER", "PAPER_KB", "TABLES", "TABLE_LABELS", "default_data"]
 
 PAPER = {
     ("fabrik", "2"): 6.56,  # Victor et al. 2021, Table 1: full-body FABRIK runtime, ms
@@ -176,33 +177,79 @@ def resolve_solvers(solvers) -> tuple:
     return tuple(dict.fromkeys(names))
 
 
+RANDOM = "random"
+"""The mixed-kind effector set of ``--effectors``: lesson 05's random benchmark rule drawn on each case
+(:func:`posekit.evaluation.effector_cases.random_case_effectors`): 6-12 effectors, a position on every main
+zone and the rest positions, rotations and look-ats on random body joints."""
+
+EFFECTOR_CHOICES = (*EFFECTOR_SETS, RANDOM)
+"""Every ``--effectors`` name: the named joint sets (:data:`posekit.ik.api.EFFECTOR_SETS`) and ``random``."""
+
+
+class SolverRefused(ValueError):
+    """A solver refused a benchmark's effectors (e.g. a neural solver with no network for those joints)."""
+
+
+def case_effectors(cases: Cases, effectors: str, tolerance: float = 1e-3, seed: int = 0) -> list[list]:
+    """Every case's effectors: a named set at the true pose's joints, or the ``random`` mixed-kind draw."""
+    if effectors == RANDOM:
+        from ..evaluation.effector_cases import random_case_effectors
+
+        return random_case_effectors(cases, seed, tolerance)
+    return [effector_set(cases.skeleton, effectors, cases.target_pos[i], tolerance) for i in range(len(cases))]
+
+
 def evaluate_solver(solver, cases: Cases, effectors: str, tolerance: float = 1e-3,
-                    natural: NaturalnessIndex | None = None, natural_floor=None) -> dict:
+                    natural: NaturalnessIndex | None = None, natural_floor=None, seed: int = 0) -> dict:
     """One row's numbers: every case solved once from its start pose, timed one solve at a time on
-    the calling thread, then scored by :func:`posekit.evaluation.pose_scores.score_poses`."""
-    s = cases.skeleton
-    effs = [effector_set(s, effectors, cases.target_pos[i], tolerance) for i in range(len(cases))]
-    solver.solve(cases.pose(0), effs[0])  # warm-up (JIT)
+    the calling thread, then scored by :func:`posekit.evaluation.pose_scores.score_poses`.
+
+    A solver is given the effectors of the kinds it honours (``solver.kinds``) and scored on all of them:
+    with ``random`` a positions-only solver's rotation and look-at misses count against it.
+
+    Raises
+    ------
+    SolverRefused
+        The solver refused the first case's effectors (its message says why); nothing was measured.
+    """
+    effs = case_effectors(cases, effectors, tolerance, seed)
+    given = [[e for e in case if e.kind in solver.kinds] for case in effs]
+    try:
+        solver.solve(cases.pose(0), given[0])  # warm-up (JIT)
+    except ValueError as err:
+        raise SolverRefused(str(err)) from err
     lat, iters, pos, rots = [], [], [], []
     for i in range(len(cases)):
         start = cases.pose(i)
         t = time.perf_counter()
-        res = solver.solve(start, effs[i])
+        res = solver.solve(start, given[i])
         lat.append(time.perf_counter() - t)
         pos.append(res.pose.global_pos)
         rots.append(res.pose.local_rot)
         iters.append(res.iterations)
     tracemalloc.start()
-    solver.solve(cases.pose(0), effs[0])
+    solver.solve(cases.pose(0), given[0])
     peak = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
     rot = np.stack(rots) if all(r is not None for r in rots) else None
     scores = score_poses(cases, np.stack(pos), effs, rot, natural, natural_floor).summary()
     row = {"cases": len(cases), "latency_ms_median": float(np.median(lat) * 1e3), **scores,
            "iterations_median": float(np.median(iters)), "memory_kb": round(peak / 1024, 1)}
-    if hasattr(solver, "sizes_kb"):  # a learned solver: the size of the networks one solve runs
+    if hasattr(solver, "sizes_kb") and effectors in EFFECTOR_SETS:  # a learned solver: the networks one solve runs
         row.update(solver.sizes_kb(EFFECTOR_SETS[effectors]))
     return row
+
+
+def effector_set_names(effector_sets) -> tuple:
+    """``"2,5,random"`` or a sequence -> a tuple of :data:`EFFECTOR_CHOICES` names; unknown names raise."""
+    names = tuple(dict.fromkeys(str(e).strip() for e in (effector_sets.split(",") if isinstance(effector_sets, str)
+                                                          else effector_sets) if str(e).strip()))
+    for e in names:
+        if e not in EFFECTOR_CHOICES:
+            raise ValueError(f"unknown effector set {e!r}; valid: {', '.join(EFFECTOR_CHOICES)}")
+    if not names:
+        raise ValueError(f"no effector set given; valid: {', '.join(EFFECTOR_CHOICES)}")
+    return names
 
 
 def _starts(start) -> tuple:
@@ -225,7 +272,7 @@ def _methods(methods, baseline: bool, batched: bool, peers: bool, solvers) -> li
 def run(motions, solvers=("fabrik", "ccd", "dls"), effector_sets=("2", "5"), n_cases: int = 1000,
         start="same-clip", seed: int = 0, tolerance: float = 1e-3, baseline: bool = True,
         batched: bool = True, peers: bool = True, methods=None, natural: bool = True,
-        progress: bool = False) -> list[dict]:
+        progress: bool = False, refused: dict | None = None) -> list[dict]:
     """Run the benchmark; one row (dict) per method, effector set and start condition.
 
     Parameters
@@ -247,16 +294,15 @@ def run(motions, solvers=("fabrik", "ccd", "dls"), effector_sets=("2", "5"), n_c
         Method keys to run (default every registered method; ``"none"`` for solvers only).
     natural : bool
         Measure the naturalness distance (to the nearest training pose).
+    refused : dict, optional
+        Filled with ``{(solver, effector set): reason}`` for the solvers that refused a set's effectors
+        (no row; a warning says so too).
     """
     from ..learn.threads import single_thread
 
     every = solvers == "all" or list(solvers) == ["all"]
     solvers = resolve_solvers(solvers)
-    effector_sets = tuple(e.strip() for e in (effector_sets.split(",") if isinstance(effector_sets, str)
-                                              else effector_sets) if str(e).strip())
-    for e in effector_sets:
-        if e not in EFFECTOR_SETS:
-            raise ValueError(f"unknown effector set {e!r}; valid: {', '.join(EFFECTOR_SETS)}")
+    effector_sets = effector_set_names(effector_sets)
     if int(n_cases) < 1:
         raise ValueError(f"--cases must be at least 1, got {n_cases}")
     starts = _starts(start)
@@ -288,21 +334,28 @@ def run(motions, solvers=("fabrik", "ccd", "dls"), effector_sets=("2", "5"), n_c
 
         bar = tqdm(total=len(jobs) + len(starts) * len(extras), desc="bench ik", unit="row")
     rows = []
+    refused = {} if refused is None else refused
     with single_thread():
         for st in starts:
             cases = all_cases[st]
             for name in solvers:
                 for e in effector_sets:
-                    row = {"method": name, "effectors": e, "start": st,
-                           **evaluate_solver(built[name], cases, e, tolerance, nat, floor)}
-                    if (name, e) in PAPER:
-                        row["paper_latency_ms"] = PAPER[(name, e)]
-                    if (name, e) in PAPER_KB:
-                        row["paper_kb"] = PAPER_KB[(name, e)]
-                    rows.append(row)
+                    try:
+                        row = {"method": name, "effectors": e, "start": st,
+                               **evaluate_solver(built[name], cases, e, tolerance, nat, floor, seed)}
+                    except SolverRefused as err:
+                        refused.setdefault((name, e), str(err))
+                        row = None
+                    if row is not None:
+                        if (name, e) in PAPER:
+                            row["paper_latency_ms"] = PAPER[(name, e)]
+                        if (name, e) in PAPER_KB:
+                            row["paper_kb"] = PAPER_KB[(name, e)]
+                        rows.append(row)
                     if bar is not None:
                         bar.update()
-            ctx = MethodContext(cases, effector_sets, solvers, tolerance, nat, floor)
+            named = tuple(e for e in effector_sets if e in EFFECTOR_SETS)  # the methods place named sets only
+            ctx = MethodContext(cases, named, solvers, tolerance, nat, floor)
             for m in extras:
                 for r in m.run(ctx):
                     r.setdefault("start", st)
@@ -311,6 +364,10 @@ def run(motions, solvers=("fabrik", "ccd", "dls"), effector_sets=("2", "5"), n_c
                     bar.update()
     if bar is not None:
         bar.close()
+    if refused:
+        warnings.warn("bench ik: not measured (the solver refused the effectors): "
+                      + "; ".join(f"{n!r} on set {e!r} ({why[:160]})" for (n, e), why in refused.items()),
+                      UserWarning, stacklevel=2)
     for r in rows:
         r.setdefault("data", first.source)
     return rows
@@ -392,7 +449,7 @@ register_benchmark(
             help="comma-separated registered solvers (posekit.ik.registry), e.g. fabrik, fabrik-constrained, "
                  "ccd, dls, or all"),
         arg("--effectors", default="2,5", help="comma-separated effector sets: 2 (hands), 5 (hands, feet, head), "
-                                               "5point (hands, feet, chest)"),
+                                               "5point (hands, feet, chest), random (lesson 05's mixed kinds)"),
         arg("--start", default="same-clip",
             help=f"comma-separated start conditions: {_START_HELP}; alias {_ALIAS_HELP}"),
         arg("--cases", type=int, default=1000, help="held-out (start, target) cases per start condition"),

@@ -29,7 +29,7 @@ from ..paths import samples_dir
 from ..rotations import matrix_to_sixd, quat_to_matrix
 
 __all__ = ["BENCHMARKS", "FIVE_POINT", "ZONES", "EffectorBenchmark", "build_benchmark", "load_benchmark",
-           "benchmark_path", "MAX_EFFECTORS"]
+           "benchmark_path", "MAX_EFFECTORS", "draw_random", "as_effector", "random_case_effectors"]
 
 BENCHMARKS = ("5point", "random")
 
@@ -104,18 +104,8 @@ class EffectorBenchmark:
 
     def effectors(self, i: int) -> list[Effector]:
         """Case ``i`` as :class:`~posekit.ik.effectors.Effector` objects (what a Solver takes)."""
-        out = []
-        for k in range(int(self.n[i])):
-            j, kind = int(self.joint[i, k]), KIND_NAMES[int(self.kind[i, k])]
-            v, tol = self.value[i, k], self.tolerance[i, k]
-            name = self.skeleton.names[j]
-            if kind == "position":
-                out.append(Effector(name, v[:3], "position", tolerance=float(tol)))
-            elif kind == "rotation":
-                out.append(Effector(name, v, "rotation", tolerance=float(tol)))
-            else:
-                out.append(Effector(name, v[:3], "look_at", tolerance=float(tol), axis=v[3:]))
-        return out
+        return [as_effector(self.skeleton, self.joint[i, k], self.kind[i, k], self.value[i, k], self.tolerance[i, k])
+                for k in range(int(self.n[i]))]
 
     def groups(self) -> list[np.ndarray]:
         """Cases that share their joints and kinds (the same network input layout), for batching."""
@@ -127,6 +117,84 @@ class EffectorBenchmark:
 
     def kinds_present(self) -> list[str]:
         return [KIND_NAMES[k] for k in sorted(set(self.kind[self.joint >= 0].tolist()))]
+
+
+def draw_random(rng: np.random.Generator, skeleton, global_pos, global_rot, body=None) -> list[tuple]:
+    """One case of the random benchmark (the rule of the module docstring) at a true pose.
+
+    Parameters
+    ----------
+    rng : numpy Generator
+        Consumed in a fixed order, so a seed gives the same effectors on every machine.
+    skeleton : Skeleton
+    global_pos : ndarray, shape (J, 3), metres
+    global_rot : ndarray, shape (J, 3, 3)
+        The true pose, world (or root) frame.
+    body : sequence of int, optional
+        The joints extra effectors may go on (default :func:`posekit.data.metrics.body_joints`).
+
+    Returns
+    -------
+    list of (joint, kind code, value)
+        6 to :data:`MAX_EFFECTORS` effectors; ``value`` (6,) as in :attr:`EffectorBenchmark.value`.
+    """
+    s, P, G = skeleton, np.asarray(global_pos, float), np.asarray(global_rot, float)
+    body = [int(j) for j in (body_joints(s) if body is None else body)]
+    picks = [(s.index(str(rng.choice(zone))), 0) for zone in ZONES.values()]
+    n = int(rng.integers(6, MAX_EFFECTORS + 1))
+    while len(picks) < n:
+        j, k = int(rng.choice(body)), int(rng.integers(0, 3))
+        taken = {kk for jj, kk in picks if jj == j}
+        if k in taken or (k > 0 and taken & {1, 2}):
+            continue
+        picks.append((j, k))
+    out = []
+    for j, k in picks:
+        value = np.zeros(6)
+        if k == 0:
+            value[:3] = P[j]
+        elif k == 1:
+            value[:] = matrix_to_sixd(G[j])
+        else:
+            v = rng.normal(size=3)
+            v /= np.linalg.norm(v)
+            value[:3] = P[j] + rng.uniform(0.5, 3.0) * (G[j] @ v)
+            value[3:] = v
+        out.append((j, k, value))
+    return out
+
+
+def as_effector(skeleton, joint: int, kind_code: int, value, tolerance: float | None = None) -> Effector:
+    """One ``(joint, kind code, value)`` of a benchmark as an :class:`~posekit.ik.effectors.Effector`
+    (tolerance: the kind's default when None)."""
+    kind, name, v = KIND_NAMES[int(kind_code)], skeleton.names[int(joint)], np.asarray(value, float)
+    tol = DEFAULT_TOLERANCE[kind] if tolerance is None else float(tolerance)
+    if kind == "position":
+        return Effector(name, v[:3], "position", tolerance=tol)
+    if kind == "rotation":
+        return Effector(name, v, "rotation", tolerance=tol)
+    return Effector(name, v[:3], "look_at", tolerance=tol, axis=v[3:])
+
+
+def random_case_effectors(cases, seed: int = 0, tolerance: float | None = None) -> list[list[Effector]]:
+    """The random benchmark's rule drawn on posing cases (:class:`posekit.data.cases.Cases`): each case's
+    effectors at its true pose (the root frame of the cases), from one generator seeded by ``seed``.
+
+    ``posekit bench ik`` / ``bench all`` call it for ``--effectors random``, so the solvers of every lesson
+    meet lesson 05's mixed-kind effectors on their own cases. ``tolerance`` (metres) replaces the position
+    effectors' default; angular effectors keep 1 degree.
+    """
+    s = cases.skeleton
+    if cases.target_rot is None:
+        raise ValueError("random effectors need the cases' true rotations (Cases.target_rot)")
+    _, G = fk(s, quat_to_matrix(np.asarray(cases.target_rot, float)), cases.target_root, cases.target_local_pos)
+    rng = np.random.default_rng([seed, BENCHMARKS.index("random"), 1])
+    body = [int(j) for j in body_joints(s)]
+    out = []
+    for i in range(len(cases)):
+        picks = draw_random(rng, s, cases.target_pos[i], G[i], body)
+        out.append([as_effector(s, j, k, v, tolerance if k == 0 else None) for j, k, v in picks])
+    return out
 
 
 def _truth(motions, frames):
@@ -155,27 +223,11 @@ def build_benchmark(name: str, motions=None, n_cases: int = 1000, seed: int = 0)
     body = [int(j) for j in body_joints(s)]
     for c in range(C):
         if name == "5point":
-            picks = [(s.index(r), 0) for r in FIVE_POINT]
+            picks = [(s.index(r), 0, np.concatenate([P[c, s.index(r)], np.zeros(3)])) for r in FIVE_POINT]
         else:
-            picks = [(s.index(str(rng.choice(zone))), 0) for zone in ZONES.values()]
-            n = int(rng.integers(6, MAX_EFFECTORS + 1))
-            while len(picks) < n:
-                j, k = int(rng.choice(body)), int(rng.integers(0, 3))
-                taken = {kk for jj, kk in picks if jj == j}
-                if k in taken or (k > 0 and taken & {1, 2}):
-                    continue
-                picks.append((j, k))
-        for e, (j, k) in enumerate(picks):
-            joint[c, e], kind[c, e] = j, k
-            if k == 0:
-                value[c, e, :3] = P[c, j]
-            elif k == 1:
-                value[c, e] = matrix_to_sixd(G[c, j])
-            else:
-                v = rng.normal(size=3)
-                v /= np.linalg.norm(v)
-                value[c, e, :3] = P[c, j] + rng.uniform(0.5, 3.0) * (G[c, j] @ v)
-                value[c, e, 3:] = v
+            picks = draw_random(rng, s, P[c], G[c], body)
+        for e, (j, k, v) in enumerate(picks):
+            joint[c, e], kind[c, e], value[c, e] = j, k, v
             tol[c, e] = DEFAULT_TOLERANCE[KIND_NAMES[k]]
     n = (joint >= 0).sum(1)
     return EffectorBenchmark(name, s, frames, n, joint, kind, value, tol, R, G, root, P)

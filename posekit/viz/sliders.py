@@ -9,8 +9,8 @@ point can be reached.
 
 Selecting never moves anything. A new selection gives every slider a new range; the kernel sends each slider's
 range and value in one message, and for :attr:`TargetSliders.ECHO_S` seconds after a new range a value the
-browser sends back that the slider held in the last seconds (clamped into the new range, so possibly an end
-of it) is an echo, not a move: under load the browser can send back a value from two selections ago. A real move changes its
+browser sends back that the slider held in the last seconds before that range (clamped into the new range, so
+possibly an end of it) is an echo, not a move; values the user moved it to since are moves: under load the browser can send back a value from two selections ago. A real move changes its
 own axis of the handle only. Units: metres, world frame (:mod:`posekit.conventions`).
 """
 
@@ -126,12 +126,15 @@ class TargetSliders:
 
     def _is_echo(self, axis, v, tol, now) -> bool:
         """Whether ``v``, sent by the browser for slider ``axis``, is a stale value and not a move: within
-        ``ECHO_S`` of a new range, a value the slider held lately, or an end of a recent range, as the browser
-        may have clamped it into any recent range (the browser can lag a selection behind)."""
-        ranges = [(lo, hi) for t, lo, hi in self._ranges[axis] if now - t < self.ECHO_S]
-        if not ranges:
+        ``ECHO_S`` of a new range, a value the slider held lately (up to that range: not a value the user moved
+        it to since), or an end of a recent range, as the browser may have clamped it into any recent range (the
+        browser can lag a selection behind)."""
+        recent = [(t, lo, hi) for t, lo, hi in self._ranges[axis] if now - t < self.ECHO_S]
+        if not recent:
             return False
-        held = [x for t, x in self._held_values[axis] if now - t < self.ECHO_S]
+        ranges, newest = [(lo, hi) for _, lo, hi in recent], max(t for t, _, _ in recent)
+        # only values held up to the newest range: the user's own moves since then are never echoes
+        held = [x for t, x in self._held_values[axis] if now - t < self.ECHO_S and t <= newest]
         held += [end for r in ranges for end in r]
         s = self.sliders[axis]
         stale = {float(np.clip(np.clip(x, lo, hi), s.min, s.max)) for x in held for lo, hi in ranges}

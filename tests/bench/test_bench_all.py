@@ -1,6 +1,7 @@
-"""``posekit bench all``: every registered solver once per start condition, and the report files that say so.
+"""``posekit bench all``: every registered solver once per start condition and effector set, and the report files
+that say so.
 
-One tiny run (3 cases, one start) is shared by the tests; most of its ~50 s is compiling the solvers'
+One tiny run (3 cases, one start, effector sets 5 and random) is shared by the tests; most of its ~50 s is compiling the solvers'
 numba kernels, which the later runs in this file reuse.
 """
 
@@ -16,34 +17,71 @@ from posekit.bench import all as bench_all
 from posekit.bench.ik import resolve_solvers
 from posekit.bench.plugin import benchmark_names
 from posekit.cli import main
+from posekit.ik import make_solver
 
 CASES = 3
 START = "rest"
+SETS = ("5", "random")
+NEURAL = ("neural", "neural-raw", "neural-chained", "neural-chained-raw", "neural-fabrik", "neural+dls")
+"""Lesson 03's networks exist for their trained joint sets only: they refuse the random set's effectors."""
 
 
 @pytest.fixture(scope="module")
 def report(tmp_path_factory):
     out = tmp_path_factory.mktemp("bench_all")
-    rows = bench_all.run(n_cases=CASES, starts=(START,), effectors="5", seed=0, out=out, progress=False)
+    rows = bench_all.run(n_cases=CASES, starts=(START,), effectors=",".join(SETS), seed=0, out=out, progress=False)
     return rows, out
 
 
-def test_every_registered_solver_appears_once_per_start(report):
+def test_every_registered_solver_appears_once_per_start_and_set(report):
     rows, _ = report
     names = resolve_solvers("all")
-    assert len(names) >= 16
-    assert sorted(r["method"] for r in rows) == sorted(names)  # once each
+    assert len(names) >= 16 and set(NEURAL) <= set(names)
+    five = [r for r in rows if r["effectors"] == "5"]
+    assert sorted(r["method"] for r in five) == sorted(names)  # once each
+    rand = [r for r in rows if r["effectors"] == "random"]
+    assert sorted(r["method"] for r in rand) == sorted(set(names) - set(NEURAL))  # the refusals are left out
+    assert [r["effectors"] for r in rows] == ["5"] * len(five) + ["random"] * len(rand)
     for r in rows:
         assert set(r) == set(bench_all.KEYS)
-        assert r["start"] == START and r["effectors"] == "5" and r["cases"] == CASES and r["data"] == "bandai-mini"
+        assert r["start"] == START and r["cases"] == CASES and r["data"] == "bandai-mini"
         assert re.fullmatch(r"\d\d", r["lesson"]) and "position" in r["kinds"]
         assert r["latency_ms_median"] > 0 and 0 <= r["converged_fraction"] <= 1
         for k in ("mpjpe_mm_median", "effector_error_mm_median", "natural_mm_median", "bone_length_error_mm_max"):
             assert math.isfinite(r[k]) and r[k] >= 0, (r["method"], k)
-    assert [r["mpjpe_mm_median"] for r in rows] == sorted(r["mpjpe_mm_median"] for r in rows)
-    by_name = {r["method"]: r for r in rows}
+    for cell in (five, rand):
+        assert [r["mpjpe_mm_median"] for r in cell] == sorted(r["mpjpe_mm_median"] for r in cell)
+    assert all(r["effector_error_deg_median"] is None for r in five)
+    by_name = {r["method"]: r for r in five}
     assert by_name["fabrik"]["lesson"] == "01" and by_name["protores"]["lesson"] == "05"
     assert by_name["fabrik"]["converged_fraction"] == 1.0  # FABRIK reaches 5 reachable targets within 1 mm
+    by_name = {r["method"]: r for r in rand}
+    for name in ("dls", "protores+dls", "latent-opt+dls"):  # every kind honoured and met
+        assert by_name[name]["converged_fraction"] == 1.0 and by_name[name]["effector_error_deg_median"] <= 1.0
+    assert by_name["fabrik"]["converged_fraction"] < 1.0  # positions only: its rotations and look-ats count
+    assert by_name["fabrik"]["effector_error_deg_median"] is None  # no rotations returned: not judged met
+
+
+def test_the_random_set_is_lesson_05s_rule_drawn_on_the_cases(mini):
+    from posekit.bench.ik import case_effectors
+    from posekit.data.cases import build_cases
+    from posekit.evaluation.effector_cases import ZONES
+
+    cases = build_cases(mini, 20, 0, START)
+    effs = case_effectors(cases, "random")
+    assert effs == case_effectors(cases, "random") or all(  # the same seed, the same effectors
+        [(e.joint, e.kind) for e in a] == [(e.joint, e.kind) for e in b]
+        for a, b in zip(effs, case_effectors(cases, "random")))
+    s = cases.skeleton
+    kinds = set()
+    for i, case in enumerate(effs):
+        assert 6 <= len(case) <= 12
+        pos = {s.index(e.joint) for e in case if e.kind == "position"}
+        assert all(pos & set(s.indices(z)) for z in ZONES.values())  # a position on every main zone
+        kinds |= {e.kind for e in case}
+        errs = make_solver("dls", s).resolve(case)  # the true pose meets every effector
+        assert len(errs) == len(case)
+    assert kinds == {"position", "rotation", "look_at"}
 
 
 def test_the_json_parses_and_agrees_with_the_rows(report):
@@ -52,26 +90,41 @@ def test_the_json_parses_and_agrees_with_the_rows(report):
     text = (out / "bench_all.json").read_text()
     d = json.loads(text)
     assert d["rows"] == rows
-    assert d["command"] == f"posekit bench all --cases {CASES} --start {START} --effectors 5 --seed 0"
-    assert (d["cases"], d["starts"], d["effectors"], d["seed"], d["data"]) == (CASES, [START], "5", 0, "bandai-mini")
+    assert d["command"] == f"posekit bench all --cases {CASES} --start {START} --effectors 5,random --seed 0"
+    assert (d["cases"], d["starts"], d["effectors"], d["seed"], d["data"]) == (CASES, [START], list(SETS), 0,
+                                                                                "bandai-mini")
     assert d["machine"]["cpu_count"] >= 1 and d["machine"]["platform"]
     assert d["skipped"] == [] and d["solvers"] == list(resolve_solvers("all"))
+    assert sorted(d["refused"]) == sorted(f"{n} / random" for n in NEURAL)
+    assert all("has solvers for these joint sets" in why for why in d["refused"].values())
     assert not re.search(r"\b20\d\d-\d\d-\d\d", text)  # no date: reruns differ only in their timings
 
 
-def test_the_markdown_has_a_sorted_table_per_start_with_every_solver(report):
+def test_the_markdown_has_a_sorted_table_per_set_and_start_with_every_solver(report):
     rows, out = report
     md = (out / "bench_all.md").read_text()
     assert md.startswith("# ") and f"{CASES} held-out cases" in md and "one thread" in md
+    assert "Not measured on a set (the solver refused its effectors): `random`: `neural`" in md
     sections = re.split(r"^## ", md, flags=re.M)
-    tables = [s for s in sections if s.startswith("Start: ")]
-    assert len(tables) == 1 and tables[0].startswith(f"Start: {START} ")
-    lines = [ln for ln in tables[0].splitlines() if ln.startswith("|")]
-    assert lines[0] == "| solver | lesson | ms per solve | MPJPE mm | effector mm | natural mm | converged |"
-    body = [[c.strip() for c in ln.strip("|").split("|")] for ln in lines[2:]]
-    assert [c[0].strip("`") for c in body] == [r["method"] for r in rows]  # every solver, by MPJPE
-    assert [float(c[3]) for c in body] == [round(r["mpjpe_mm_median"], 1) for r in rows]
-    assert all(c[6].endswith("%") for c in body)
+    tables = [s for s in sections if s.startswith("Effectors ")]
+    assert [t.split(" —")[0] for t in tables] == [f"Effectors {e}, start {START}" for e in SETS]
+    heads = ["| solver | lesson | ms per solve | MPJPE mm | effector mm | natural mm | converged |",
+             "| solver | lesson | ms per solve | MPJPE mm | effector mm | effector deg | natural mm | converged |"]
+    assert "| n/a |" in tables[1]  # positions-only solvers are not judged on the angular effectors
+    for e, table, head in zip(SETS, tables, heads):
+        lines = [ln for ln in table.splitlines() if ln.startswith("|")]
+        assert lines[0] == head
+        body = [[c.strip() for c in ln.strip("|").split("|")] for ln in lines[2:]]
+        mine = [r for r in rows if r["effectors"] == e]
+        assert [c[0].strip("`") for c in body] == [r["method"] for r in mine]  # every solver, by MPJPE
+        assert [float(c[3]) for c in body] == [round(r["mpjpe_mm_median"], 1) for r in mine]
+        assert all(c[-1].endswith("%") for c in body)
+    wins = next(s for s in sections if s.startswith("Who wins where"))
+    cells = [ln for ln in wins.splitlines() if ln.startswith("| `")]
+    assert [c.split("|")[1].strip() for c in cells] == [f"`{e}`" for e in SETS]
+    for e, line in zip(SETS, cells):
+        best = min((r for r in rows if r["effectors"] == e), key=lambda r: r["mpjpe_mm_median"])
+        assert f"`{best['method']}` {best['mpjpe_mm_median']:.1f} mm" in line.split("|")[3]
     assert any(s.startswith("Reading the scatter") for s in sections) and "(bench_all.png)" in md
 
 
@@ -82,7 +135,7 @@ def test_the_png_is_a_valid_figure(report):
         im.verify()
     with Image.open(path) as im:
         assert im.format == "PNG"
-        assert (im.width, im.height) == (1500, 975)  # 10 x 6.5 in at 150 dpi
+        assert (im.width, im.height) == (1500, 975 * len(SETS))  # a 10 x 6.5 in panel per set at 150 dpi
         pixels = np.asarray(im.convert("L"))
     assert pixels.std() > 5 and (pixels < 128).mean() > 0.002  # drawn on, not blank
 
@@ -97,8 +150,8 @@ def test_the_pareto_edge_is_the_rows_nothing_beats():
     ({"n_cases": 0}, "at least 1"),
     ({"starts": ("same-clip", "sideways")}, "unknown start condition 'sideways'; valid: same-clip"),
     ({"starts": ""}, "no start condition"),
-    ({"effectors": "7"}, "unknown effector set '7'.*valid: 2, 5, 5point"),
-    ({"effectors": "2,5"}, "one set per report"),
+    ({"effectors": "7"}, "unknown effector set '7'.*valid: 2, 5, 5point, random"),
+    ({"effectors": ","}, "no effector set given"),
 ])
 def test_bad_input_is_refused_with_a_sentence(kwargs, message):
     with pytest.raises(ValueError, match=message):
@@ -110,7 +163,8 @@ def test_the_cli(report, capsys, monkeypatch):
     with pytest.raises(SystemExit):
         main(["bench", "all", "--help"])
     help_text = " ".join(capsys.readouterr().out.split())
-    assert "(default: 200)" in help_text and "(default: same-clip,rest)" in help_text
+    assert "(default: 200)" in help_text and "(default: rest,other-clip)" in help_text
+    assert "(default: 2,5,random)" in help_text
     assert main(["bench", "all", "--cases", "0"]) == 2
     assert "posekit: error: cases must be a whole number of at least 1" in capsys.readouterr().err
     assert main(["bench", "all", "--start", "sideways"]) == 2
@@ -123,7 +177,7 @@ def test_the_cli(report, capsys, monkeypatch):
         raise AssertionError("--out none must write nothing")
 
     monkeypatch.setattr(bench_all, "write_report", no_files)
-    assert main(["bench", "all", "--cases", "2", "--start", START, "--out", "none"]) == 0  # kernels compiled: quick
+    assert main(["bench", "all", "--cases", "2", "--start", START, "--effectors", "5", "--out", "none"]) == 0
     out = capsys.readouterr().out
     assert "report: not written" in out and f"Start: {START}" in out
     assert max(map(len, out.splitlines())) <= 100

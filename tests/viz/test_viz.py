@@ -348,6 +348,23 @@ def test_a_stale_value_that_arrives_after_the_next_selection_moves_nothing(sampl
     assert seen == ["right_knee"]
 
 
+def test_quick_moves_back_and_forth_after_a_selection_all_move(sample):
+    """Right, left, right by one step within a second of selecting a joint (a student tapping the arrow keys, or
+    ``posekit bench studio``): every press moves the target, though the third value is one the slider held a
+    moment ago. Only values held up to the new range can be echoes."""
+    s = sample.skeleton
+    v = SkeletonViewer(s, sample.global_pos[0])
+    seen = []
+    v.on_target_change(lambda name, p: seen.append(round(float(p[0]), 4)))
+    v.select("head")
+    v.select("left_wrist")
+    x0 = v.sliders[0].value
+    for x in (x0 + 0.001, x0, x0 + 0.001, x0):
+        v.sliders[0].value = x
+    assert seen == [round(x0 + 0.001, 4), round(x0, 4), round(x0 + 0.001, 4), round(x0, 4)]
+    assert v.targets["left_wrist"][0] == pytest.approx(x0)
+
+
 def test_helper_joints_are_not_selectable_and_markers_stay_pickable():
     from posekit.data import load_bandai_mini
     from posekit.viz.meshes import PICK_BOUND
