@@ -39,7 +39,7 @@ from .effectors import DEFAULT_TOLERANCE, KINDS, Effector, ResolvedEffectors, ch
 
 __all__ = ["Effector", "Pose", "IKResult", "Solver", "SolverBase", "EFFECTOR_SETS", "effector_set",
            "resolve_effectors", "effector_errors", "effector_errors_batch", "KINDS", "DEFAULT_TOLERANCE",
-           "ResolvedEffectors"]
+           "ResolvedEffectors", "base_index", "base_on_target"]
 
 EFFECTOR_SETS = {
     "2": ("left_hand", "right_hand"),
@@ -131,7 +131,13 @@ class SolverBase:
         pos = check_pose(self.skeleton, start)
         res = self.resolve(effectors)
         check_look_at(res, pos)
-        return start, res
+        return self._onto_base(start, res), res
+
+    def _onto_base(self, start: Pose, res: ResolvedEffectors) -> Pose:
+        """A solver that keeps a base joint in place (``self.base``: FABRIK, CCD, DLS) starts from ``start`` moved
+        as a whole onto a position effector on that joint, when there is one; else from ``start`` itself."""
+        base = getattr(self, "base", None)
+        return start if base is None else base_on_target(start, res, int(base))
 
     def solve(self, start: Pose | None, effectors: Sequence[Effector]) -> IKResult:
         """Pose the skeleton so the effectors reach their targets (one problem)."""
@@ -168,7 +174,7 @@ class SolverBase:
 
     def _prepare_start(self, start, res):
         check_look_at(res, check_pose(self.skeleton, start))
-        return start, res
+        return self._onto_base(start, res), res
 
     def _solve(self, start, resolved) -> IKResult:
         raise NotImplementedError
@@ -213,6 +219,35 @@ def effector_set(skeleton: Skeleton, name: str, pose_pos, tolerance: float = 1e-
     skeleton.require_roles(EFFECTOR_SETS[name], f"effector set {name!r}")
     pose_pos = np.asarray(pose_pos, dtype=float)
     return [Effector(role, pose_pos[skeleton.index(role)], tolerance=tolerance) for role in EFFECTOR_SETS[name]]
+
+
+def base_on_target(pose: Pose, res: ResolvedEffectors, base: int) -> Pose:
+    """``pose`` moved as a whole (every joint by the same vector) so that joint ``base`` meets the first position
+    effector on it, or ``pose`` itself when no position effector is on ``base``.
+
+    A solver that only turns joints keeps its base where the start put it, so a pinned pelvis (lesson 05's
+    random effectors hold one in most cases) could never be met; moved first, it is met exactly and the
+    solver turns the rest.
+
+    Parameters
+    ----------
+    pose : Pose
+    res : ResolvedEffectors
+    base : int
+        The joint the solver keeps in place (:func:`base_index`).
+    """
+    on_base = np.nonzero((np.asarray(res.joints) == base) & (np.asarray(res.codes) == 0))[0]
+    if not len(on_base):
+        return pose
+    P = np.asarray(pose.global_pos, dtype=float)
+    shift = np.asarray(res.position[on_base[0]], dtype=float) - P[base]
+    if not np.any(shift):
+        return pose
+    lp = None if pose.local_pos is None else np.asarray(pose.local_pos, dtype=float).copy()
+    if lp is not None:
+        lp[0] += shift
+    root = None if pose.root_pos is None else np.asarray(pose.root_pos, dtype=float) + shift
+    return Pose(P + shift, pose.local_rot, root, lp)
 
 
 def base_index(skeleton: Skeleton, base=None) -> int:

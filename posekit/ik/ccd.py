@@ -6,7 +6,8 @@ Introduced in ``notebooks/01_fabrik.ipynb`` as a baseline next to FABRIK. Conven
 For each effector in turn, walk from its parent joint up to the base; at each joint ``i`` turn it by
 the shortest rotation that takes the direction to the end effector, ``e - p_i``, onto the direction
 to the target, ``t - p_i``. Repeat the sweeps until every effector is within tolerance. Bone lengths
-are exact by construction (only rotations change); the base keeps its position.
+are exact by construction (only rotations change); the base keeps its position (the start is first moved
+as a whole onto a position effector on it, when there is one: :func:`posekit.ik.api.base_on_target`).
 
 CCD here honours position effectors only (``kinds = ("position",)``): a rotation goal would need a
 second, competing turn per joint and a rule for sharing it, which is what the Jacobian of
@@ -65,6 +66,8 @@ class CCDSolver(SolverBase):
         Sweeps over all effectors.
     base : str, optional
         Joint whose position stays fixed (default the pelvis role); it may still turn.
+        A position effector on it moves the start as a whole onto its target first
+        (:func:`posekit.ik.api.base_on_target`).
     """
 
     name = "ccd"

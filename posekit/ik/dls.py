@@ -187,7 +187,8 @@ class DLSSolver(SolverBase):
     max_step : float, radians
         Largest rotation-vector component per step.
     base : str, optional
-        Joint whose position stays fixed (default the pelvis role); it may still turn.
+        Joint whose position stays fixed (default the pelvis role); it may still turn. A position effector on
+        it moves the start as a whole onto its target first (:func:`posekit.ik.api.base_on_target`).
     angle_scale : float, metres per radian
         Weight of the angular rows relative to position rows (:data:`ANGLE_SCALE`).
     """

@@ -111,6 +111,8 @@ class FabrikSolver(SolverBase):
         Iteration cap.
     base : str
         The joint that stays fixed, with all its ancestors (default the pelvis role, else joint 0).
+        A position effector on it moves the start as a whole onto its target first
+        (:func:`posekit.ik.api.base_on_target`).
     constraints : Constraints, True or None
         Joint limits; ``True`` uses :func:`default_constraints`. Chains through a limited joint are
         then only ever straightened in step 2, never bent further.

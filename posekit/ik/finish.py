@@ -16,9 +16,9 @@ The stages
 1. the learned solver is given the effectors of the kinds it honours (``"protores"``: all three; the lesson 03
    and 04 solvers: positions), from the start pose when it needs one;
 2. a positions-only learned pose gets rotations that turn the start's bones onto its positions
-   (:func:`posekit.ik.bone_rotations.rotations_from_positions`; bone lengths are the skeleton's); when a
-   position effector is on the base joint (the pelvis), the pose is moved as a whole onto it, since DLS keeps
-   its base in place;
+   (:func:`posekit.ik.bone_rotations.rotations_from_positions`; bone lengths are the skeleton's); DLS moves
+   it as a whole onto a position effector on its base joint (the pelvis) first, as every solver that keeps a
+   base in place does (:func:`posekit.ik.api.base_on_target`);
 3. :class:`~posekit.ik.dls.DLSSolver` from that pose with every effector; when it gets stuck there (a limb
    stretched to its end, a local minimum), DLS from the start pose as well, and the better of the two
    (``info["kept"] = "start"`` when it is the latter).
@@ -64,21 +64,6 @@ def _subset(res: ResolvedEffectors, keep) -> ResolvedEffectors:
                    position=res.position[idx], rotation=res.rotation[idx], axis=res.axis[idx],
                    tolerance=res.tolerance[idx], weight=res.weight[idx],
                    names=tuple(res.names[i] for i in idx) if res.names else ())
-
-
-def _base_on_target(pose: Pose, res: ResolvedEffectors, base: int) -> Pose:
-    """``pose`` moved as a whole so that its base joint meets a position effector on it, if there is one: DLS
-    keeps the base where it is (it only turns joints), so a learned pose whose pelvis is a few centimetres off a
-    pelvis target could never meet it. Unchanged when no position effector is on the base."""
-    on_base = np.nonzero((res.joints == base) & (res.codes == 0))[0]
-    if not len(on_base):
-        return pose
-    shift = res.position[on_base[0]] - np.asarray(pose.global_pos, float)[base]
-    lp = None if pose.local_pos is None else np.asarray(pose.local_pos, float).copy()
-    if lp is not None:
-        lp[0] += shift
-    root = None if pose.root_pos is None else np.asarray(pose.root_pos, float) + shift
-    return Pose(np.asarray(pose.global_pos, float) + shift, pose.local_rot, root, lp)
 
 
 def _worse(finished: np.ndarray, learned: np.ndarray, codes: np.ndarray) -> bool:
@@ -127,7 +112,6 @@ class FinishedSolver(SolverBase):
                                                np.asarray(pose.global_pos, float)[None, 0],
                                                np.asarray(pose.global_pos, float)[None])
             pose = Pose.from_rotations(self.skeleton, matrix_to_quat(L[0]), root[0])
-        pose = _base_on_target(pose, res, self.finisher.base)
         t1 = time.perf_counter()
         fr = self.finisher.solve(pose, res)
         t2 = time.perf_counter()

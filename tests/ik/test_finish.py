@@ -73,6 +73,24 @@ def test_a_pelvis_target_is_met_from_the_learned_pose_not_only_from_the_start(le
     assert finished >= len(cases) - 1
 
 
+@pytest.mark.parametrize("name", ["fabrik", "ccd", "dls"])
+def test_a_position_effector_on_the_base_moves_the_start_onto_it(name, cases):
+    s = cases.skeleton
+    pelvis, hand = s.pelvis(), s.index("left_hand")
+    start = cases.pose(0)
+    goal = start.global_pos[pelvis] + np.array([0.3, -0.05, 0.2])
+    reach = cases.target_pos[0][hand] - cases.target_pos[0][pelvis] + goal  # the true hand, relative to the new pelvis
+    effs = [Effector(s.names[pelvis], goal), Effector("left_hand", reach)]
+    r = make_solver(name, s).solve(start, effs)
+    assert np.linalg.norm(r.pose.global_pos[pelvis] - goal) < 1e-9  # met exactly: the body moved as a whole
+    assert r.effector_error[0] < 1e-9 and np.all(np.isfinite(r.pose.global_pos))
+    if r.pose.local_rot is not None:
+        from posekit.kinematics import fk
+
+        assert np.allclose(fk(s, r.pose.local_rot, r.pose.root_pos, r.pose.local_pos)[0], r.pose.global_pos)
+    assert np.allclose(start.global_pos[pelvis], cases.pose(0).global_pos[pelvis])  # the caller's start is untouched
+
+
 def test_unreachable_targets_give_the_best_pose_found_never_nan(cases):
     s = cases.skeleton
     solver = make_solver("protores+dls", s)
