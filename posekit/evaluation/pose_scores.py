@@ -68,7 +68,8 @@ class PoseScores:
     effector_mm : ndarray, shape (N,)
         Worst position effector of each case.
     effector_deg : ndarray, shape (N,) or None
-        Worst angular effector (None when there is none).
+        Worst angular effector (NaN for a case without one; None when no case has one the method can be judged
+        on).
     mpjpe_mm, bone_mm : ndarray, shape (N,)
     rotation_deg : ndarray, shape (N,) or None
         None when the method returned no local rotations.
@@ -88,11 +89,15 @@ class PoseScores:
     converged: np.ndarray
 
     def summary(self) -> dict:
-        """The benchmark's JSON keys: medians over cases, the worst case for bone lengths."""
+        """The benchmark's JSON keys: medians over cases, the worst case for bone lengths. The angular effector
+        error's median is over the cases that hold an angular effector."""
         med = lambda a: None if a is None else float(np.median(a))
+        deg = None
+        if self.effector_deg is not None and np.any(np.isfinite(self.effector_deg)):
+            deg = float(np.median(self.effector_deg[np.isfinite(self.effector_deg)]))
         out = {
             "effector_error_mm_median": med(self.effector_mm),
-            "effector_error_deg_median": med(self.effector_deg),
+            "effector_error_deg_median": deg,
             "mpjpe_mm_median": med(self.mpjpe_mm),
             "bone_length_error_mm_max": float(np.max(self.bone_mm)),
             "rotation_error_deg_median": med(self.rotation_deg),

@@ -49,3 +49,18 @@ def test_score_poses_counts_a_case_converged_only_when_every_effector_is_met(min
     assert list(sc.converged) == [True, True, False, True, True, True]
     assert sc.effector_mm[2] == pytest.approx(2.0)
     assert sc.summary()["converged_fraction"] == pytest.approx(5 / 6)
+
+
+def test_the_angular_median_is_over_the_cases_that_hold_an_angular_effector(mini):
+    # lesson 05's random effectors: some cases hold positions only; their worst angular error does not exist
+    s = mini.skeleton
+    cases = build_cases(mini, n_cases=3, seed=0, start="rest")
+    G = [fk(s, cases.target_rot[i], cases.target_root[i])[1] for i in range(3)]
+    head = s.index("head")
+    effs = [effector_set(s, "2", cases.target_pos[i]) for i in range(3)]
+    for i, angle in ((1, 2.0), (2, 4.0)):  # a rotation target turned by 2 and 4 degrees about the vertical
+        c, sn = np.cos(np.radians(angle)), np.sin(np.radians(angle))
+        effs[i].append(Effector(head, np.array([[c, 0, sn], [0, 1, 0], [-sn, 0, c]]) @ G[i][head], kind="rotation"))
+    summary = score_poses(cases, cases.target_pos, effs, cases.target_rot).summary()
+    assert summary["effector_error_deg_median"] == pytest.approx(3.0, abs=1e-6)  # (2 + 4) / 2, not NaN
+    assert "effector_error_deg_median" not in score_poses(cases, cases.target_pos, effs).summary()  # no rotations

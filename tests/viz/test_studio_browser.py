@@ -72,7 +72,7 @@ def _wait_update(page, n0, what, timeout=60):
 
 def test_studio_loads_and_every_view_shows_a_skeleton(page):
     canvases = _canvases(page)
-    assert len(canvases) == 4  # the notebook compares FABRIK, DLS, ProtoRes and ProtoRes with an exact finish
+    assert len(canvases) == 4  # the notebook compares FABRIK, DLS and two learned solvers with an exact finish
     for c in canvases:
         img = wait_for(lambda c=c: (lambda im: im if (np.abs(im - BACKGROUND).sum(-1) > 60).mean() > 0.002
                                      else None)(_pixels(c)), 60, "a skeleton on every canvas")
@@ -80,7 +80,7 @@ def test_studio_loads_and_every_view_shows_a_skeleton(page):
     texts = _texts(page)
     assert len(texts) == 4 and all("worst effector" in t and "ms" in t for t in texts), texts
     summary = page.locator(".posekit-summary").inner_text()
-    assert all(n in summary for n in ("fabrik", "dls", "protores", "protores+dls")), summary
+    assert all(n in summary for n in ("fabrik", "dls", "protores+dls", "latent-opt+dls")), summary
 
 
 def _joint_list(page):
