@@ -2,7 +2,9 @@
 
 * :func:`samples_dir` — the embedded default data and shipped weights, ``data_samples/`` at the top
   of the posekit checkout (override with ``$POSEKIT_SAMPLES_DIR``).
-* :func:`weights_path` — where a weight file lives (``data_samples/weights/`` unless a folder is given).
+* :func:`weights_path` — where a weight file lives: ``data_samples/weights/`` unless a folder is given, or a
+  weights folder of the user's own is in use (:func:`use_weights`, ``$POSEKIT_WEIGHTS_DIR``, ``--weights DIR``
+  of ``posekit bench ik`` and ``bench all``, ``make studio STUDIO_WEIGHTS=DIR``) and holds that file.
 * :func:`shared_data_dir` — larger real mocap read by path, never copied: ``$POSEKIT_DATA_DIR``
   (the Makefile points it at ``../shared/data`` when that folder exists).
 * :func:`notebooks_dir` — the lessons, ``notebooks/`` of the checkout.
@@ -12,10 +14,14 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 from pathlib import Path
 
-__all__ = ["samples_dir", "weights_path", "shared_data_dir", "require_shared_data", "notebooks_dir", "course_assets_dir"]
+__all__ = ["samples_dir", "weights_path", "user_weights_dir", "use_weights", "shared_data_dir", "require_shared_data",
+           "notebooks_dir", "course_assets_dir"]
+
+_USER_WEIGHTS: list[Path] = []
 
 _CHECKOUT = Path(__file__).resolve().parent.parent
 
@@ -27,11 +33,52 @@ def samples_dir() -> Path:
 
 
 def weights_path(file: str, folder=None) -> Path:
-    """Where the weight file ``file`` lives: in ``folder`` if given, else in ``weights/`` of :func:`samples_dir`.
+    """Where the weight file ``file`` lives: in ``folder`` if given; else in the user's weights folder
+    (:func:`user_weights_dir`) when one is in use and holds ``file``; else in ``weights/`` of :func:`samples_dir`.
 
-    Every learned model's shipped weights are found through this one function (each model names its
-    file: ``WEIGHTS`` beside its networks)."""
-    return Path(folder or samples_dir() / "weights") / file
+    Every learned model's weights are found through this one function (each model names its file:
+    ``WEIGHTS`` beside its networks), so a folder of models a user trained on their own data (``posekit train
+    ... --data FOLDER --out DIR/FILE``) replaces the shipped ones file by file; a file the folder lacks is the
+    shipped one."""
+    if folder:
+        return Path(folder) / file
+    mine = user_weights_dir()
+    if mine is not None and (mine / file).is_file():
+        return mine / file
+    return samples_dir() / "weights" / file
+
+
+def user_weights_dir() -> Path | None:
+    """The user's weights folder in use: the innermost :func:`use_weights`, else ``$POSEKIT_WEIGHTS_DIR``, else
+    None (the shipped weights)."""
+    if _USER_WEIGHTS:
+        return _USER_WEIGHTS[-1]
+    env = os.environ.get("POSEKIT_WEIGHTS_DIR")
+    return Path(env).expanduser() if env else None
+
+
+@contextlib.contextmanager
+def use_weights(folder):
+    """Within the block, learned models load their weights from ``folder`` where it holds their file
+    (:func:`weights_path`).
+
+    Raises
+    ------
+    FileNotFoundError
+        ``folder`` is not a folder, or holds no ``.pt`` file (said before any work).
+    """
+    path = Path(folder).expanduser()
+    if not path.is_dir():
+        raise FileNotFoundError(f"--weights {folder}: not a folder (expected a folder of .pt files from "
+                                "`posekit train ... --out DIR/FILE.pt`)")
+    if not any(path.glob("*.pt")):
+        raise FileNotFoundError(f"--weights {folder}: the folder holds no .pt file (expected the checkpoints of "
+                                "`posekit train ... --out DIR/FILE.pt`)")
+    _USER_WEIGHTS.append(path)
+    try:
+        yield path
+    finally:
+        _USER_WEIGHTS.pop()
 
 
 def shared_data_dir(data_dir=None) -> Path | None:

@@ -85,7 +85,7 @@ def _check(n_cases, starts, effectors) -> tuple:
 
 
 def run(n_cases: int = 200, starts=("rest", "other-clip"), effectors=("2", "5", RANDOM), seed: int = 0, out=None,
-        progress: bool = True) -> list[dict]:
+        progress: bool = True, data: str | None = None) -> list[dict]:
     """Benchmark every registered solver on the same held-out cases; one row per solver and start condition.
 
     Parameters
@@ -103,6 +103,10 @@ def run(n_cases: int = 200, starts=("rest", "other-clip"), effectors=("2", "5", 
         A folder to write :data:`FILES` into (created if missing); None writes nothing.
     progress : bool
         A progress bar (one step per solver and start condition).
+    data : str, optional
+        The data set (a shipped set's name, a BVH file or folder); default the one the learned solvers were
+        trained on (:func:`posekit.bench.ik.default_data`). Learned solvers made for another skeleton are left
+        out (``meta["skipped"]``); with :func:`posekit.paths.use_weights` the user's own models are measured.
 
     Returns
     -------
@@ -121,8 +125,11 @@ def run(n_cases: int = 200, starts=("rest", "other-clip"), effectors=("2", "5", 
     from ..data.sources import open_dataset
 
     starts, sets = _check(n_cases, starts, effectors)
+    from ..paths import user_weights_dir
+
     names = resolve_solvers("all")
-    data = default_data(names)
+    named = data is not None
+    data = default_data(names) if data is None else str(data)
     t0 = time.perf_counter()
     motions = open_dataset(data)
     refused = {}
@@ -149,7 +156,9 @@ def run(n_cases: int = 200, starts=("rest", "other-clip"), effectors=("2", "5", 
             floors.setdefault(r["start"], round(float(r["natural_floor_mm_median"]), 3))
         meta = {"benchmark": "all",
                 "command": (f"posekit bench all --cases {int(n_cases)} --start {','.join(starts)} "
-                            f"--effectors {','.join(sets)} --seed {int(seed)}"),
+                            f"--effectors {','.join(sets)} --seed {int(seed)}"
+                            + (f" --data {data}" if named else "")
+                            + (f" --weights {user_weights_dir()}" if user_weights_dir() is not None else "")),
                 "cases": int(n_cases), "starts": list(starts), "effectors": list(sets),
                 "effector_roles": {e: list(EFFECTOR_SETS[e]) for e in sets if e in EFFECTOR_SETS},
                 "seed": int(seed), "data": data, "threads": 1,
@@ -377,9 +386,13 @@ def _out(value):
 def _cli_run(args) -> list[dict]:
     import sys
 
+    from .ik import weights_and_data
+
     _check(args.cases, args.start, args.effectors)  # refuse before loading anything
-    return run(n_cases=args.cases, starts=args.start, effectors=args.effectors, seed=args.seed, out=_out(args.out),
-               progress=not args.json and sys.stderr.isatty())
+    weights, data = weights_and_data(args, resolve_solvers("all"))
+    with weights:
+        return run(n_cases=args.cases, starts=args.start, effectors=args.effectors, seed=args.seed,
+                   out=_out(args.out), progress=not args.json and sys.stderr.isatty(), data=data)
 
 
 def _header(rows, args) -> str:
@@ -409,6 +422,12 @@ register_benchmark(
             help="comma-separated effector sets: 2 (hands), 5 (hands, feet, head), 5point (hands, feet, chest), "
                  "random (6-12 effectors of three kinds, lesson 05's rule)"),
         arg("--seed", type=int, default=0, help="seed of the case draw"),
+        arg("--data", default=None,
+            help="sample, bandai-mini, bandai1, bandai2, or a BVH file/folder (default: the data the shipped learned "
+                 "solvers were trained on, bandai-mini); learned solvers made for another skeleton are skipped"),
+        arg("--weights", default=None,
+            help="a folder of checkpoints you trained (posekit train ... --data FOLDER --out DIR/FILE.pt): every "
+                 "learned solver loads its file from it (a file it lacks: the shipped one); give --data too"),
         arg("--out", default=None,
             help="folder for bench_all.json, .md and .png (default: data_samples/results; none or '': "
                  "do not write)"),

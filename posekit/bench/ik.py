@@ -50,7 +50,7 @@ from .plugin import arg, register_benchmark
 
 __all__ = ["Method", "MethodContext", "register_method", "unregister_method", "method_names", "get_method",
            "resolve_solvers", "evaluate_solver", "case_effectors", "effector_set_names", "SolverRefused", "RANDOM",
-           "EFFECTOR_CHOICES", "run", "PAPER", "PAPER_KB", "TABLES", "TABLE_LABELS", "default_data"]
+           "EFFECTOR_CHOICES", "weights_and_data", "run", "PAPER", "PAPER_KB", "TABLES", "TABLE_LABELS", "default_data"]
 
 PAPER = {
     ("fabrik", "2"): 6.56,  # Victor et al. 2021, Table 1: full-body FABRIK runtime, ms
@@ -403,6 +403,22 @@ TABLE_COLUMNS = ["method"] + list(dict.fromkeys(c for _, cols in TABLES for c in
 """Every column in one table (``posekit bench ik --wide``)."""
 
 
+def weights_and_data(args, solvers) -> tuple:
+    """``--weights DIR`` and ``--data`` of a benchmark's command line: the weights context
+    (:func:`posekit.paths.use_weights`, or a null context) and the data to open. With ``--weights`` the data must
+    be named too (the data those weights were trained on); refused before any work with a sentence saying so."""
+    import contextlib
+
+    from ..paths import use_weights
+
+    if getattr(args, "weights", None) is None:
+        return contextlib.nullcontext(), (default_data(solvers) if args.data is None else args.data)
+    if args.data is None:
+        raise ValueError(f"--weights {args.weights}: name the data those weights were trained on with --data "
+                         "(the BVH folder or file given to `posekit train ... --data`, or a shipped set's name)")
+    return use_weights(args.weights), args.data
+
+
 def _cli_run(args) -> list[dict]:
     import sys
 
@@ -410,10 +426,12 @@ def _cli_run(args) -> list[dict]:
 
     solvers = resolve_solvers(args.solvers)  # refuse bad names before loading data
     _starts(args.start)
+    weights, data = weights_and_data(args, solvers)
     show = not args.json and sys.stderr.isatty()
-    motions = open_dataset(default_data(solvers) if args.data is None else args.data, scale=args.scale, progress=show)
-    return run(motions, solvers=solvers, effector_sets=args.effectors.split(","), n_cases=args.cases,
-               start=args.start, seed=args.seed, peers=not args.no_peers, methods=args.methods, progress=show)
+    with weights:
+        motions = open_dataset(data, scale=args.scale, progress=show)
+        return run(motions, solvers=solvers, effector_sets=args.effectors.split(","), n_cases=args.cases,
+                   start=args.start, seed=args.seed, peers=not args.no_peers, methods=args.methods, progress=show)
 
 
 def default_data(solvers) -> str:
@@ -456,6 +474,9 @@ register_benchmark(
         arg("--data", default=None,
             help="sample, bandai-mini, bandai1, bandai2, or a BVH file/folder or .npz (default: the data the learned "
                  "solvers of the run were trained on, e.g. bandai-mini for neural; else sample)"),
+        arg("--weights", default=None,
+            help="a folder of checkpoints you trained (posekit train ... --data FOLDER --out DIR/FILE.pt): the learned "
+                 "solvers load their file from it (a file it lacks: the shipped one); give --data too"),
         arg("--scale", type=float, default=None,
             help="file units to metres for a BVH path (default: detected from the skeleton's height)"),
         arg("--seed", type=int, default=0, help="seed of the held-out split and of the case draw"),

@@ -288,7 +288,11 @@ def load_cached(load, path, skeleton=None):
     solver built from them — then checked against ``skeleton``: a model made for another skeleton is
     loaded again with ``load(path, skeleton=skeleton)``, which raises with a sentence naming the joint,
     parent or offset that differs."""
-    key = (getattr(load, "__qualname__", repr(load)), str(path))
+    try:
+        stamp = Path(path).stat().st_mtime_ns  # a file rewritten since (a retrained model) is loaded again
+    except OSError:
+        stamp = None
+    key = (getattr(load, "__qualname__", repr(load)), str(path), stamp)
     if key not in _LOADED:
         _LOADED[key] = load(path)
     m = _LOADED[key]

@@ -1,0 +1,81 @@
+"""Your own mocap end to end (issue 25, item 5): a folder of BVH clips, models trained on it with ``posekit train
+... --data FOLDER --out DIR/FILE.pt``, then ``posekit bench ik`` / ``bench all`` with ``--weights DIR --data FOLDER``
+measure them beside every classical solver, with no code. The clips are written here from the DeepMimic sample (a
+skeleton the shipped learned models were not made for), so every shipped learned model must be skipped and the
+user's own measured."""
+
+import json
+
+import numpy as np
+import pytest
+
+from posekit import paths
+from posekit.cli import main
+from posekit.data import load_sample
+from posekit.io.bvh import write_bvh
+
+
+@pytest.fixture(scope="module")
+def own(tmp_path_factory):
+    root = tmp_path_factory.mktemp("own")
+    bvh, weights = root / "clips", root / "weights"
+    bvh.mkdir()
+    m = load_sample()
+    for c in range(8):
+        idx = np.nonzero(m.clip_id == c)[0]
+        write_bvh(bvh / f"clip{c}.bvh", m.skeleton, m.local_rot[idx], float(m.frame_time[c]), root_pos=m.root_pos[idx])
+    code = main(["train", "ae-solvers", "--data", str(bvh), "--ae-epochs", "2", "--solver-epochs", "1",
+                 "--chain-epochs", "1", "--pairs", "2000", "--latent", "16", "--out", str(weights / "ae_solvers.pt")])
+    assert code == 0 and (weights / "ae_solvers.pt").is_file()
+    return bvh, weights
+
+
+def test_bench_ik_measures_the_users_own_models(own, capsys):
+    bvh, weights = own
+    capsys.readouterr()
+    assert main(["bench", "ik", "--solvers", "fabrik,neural,neural+dls", "--weights", str(weights), "--data", str(bvh),
+                 "--cases", "5", "--effectors", "2,5", "--methods", "none", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert {(r["method"], r["effectors"]) for r in rows} == {(m, e) for m in ("fabrik", "neural", "neural+dls")
+                                                            for e in ("2", "5")}
+    assert all(np.isfinite(r["mpjpe_mm_median"]) for r in rows)
+    assert all(r["converged_fraction"] == 1.0 for r in rows if r["method"] == "neural+dls")
+    # without --weights the shipped (Bandai) networks are refused for this skeleton, by name
+    assert main(["bench", "ik", "--solvers", "neural", "--data", str(bvh), "--cases", "5"]) == 2
+    assert "trained for skeleton" in capsys.readouterr().err
+    assert paths.user_weights_dir() is None  # the folder was in use for that command only
+
+
+def test_bench_all_measures_them_and_skips_the_shipped_ones(own, capsys):
+    bvh, weights = own
+    capsys.readouterr()
+    with pytest.warns(UserWarning, match="skipping solver"):
+        assert main(["bench", "all", "--weights", str(weights), "--data", str(bvh), "--cases", "3", "--start", "rest",
+                     "--effectors", "5", "--out", "none", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    names = {r["method"] for r in rows}
+    assert {"fabrik", "dls", "neural", "neural-fabrik", "neural+dls"} <= names  # the user's network, every variant
+    assert not names & {"latent-opt", "protores", "protores+dls"}  # shipped for the Bandai skeleton: skipped
+    assert all(r["data"] == str(bvh) for r in rows)
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--weights", "{weights}"], "name the data those weights were trained on with --data"),
+    (["--weights", "{missing}", "--data", "{bvh}"], "not a folder"),
+    (["--weights", "{bvh}", "--data", "{bvh}"], "holds no .pt file"),
+])
+def test_a_bad_weights_folder_is_refused_before_any_work(own, tmp_path, capsys, args, message):
+    bvh, weights = own
+    fill = {"weights": weights, "bvh": bvh, "missing": tmp_path / "nowhere"}
+    for bench in ("ik", "all"):
+        assert main(["bench", bench, *[a.format(**fill) for a in args], "--cases", "2"]) == 2
+        assert message in capsys.readouterr().err
+
+
+def test_weights_path_prefers_the_users_file_and_falls_back_to_the_shipped_one(own):
+    _, weights = own
+    shipped = paths.weights_path("protores.pt")
+    with paths.use_weights(weights):
+        assert paths.weights_path("ae_solvers.pt") == weights / "ae_solvers.pt"
+        assert paths.weights_path("protores.pt") == shipped  # a file the folder lacks: the shipped one
+    assert paths.weights_path("ae_solvers.pt") == paths.samples_dir() / "weights" / "ae_solvers.pt"
