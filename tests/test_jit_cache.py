@@ -15,12 +15,12 @@ pytestmark = pytest.mark.skipif(not _jit.HAVE_NUMBA, reason="numba is not instal
 PROBE = """
 from posekit.data import load_sample
 from posekit.ik import Pose, effector_set, make_solver
-from posekit.ik import dls
+from posekit.ik import ccd
 from posekit import _jit
 m = load_sample()
 start = Pose(m.global_pos[0], m.local_rot[0], m.root_pos[0])
-make_solver("dls", m.skeleton).solve(start, effector_set(m.skeleton, "2", m.global_pos[5]))
-print(_jit._CACHE, sum(dls._dls.stats.cache_hits.values()), sum(dls._dls.stats.cache_misses.values()))
+make_solver("ccd", m.skeleton).solve(start, effector_set(m.skeleton, "2", m.global_pos[5]))
+print(_jit._CACHE, sum(ccd._ccd.stats.cache_hits.values()), sum(ccd._ccd.stats.cache_misses.values()))
 """
 
 
