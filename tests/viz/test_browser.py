@@ -159,19 +159,25 @@ def _diagnose(page, url, token, work, what):
             f"lab.log tail:\n{log}\nscreenshot: {work / 'stalled.png'}")
 
 
-def _dismiss_dialogs(page, seen):
-    """Close any JupyterLab dialog in the way (accepting its default: e.g. the kernel to start), noting its text."""
-    for _ in range(5):
-        dialog = page.locator(".jp-Dialog")
-        if not dialog.count():
-            return
-        seen.append(" ".join(dialog.first.inner_text().split())[:300])
-        accept = dialog.first.locator(".jp-Dialog-button.jp-mod-accept")
+def _lab_page(chromium, viewport):
+    """A page for JupyterLab that closes any dialog in the way before each action, whenever it appears (a
+    kernel to choose, a file changed on disk: accepting its default), and keeps its text in ``page.dialogs``.
+    Dismissing them once before Run All lost a race: one opened after the check, before the click, and the
+    click waited 30 s behind it."""
+    page = chromium.new_page(viewport=viewport)
+    page.dialogs = []
+    dialog = page.locator(".jp-Dialog")
+
+    def close(found):
+        page.dialogs.append(" ".join(found.first.inner_text().split())[:300])
+        accept = found.first.locator(".jp-Dialog-button.jp-mod-accept")
         if accept.count():
             accept.first.click()
         else:
             page.keyboard.press("Escape")
-        page.wait_for_timeout(500)
+
+    page.add_locator_handler(dialog, close)
+    return page
 
 
 def _open_and_run_all(page, url, token, work, notebook):
@@ -181,20 +187,18 @@ def _open_and_run_all(page, url, token, work, notebook):
                            "#jp-main-statusbar :text('Idle')", timeout=120_000)
     # Run All, then check that the kernel took the cells (a "[*]" prompt: the saved outputs already
     # carry numbers); a click lost while the page settles is repeated, not waited on for minutes
-    dialogs = []
     for _ in range(3):
-        _dismiss_dialogs(page, dialogs)
         page.locator(".lm-MenuBar-itemLabel", has_text="Run").first.click()
         page.locator(".lm-Menu-itemLabel", has_text="Run All Cells").first.click()
         try:
             page.wait_for_function(_RUNNING, timeout=60_000, polling=100)
-            if dialogs:  # say what was in the way (the run went on)
-                warnings.warn(f"{notebook}: JupyterLab dialogs closed before Run All: {dialogs}")
+            if page.dialogs:  # say what was in the way (the run went on)
+                warnings.warn(f"{notebook}: JupyterLab dialogs closed on the way: {page.dialogs}")
             return
         except Exception:  # noqa: BLE001 - playwright's TimeoutError; try the menu again
             page.keyboard.press("Escape")
     pytest.fail(_diagnose(page, url, token, work, f"{notebook}: Run All Cells never started the kernel "
-                                                  f"(dialogs closed on the way: {dialogs or 'none'})"))
+                                                  f"(dialogs closed on the way: {page.dialogs or 'none'})"))
 
 
 def _wait_visible(page, locator, timeout, url, token, work, what):
@@ -226,7 +230,7 @@ def _drag(page, handle, dx):
 
 def test_viewer_renders_and_slider_moves_joint(lab, chromium):
     url, token, work = lab
-    page = chromium.new_page(viewport={"width": 1400, "height": 1000})
+    page = _lab_page(chromium, {"width": 1400, "height": 1000})
     try:
         _open_and_run_all(page, url, token, work, NOTEBOOK)
 
@@ -342,7 +346,7 @@ def test_solvers_solve_live_side_by_side(lab, chromium, notebook, views):
     every solver (their status lines change) and every view moves. Notebook 01: FABRIK, CCD and DLS;
     notebook 03: the neural solver and FABRIK; notebook 04: latent optimisation and FABRIK."""
     work = lab[2]
-    page = chromium.new_page(viewport={"width": 1500, "height": 1100})
+    page = _lab_page(chromium, {"width": 1500, "height": 1100})
     try:
         cell, labels, canvases, before = _open_panel(page, lab, notebook, views, "the solver panel")
         _select_others_and_back(page, cell, labels, notebook)
@@ -362,7 +366,7 @@ def test_effector_editor_adds_effectors_and_re_poses(lab, chromium):
     """Lesson 05's EffectorEditor (ProtoRes beside DLS): both views draw a skeleton; the target slider, a
     newly added rotation effector's yaw slider and a tolerance slider each make both solvers re-pose."""
     work = lab[2]
-    page = chromium.new_page(viewport={"width": 1500, "height": 1300})
+    page = _lab_page(chromium, {"width": 1500, "height": 1300})
     try:
         cell, labels, canvases, before = _open_panel(page, lab, PROTORES_NOTEBOOK, 2, "the effector editor")
         _select_others_and_back(page, cell, labels, PROTORES_NOTEBOOK)
@@ -399,7 +403,7 @@ def test_rig_viewer_selection_moves_nothing(lab, chromium):
     target to the previous joint's slider values, and the rig followed; later, the browser sending the wrist's
     value clamped into the ankle's range once more after chest was selected gave chest a target)."""
     url, token, work = lab
-    page = chromium.new_page(viewport={"width": 1400, "height": 1100})
+    page = _lab_page(chromium, {"width": 1400, "height": 1100})
     try:
         _open_and_run_all(page, url, token, work, RIG_NOTEBOOK)
         status = page.locator(".widget-html-content", has_text="rig at the learned controls")
