@@ -190,9 +190,18 @@ def _train(args) -> int:
     """``posekit train NAME``: run a registered trainer (:mod:`posekit.learn.trainers`)."""
     from .learn.trainers import get_trainer
 
+    import contextlib
+    import os
+
+    from .learn.distributed import start
+
     if args.list:
         return _train_list(args)
-    return get_trainer(args.trainer).run(args)
+    with start(args.device) as run:  # the device checked, torchrun's processes joined, before any data is read
+        if run.main:
+            return get_trainer(args.trainer).run(args)
+        with open(os.devnull, "w") as quiet, contextlib.redirect_stdout(quiet):  # one report, from rank 0
+            return get_trainer(args.trainer).run(args)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -253,6 +262,8 @@ def build_parser() -> argparse.ArgumentParser:
         t = get_trainer(name)
         p = tsub.add_parser(name, help=t.help)
         add_arguments(p, t.args, default_in_help=False)
+        p.add_argument("--device", default="cpu", help="where to train: cpu (default), cuda or cuda:N; under torchrun "
+                       "every process trains its share of each batch (data-parallel, README: training at scale)")
         p.set_defaults(fn=_train, trainer=name)
     from .course.commands import add_commands
 

@@ -79,12 +79,25 @@ class InverseRigNet:
         return self.y_norm.denormalize(z)
 
 
+class _WithHidden(torch.nn.Module):
+    """The network's output and hidden activations in one call (one forward per backward, as
+    ``DistributedDataParallel`` asks); the same parameters as the wrapped ``Sequential``."""
+
+    def __init__(self, net):
+        super().__init__()
+        self.net = net
+
+    def forward(self, x):
+        h = self.net[1](self.net[0](x))
+        return self.net[2](h), h
+
+
 def _loss(l1: float):
     """Holden et al. 2017 Sec. 6: squared error plus an L1 penalty on the hidden activations."""
 
     def loss(net, x, y):
-        h = net[1](net[0](x))
-        return torch.mean((net[2](h) - y) ** 2) + l1 * h.abs().mean()
+        out, h = net(x)
+        return torch.mean((out - y) ** 2) + l1 * h.abs().mean()
 
     return loss
 
@@ -120,8 +133,9 @@ def train_inverse_net(X, Y, epochs: int = 20, batch: int = 256, lr: float = 1e-3
     model = InverseRigNet(X.shape[1], Y.shape[1], hidden, xn, yn, control_names, joint_names, skeleton)
     Xt = torch.as_tensor(xn.normalize(X), dtype=torch.float32)
     Yt = torch.as_tensor(yn.normalize(Y), dtype=torch.float32)
-    model.curves = fit(model.net, _loss(l1), (Xt, Yt), epochs=epochs, batch=batch, lr=lr, seed=seed,
+    model.curves = fit(_WithHidden(model.net), _loss(l1), (Xt, Yt), epochs=epochs, batch=batch, lr=lr, seed=seed,
                        progress=progress)
+    model.net.cpu()  # trained on the run's device (posekit train --device); predicted on the CPU
     model.train_config = {"l1": l1, "epochs": epochs, "batch": batch, "lr": lr, "optimizer": "adam"}
     return model, list(model.curves.train)
 

@@ -147,10 +147,15 @@ def save_checkpoint(path, model_state, *, kind: str, config: dict, skeleton: Ske
             "seed": None if seed is None else int(seed), "data": str(data), "licence": str(licence),
             "extra": _plain(extra or {}, "extra"), "torch": str(torch.__version__)}
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    torch.save(ckpt, tmp)
-    os.replace(tmp, path)
+    from .distributed import current
+
+    run = current()
+    if run.main:  # under torchrun every process holds the same weights: rank 0 writes them, the others wait
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(path.name + ".tmp")
+        torch.save(ckpt, tmp)
+        os.replace(tmp, path)
+    run.barrier()
     return path
 
 

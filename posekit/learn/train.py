@@ -8,6 +8,12 @@ solvers of lessons 03-05 train with the same :func:`fit`. Each epoch::
     for each batch b of perm:  loss_fn(model, *train_data[b]).backward(); optimizer.step()
     val = mean loss_fn over val_data (no gradients), in order
 
+**Past one process.** Inside :func:`posekit.learn.distributed.start` (``posekit train ... --device``, or
+``torchrun``) the loop trains on that run's device, and with ``W`` processes each takes every ``W``-th
+sample of each batch (the same permutation everywhere) through ``DistributedDataParallel``, which averages
+the gradients: the step of one process on the whole batch, shared (``W`` must divide ``batch``; a last
+batch smaller than ``W`` is skipped).
+
 **Reproducibility.** For a given ``seed`` the loop is repeatable on one machine: the shuffling
 generator and torch's global generator (dropout, noise) are seeded, and nothing else is random.
 Build the model under ``torch.manual_seed(seed)`` so its initial weights are seeded too. Another
@@ -116,7 +122,9 @@ def fit(model: torch.nn.Module, loss_fn, train_data, val_data=None, *, epochs: i
         Built by the caller (under ``torch.manual_seed(seed)`` for seeded initial weights).
     loss_fn : callable
         ``loss_fn(model, *batch) -> scalar tensor``: ``batch`` holds one slice of each array of
-        ``train_data``, in order (``loss_fn(model, x, y)``).
+        ``train_data``, in order (``loss_fn(model, x, y)``). It calls ``model(...)`` once per batch and
+        nothing else of it: with several processes ``model`` is the ``DistributedDataParallel`` wrapper,
+        which shares the gradients of that one call.
     train_data : tuple of Tensor or ndarray, each shape (N, ...)
         Arrays indexed together; floating numpy arrays become float32 tensors.
     val_data : tuple of Tensor or ndarray, each shape (M, ...), optional
@@ -152,11 +160,16 @@ def fit(model: torch.nn.Module, loss_fn, train_data, val_data=None, *, epochs: i
         raise ValueError(f"fit: epochs and batch must be >= 1, got epochs={epochs}, batch={batch}")
     if patience is not None and (val_data is None or patience < 1):
         raise ValueError("fit: patience (early stopping) needs val_data and patience >= 1")
-    train_data = _tensors(train_data, "train_data")
-    val_data = None if val_data is None else _tensors(val_data, "val_data")
+    from .distributed import current
+
+    run = current()
+    run.share(batch, "fit: batch")
+    train_data = tuple(a.to(run.device) for a in _tensors(train_data, "train_data"))
+    val_data = None if val_data is None else tuple(a.to(run.device) for a in _tensors(val_data, "val_data"))
     n = len(train_data[0])
-    torch.manual_seed(seed)
-    g = torch.Generator().manual_seed(seed)
+    torch.manual_seed(run.seed(seed))  # dropout and noise: each process its own stream
+    g = torch.Generator().manual_seed(seed)  # the shuffle: the same on every process
+    net = run.wrap(model)  # model on the run's device; with several processes inside DDP
     opt = _optimizer(optimizer, model.parameters(), lr, weight_decay)
     curves = Curves()
     best, best_state = math.inf, None
@@ -170,14 +183,20 @@ def fit(model: torch.nn.Module, loss_fn, train_data, val_data=None, *, epochs: i
         model.train()
         perm = torch.randperm(n, generator=g)
         total = 0.0
+        seen = 0
         for k in range(0, n, batch):
             idx = perm[k:k + batch]
-            loss = loss_fn(model, *(a[idx] for a in train_data))
+            if run.distributed:
+                if len(idx) < run.world:  # every process skips it alike: no process without a share
+                    continue
+                idx = idx[run.rank::run.world]
+            loss = loss_fn(net, *(a[idx] for a in train_data))
             opt.zero_grad()
             loss.backward()
             opt.step()
             total += float(loss.detach()) * len(idx)
-        curves.train.append(total / n)
+            seen += len(idx)
+        curves.train.append(run.mean(total) / run.mean(seen))
         if not math.isfinite(curves.train[-1]):
             raise ValueError(f"fit: the training loss became {curves.train[-1]} in epoch {epoch}; "
                              "lower lr or check the data for NaN")

@@ -63,8 +63,11 @@ def command(seed: int = 0, data: str = "bandai-mini", structured: bool = True, *
 
 
 def recon_mm(model: AEGAN, x) -> float:
-    """Mean per-joint distance of ``G(E(x))`` to z-scored poses ``x`` (N, 3 B), millimetres."""
-    xr = model.decode(model.encode(x))
+    """Mean per-joint distance of ``G(E(x))`` to z-scored poses ``x`` (N, 3 B), millimetres (on the networks'
+    device)."""
+    dev = next(model.encoder.parameters()).device
+    with torch.no_grad():
+        xr = model.generator(model.encoder(torch.as_tensor(np.asarray(x, np.float32), device=dev))).cpu().numpy()
     d = (xr - x) * model.norm.std.astype(np.float32)
     return float(np.linalg.norm(d.reshape(len(x), -1, 3), axis=-1).mean() * 1000)
 
@@ -77,9 +80,48 @@ def _acc(real_logit, fake_logit) -> float:
     return 0.5 * ((real_logit > 0).float().mean().item() + (fake_logit < 0).float().mean().item())
 
 
-def _discriminator_step(opt, logit, real, fake, smooth: float):
+class _Logits(torch.nn.Module):
+    """A discriminator's logits of real and fake samples in one call (one forward per backward: what
+    ``DistributedDataParallel`` asks)."""
+
+    def __init__(self, disc):
+        super().__init__()
+        self.disc = disc
+
+    def forward(self, real, fake):
+        return self.disc.logit(real), self.disc.logit(fake)
+
+
+class _EncoderGeneratorLoss(torch.nn.Module):
+    """The encoder/generator loss terms of Eq. (5) in one call; the discriminators are read, not trained
+    here (kept out of the module's parameters)."""
+
+    def __init__(self, encoder, generator, pose_disc, latent_disc):
+        super().__init__()
+        self.encoder, self.generator = encoder, generator
+        self._discs = (pose_disc, latent_disc)  # a tuple: not submodules, not synchronised with this step
+
+    def forward(self, xb, zp):
+        E, G = self.encoder, self.generator
+        Dx, Dz = self._discs
+        ze = E(xb)
+        xg = G(zp)
+        rec_x = torch.mean((G(ze) - xb) ** 2)
+        rec_z = torch.mean((E(xg) - zp) ** 2)
+        # the gradient flows through the discriminators to E and G, not into their weights (their own steps
+        # start from zero gradients anyway; under DDP a gradient here would count as a second one of theirs)
+        for D in (Dx, Dz):
+            D.requires_grad_(False)
+        try:
+            return rec_x, rec_z, _bce(Dx.logit(xg), 1.0), _bce(Dz.logit(ze), 1.0)
+        finally:
+            for D in (Dx, Dz):
+                D.requires_grad_(True)
+
+
+def _discriminator_step(opt, logits, real, fake, smooth: float):
     """One step of Eq. (3) or (4): real samples labelled ``smooth``, fake ones 0; returns (loss, accuracy)."""
-    lr_, lf = logit(real), logit(fake)
+    lr_, lf = logits(real, fake)
     loss = _bce(lr_, smooth) + _bce(lf, 0.0)
     opt.zero_grad()
     loss.backward()
@@ -112,20 +154,29 @@ def train_aegan(motions=None, *, seed: int = 0, out=None, progress: bool = True,
         ``curves`` ({loss: [mean per log interval]} for :data:`LOSSES`, ``step``, ``val_rec_mm``), settings,
         seconds, steps done.
     """
+    from ...learn.distributed import current
+
     st = merge_settings("train_aegan", settings, DEFAULTS)
+    run = current()  # torchrun: each process draws its own share of every batch
+    share = run.share(int(st["batch"]))
     t0 = time.perf_counter()
     motions, td, vd, how = split_pose_data(motions, seed)
-    x = torch.as_tensor(td.normalized())
+    x = torch.as_tensor(td.normalized()).to(run.device)
     xv = vd.normalized()[:2000]
     model = AEGAN.new(motions.skeleton, td.norm, config, seed)
     model.x_range = np.stack([td.normalized().min(0), td.normalized().max(0)])
     E, G, Dx, Dz = model.encoder, model.generator, model.pose_disc, model.latent_disc
+    # one module per optimiser step, on the run's device, inside DDP with several processes (some SPL weights
+    # get no gradient in a step: DDP is told so)
+    dz_step, dx_step = run.wrap(_Logits(Dz), unused=True), run.wrap(_Logits(Dx), unused=True)
+    eg_step = run.wrap(_EncoderGeneratorLoss(E, G, Dx, Dz), unused=True)
     betas = (st["beta1"], 0.999)
     opt_eg = torch.optim.Adam([*E.parameters(), *G.parameters()], lr=st["lr"], betas=betas)
     opt_dx = torch.optim.Adam(Dx.parameters(), lr=st["lr_dx"], betas=betas)
     opt_dz = torch.optim.Adam(Dz.parameters(), lr=st["lr"], betas=betas)
-    gen = torch.Generator().manual_seed(seed)
-    b, d, s = int(st["batch"]), model.config.latent, float(st["smooth"])
+    gen = torch.Generator().manual_seed(run.seed(seed))
+    b, d, s = share, model.config.latent, float(st["smooth"])
+    dev = run.device
     curves = {k: [] for k in (*LOSSES, "step", "val_rec_mm")}
     acc = {k: 0.0 for k in LOSSES}
     n_acc = 0
@@ -145,26 +196,21 @@ def train_aegan(motions=None, *, seed: int = 0, out=None, progress: bool = True,
             xb = x[torch.randint(0, len(x), (3 * b,), generator=gen)]
             with torch.no_grad():
                 ze = E(xb)
-            zp = sample_prior(3 * b, d, gen)
-            loss_, acc_ = _discriminator_step(opt_dz, Dz.logit, zp, ze, s)
+            zp = sample_prior(3 * b, d, gen).to(dev)
+            loss_, acc_ = _discriminator_step(opt_dz, dz_step, zp, ze, s)
             acc["d_z"] += loss_
             acc["acc_z"] += acc_
             # pose discriminator: b samples; training poses real, generated poses fake (3)
             xr = x[torch.randint(0, len(x), (b,), generator=gen)]
             with torch.no_grad():
-                xg = G(sample_prior(b, d, gen))
-            loss_, acc_ = _discriminator_step(opt_dx, Dx.logit, xr, xg, s)
+                xg = G(sample_prior(b, d, gen).to(dev))
+            loss_, acc_ = _discriminator_step(opt_dx, dx_step, xr, xg, s)
             acc["d_x"] += loss_
             acc["acc_x"] += acc_
             # encoder and generator: 2 b samples (5)
             xb = x[torch.randint(0, len(x), (2 * b,), generator=gen)]
-            zp = sample_prior(2 * b, d, gen)
-            ze = E(xb)
-            xg = G(zp)
-            rec_x = torch.mean((G(ze) - xb) ** 2)
-            rec_z = torch.mean((E(xg) - zp) ** 2)
-            adv_x = _bce(Dx.logit(xg), 1.0)
-            adv_z = _bce(Dz.logit(ze), 1.0)
+            zp = sample_prior(2 * b, d, gen).to(dev)
+            rec_x, rec_z, adv_x, adv_z = eg_step(xb, zp)
             loss = st["w_x"] * rec_x + st["w_z"] * rec_z + adv_x + adv_z
             opt_eg.zero_grad()
             loss.backward()
@@ -175,7 +221,7 @@ def train_aegan(motions=None, *, seed: int = 0, out=None, progress: bool = True,
             done = step + 1
             if done % int(st["log_every"]) == 0 or done == int(st["steps"]):
                 for k in LOSSES:
-                    curves[k].append(acc[k] / n_acc)
+                    curves[k].append(run.mean(acc[k] / n_acc))
                     acc[k] = 0.0
                 n_acc = 0
                 for net in (E, G, Dx, Dz):
@@ -190,12 +236,13 @@ def train_aegan(motions=None, *, seed: int = 0, out=None, progress: bool = True,
         finish(bar)                    # a time budget stops it early: the bar ends at the steps that ran
         bar.close()
     for net in (E, G, Dx, Dz):
-        net.eval()
+        net.cpu().eval()  # back on the CPU: what the lessons load
     with torch.no_grad():  # evaluated as shipped: float16 weights
         for net in (E, G, Dx, Dz):
             for p in net.parameters():
                 p.copy_(p.half().float())
     report = {"split": how, "train_poses": int(td.n), "val_poses": int(vd.n), "settings": st, "steps": done,
+              "processes": run.world, "device": str(run.device),
               "curves": curves, "seconds": time.perf_counter() - t0, "val_rec_mm": recon_mm(model, xv)}
     if out is not False:
         label = data_label or motions.source.split(" (")[0]

@@ -130,8 +130,13 @@ def run_studies(motions=None, model: AESolvers | None = None, out=None, seed: in
                 ae_epochs: int = 40) -> dict:
     """All three studies; written as JSON to ``out`` (default :func:`studies_path`) unless ``out=False``."""
     from ...data.bandai_mini import load_bandai_mini
+    from ...learn.distributed import current
     from .solver import load_model
 
+    run = current()
+    if run.device.type != "cpu":
+        raise ValueError(f"posekit train ae-studies trains on the CPU only (its studies read the shipped model and "
+                         f"data on the CPU), not {run.device}: run it with --device cpu (about 9 minutes)")
     motions = load_bandai_mini() if motions is None else motions
     model = load_model(skeleton=motions.skeleton) if model is None else model
     t0 = time.perf_counter()
@@ -142,7 +147,7 @@ def run_studies(motions=None, model: AESolvers | None = None, out=None, seed: in
               "k": k_study(model, motions, seed=seed, progress=progress),
               "chain": chain_study(model, motions, seed=seed)}
     result["seconds"] = time.perf_counter() - t0
-    if out is not False:
+    if out is not False and run.main:
         path = studies_path() if out is None else Path(out)
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(json.dumps(result, indent=1) + "\n")

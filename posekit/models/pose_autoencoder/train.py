@@ -154,13 +154,18 @@ def train_ae_solvers(motions=None, *, seed: int = 0, out=None, groups=tuple(GROU
     report : dict
         Curves (train/val per epoch), seconds per stage and in all.
     """
+    from ...learn.distributed import current
+
     st = merge_settings("train_ae_solvers", settings, DEFAULTS)
+    run = current()  # --device, torchrun: fit trains each network there, data-parallel
+    run.share(int(st["batch"]))
     t0 = time.perf_counter()
     motions, td, vd, how = split_pose_data(motions, seed)
-    x = torch.as_tensor(np.concatenate([td.normalized(), vd.normalized()]))
+    x = torch.as_tensor(np.concatenate([td.normalized(), vd.normalized()])).to(run.device)
     xv = x[len(td.x):]
     cfg = AEConfig(x.shape[1], latent=latent, tied=tied)
     model = AESolvers.new(motions.skeleton, td.norm, cfg, seed)
+    model.ae.to(run.device)  # the solvers' losses read it on the device they train on
     z = td.normalized()
     model.x_range = np.stack([z.min(0), z.max(0)])
     report = {"split": how, "train_poses": int(td.n), "val_poses": int(vd.n), "settings": st, "seconds": {}}
@@ -186,6 +191,9 @@ def train_ae_solvers(motions=None, *, seed: int = 0, out=None, groups=tuple(GROU
             report["solvers"][f"chained {g}"] = {"train": c.train, "val": c.val}
             report["seconds"][f"chained {g}"] = c.seconds
     report["seconds"]["total"] = time.perf_counter() - t0
+    report["processes"], report["device"] = run.world, str(run.device)
+    for net in (model.ae, *model.solvers.values(), *model.chained.values()):
+        net.cpu()  # what the lessons load
     if out is not False:
         label = data_label or motions.source.split(" (")[0]
         data = (f"{label}: training split ({how}), {td.n} poses + mirrored copies; val {vd.n} poses; "

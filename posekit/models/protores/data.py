@@ -123,6 +123,12 @@ class Batch:
     global_rot: torch.Tensor
     global_pos: torch.Tensor
 
+    def to(self, device) -> "Batch":
+        """The batch on ``device`` (itself when it is there already)."""
+        if self.joint.device == torch.device(device):
+            return self
+        return Batch(**{k: v.to(device) for k, v in vars(self).items()})
+
 
 def add_noise(pos, rot, lookdir, sigma, gen):
     """The three noise models (Appendix B), one per kind, each of scale ``sigma`` (B, N).

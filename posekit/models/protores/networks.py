@@ -185,7 +185,7 @@ class PosingNet(nn.Module):
             pelvis = out[:, 6 * nb:]
         J = self.skeleton.n_joints
         rot6 = out[:, :6 * nb].reshape(Bn, nb, 6)
-        local = torch.eye(3, dtype=code.dtype).expand(Bn, J, 3, 3).clone()
+        local = torch.eye(3, dtype=code.dtype, device=code.device).expand(Bn, J, 3, 3).clone()
         local[:, self.body] = sixd_to_matrix(rot6)
         pelvis = pelvis + c
         root = pelvis - self.pelvis_offset if self.helper_root >= 0 else pelvis

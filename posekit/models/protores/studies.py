@@ -11,7 +11,8 @@ writes ``data_samples/results/protores_ablation.json`` (read by ``posekit bench 
 * **Width** — ProtoRes of widths 64, 128 (the ablations' reference run) and 256, the same :data:`STEPS`
   steps: parameters, seconds per step, one-pose time on one thread, and the benchmarks' errors.
 
-Every run is seeded and single-threaded; ``workers`` runs train side by side, one per core.
+Every run is seeded and single-threaded; ``workers`` runs train side by side, one per core (under ``torchrun``
+or on a GPU, :mod:`posekit.learn.distributed`: one after another, each data-parallel).
 """
 
 from __future__ import annotations
@@ -91,8 +92,14 @@ def run_studies(seed: int = 0, out=None, workers: int = 2, progress: bool = True
     jobs = [(f"width {w}", {"width": w}, {"steps": STEPS}, seed) for w in (256, 64, 128)]  # longest first
     jobs += [(f"ProtoRes, {k}", {k2: v for k2, v in kw.items() if k2 == "gpd"},
               {"steps": STEPS, **{k2: v for k2, v in kw.items() if k2 != "gpd"}}, seed) for k, kw in ABLATIONS.items()]
-    with ProcessPoolExecutor(max_workers=max(1, workers)) as pool:
-        done = list(pool.map(_job, jobs))
+    from ...learn.distributed import current
+
+    run = current()
+    if run.distributed or run.device.type != "cpu" or workers <= 1:  # torchrun or a GPU: one run after another,
+        done = [_job(j) for j in jobs]                                # each on every process, data-parallel
+    else:
+        with ProcessPoolExecutor(max_workers=workers) as pool:
+            done = list(pool.map(_job, jobs))
     width = lambda r: int(r["method"][6:]) if r["method"].startswith("width") else 0  # noqa: E731
     done.sort(key=lambda r: (not r["method"].startswith("width"), width(r)))
     shipped = load_protores("protores")
@@ -106,7 +113,7 @@ def run_studies(seed: int = 0, out=None, workers: int = 2, progress: bool = True
            "width": [r for r in done if r["method"].startswith("width")], "seed": seed,
            "steps": STEPS, "seconds": round(time.perf_counter() - t0),
            "command": f"posekit train protores-studies --seed {seed}"}
-    if out is not False:
+    if out is not False and run.main:
         path = studies_path() if out is None else out
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(json.dumps(res, indent=1) + "\n")

@@ -181,10 +181,14 @@ def train_protores(motions=None, *, arch: str = "protores", seed: int = 0, out=N
     from ...data.cases import case_split
     from ...data.metrics import body_joints
 
+    from ...learn.distributed import current
+
     st = merge_settings("train_protores", settings, DEFAULTS)
     if arch not in ARCHS:
         raise ValueError(f"arch must be one of {', '.join(ARCHS)}, got {arch!r}")
     steps = int(st["steps"] or STEPS[arch])
+    run = current()  # torchrun: each process draws its own share of every batch
+    share = run.share(int(st["batch"]))
     t0 = time.perf_counter()
     motions = load_bandai_mini() if motions is None else motions
     train, val, _, how = case_split(motions, seed)
@@ -196,9 +200,12 @@ def train_protores(motions=None, *, arch: str = "protores", seed: int = 0, out=N
     cfg = config or ProtoResConfig(len(body_joints(motions.skeleton)))
     cfg = ProtoResConfig(**{**cfg.to_dict(), "arch": arch})
     net = PosingNet(motions.skeleton, cfg)
+    # on the run's device; with several processes inside DDP (net: the plain network). The last residual block's
+    # skip layer of each FCR feeds nothing (its output is not read): DDP is told some parameters get no gradient
+    model = run.wrap(net, unused=True)
     opt = torch.optim.Adam(net.parameters(), lr=float(st["lr"]))
     sched = torch.optim.lr_scheduler.LambdaLR(opt, lambda i: _lr_factor(i, steps, int(st["warmup"])))
-    gen = torch.Generator().manual_seed(seed)
+    gen = torch.Generator().manual_seed(run.seed(seed))
     curves = {k: [] for k in (*LOSSES, "step", "seconds", "val_ikd_l2", "val_gpd_l2", "val_loc_geo", "val_mpjpe_mm")}
     acc = {k: 0.0 for k in LOSSES}
     n_acc, done, bar = 0, 0, None
@@ -213,8 +220,8 @@ def train_protores(motions=None, *, arch: str = "protores", seed: int = 0, out=N
                 break
             ts = time.perf_counter()
             net.train()
-            b = draw_batch(bank, int(st["batch"]), gen, **draw)
-            terms = losses(net(b.joint, b.kind, b.value, b.tol), b, net.body, st["w_pos"], st["w_max"],
+            b = draw_batch(bank, share, gen, **draw).to(run.device)
+            terms = losses(model(b.joint, b.kind, b.value, b.tol), b, net.body, st["w_pos"], st["w_max"],
                            bool(st["weighted"]))
             opt.zero_grad()
             terms["total"].backward()
@@ -222,16 +229,16 @@ def train_protores(motions=None, *, arch: str = "protores", seed: int = 0, out=N
             sched.step()
             train_seconds += time.perf_counter() - ts
             for k in LOSSES:
-                acc[k] += float(terms[k].detach())
+                acc[k] += float(terms[k].detach())  # this process's share; averaged over processes when logged
             n_acc += 1
             done = step + 1
             if done % int(st["log_every"]) == 0 or done == steps:
                 for k in LOSSES:
-                    curves[k].append(acc[k] / n_acc)
+                    curves[k].append(run.mean(acc[k] / n_acc))
                     acc[k] = 0.0
                 n_acc = 0
                 net.eval()
-                m = evaluate_batches(net, vb)
+                m = evaluate_batches(net, [v.to(run.device) for v in vb])
                 for k, v in m.items():
                     curves[f"val_{k}"].append(v)
                 curves["step"].append(done)
@@ -243,12 +250,13 @@ def train_protores(motions=None, *, arch: str = "protores", seed: int = 0, out=N
     if bar is not None:
         finish(bar)                    # a time budget stops it early: the bar ends at the steps that ran
         bar.close()
-    net.eval()
+    net.cpu().eval()  # the plain network, back on the CPU: what the lessons load
     with torch.no_grad():  # evaluated as shipped: float16 weights
         for p in net.parameters():
             p.copy_(p.half().float())
     final = evaluate_batches(net, vb)
     report = {"split": how, "train_poses": int(len(bank)), "val_poses": int(len(vbank)), "settings": st,
+              "processes": run.world, "device": str(run.device),
               "steps": done, "curves": curves, "seconds": time.perf_counter() - t0, "train_seconds": train_seconds,
               "seconds_per_step": train_seconds / max(done, 1), "val": final, "parameters": net.n_parameters()}
     if out is not False:
