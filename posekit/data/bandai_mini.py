@@ -28,7 +28,7 @@ from .motion import MotionSet
 __all__ = [
     "MINI_DIR", "MINI_FILE", "STEP", "ROOT_TO_HIPS", "JOINTS", "CONTENTS_1", "STYLES_1",
     "BandaiMiniSplit", "held_out_split", "load_bandai_mini", "bandai_mini_split",
-    "mini_path", "LICENCE",
+    "mini_path", "LICENCE", "weights_licence",
 ]
 
 MINI_DIR = "bandai_mini"
@@ -41,6 +41,18 @@ LICENCE = ("CC BY-NC 4.0 (non-commercial): trained on the Bandai mini set (data_
            "frames subsampled from the Bandai Namco Research Motion Datasets 1 and 2, (c) Bandai Namco "
            "Research Inc., CC BY-NC 4.0 (Kobayashi et al. 2023, arXiv 2306.08861).")
 """Licence recorded in weights trained on the Bandai mini set."""
+
+
+def weights_licence(label: str) -> str:
+    """The licence to record in weights trained on the data set ``label`` (a ``posekit`` data set name):
+    :data:`LICENCE` for the mini set, the full Bandai sets' CC BY-NC 4.0 for ``bandai1`` / ``bandai2``,
+    else a pointer to the data's own licence."""
+    if label == "bandai-mini":
+        return LICENCE
+    if "bandai" in label.lower():
+        return (f"CC BY-NC 4.0 (non-commercial): trained on {label}, the Bandai Namco Research Motion Dataset "
+                "(c) Bandai Namco Research Inc., CC BY-NC 4.0 (Kobayashi et al. 2023, arXiv 2306.08861).")
+    return "see the data's licence"
 
 FORMAT_VERSION = 1
 

@@ -39,7 +39,7 @@ from ...learn.trainers import cli_data, cli_settings, print_written, register_tr
 from ...plugins import arg
 from ...progress import finish
 from ...data.pose_vectors import split_pose_data
-from ...data.bandai_mini import LICENCE
+from ...data.bandai_mini import weights_licence
 from .networks import AEGAN, AEGANConfig, sample_prior, weights_path
 
 __all__ = ["DEFAULTS", "LOSSES", "train_aegan", "command", "recon_mm"]
@@ -250,7 +250,7 @@ def train_aegan(motions=None, *, seed: int = 0, out=None, progress: bool = True,
         data = (f"{label}: training split ({how}), {td.n} poses + mirrored copies; val {vd.n} poses (seed {seed})")
         model.save(weights_path() if out is None else out,
                    command=command(seed=seed, data=label, structured=cfg.structured, **settings), seed=seed,
-                   data=data, licence=LICENCE if "bandai" in label.lower() else "see the data's licence",
+                   data=data, licence=weights_licence(label),
                    extra={"report": report})
     return model, report
 

@@ -24,7 +24,7 @@ import time
 import numpy as np
 import torch
 
-from ...data.bandai_mini import LICENCE
+from ...data.bandai_mini import weights_licence
 from ...learn import fit, merge_settings
 from ...learn.trainers import cli_data, cli_settings, print_written, register_trainer
 from ...plugins import arg
@@ -200,7 +200,7 @@ def train_ae_solvers(motions=None, *, seed: int = 0, out=None, groups=tuple(GROU
                 f"{st['pairs']} training pairs at most 1 s apart (seed {seed})")
         model.save(weights_path() if out is None else out,
                    command=command(seed=seed, latent=latent, tied=tied, data=label, **settings), seed=seed,
-                   data=data, licence=LICENCE if "bandai" in label.lower() else "see the data's licence",
+                   data=data, licence=weights_licence(label),
                    extra={"report": report})
     return model, report
 

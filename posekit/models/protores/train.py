@@ -36,9 +36,9 @@ import torch
 
 from ...learn import limit_threads, merge_settings
 from ...progress import finish
-from ...learn.trainers import cli_settings, print_written, register_trainer
+from ...learn.trainers import cli_data, cli_settings, print_written, register_trainer
 from ...plugins import arg
-from ...data.bandai_mini import LICENCE
+from ...data.bandai_mini import weights_licence
 from .networks import ARCHS, PosingNet, ProtoResConfig, weights_path
 from .data import PoseBank, draw_batch
 
@@ -56,9 +56,10 @@ STEPS = {"protores": 8000, "masked-fcr": 8000, "transformer": 1500}
 LOSSES = ("total", "gpd_l2", "ikd_l2", "loc_geo", "glob_geo", "look_at")
 
 
-def command(arch: str = "protores", seed: int = 0, config: dict | None = None, **settings) -> str:
+def command(arch: str = "protores", seed: int = 0, config: dict | None = None, data: str = "bandai-mini",
+            **settings) -> str:
     """The command line that makes weights with these settings."""
-    parts = [f"--arch {arch}"] * (arch != "protores") + [f"--seed {seed}"]
+    parts = [f"--arch {arch}"] * (arch != "protores") + [f"--data {data}"] * (data != "bandai-mini") + [f"--seed {seed}"]
     base = ProtoResConfig(1)
     for k in ("width", "gpd"):
         if config and config.get(k) != getattr(base, k):
@@ -264,8 +265,8 @@ def train_protores(motions=None, *, arch: str = "protores", seed: int = 0, out=N
         data = (f"{label}: training split ({how}), {len(train)} poses + mirrored copies; val {len(val)} poses "
                 f"(seed {seed})")
         net.save(weights_path(arch) if out is None else out,
-                 command=command(arch, seed, cfg.to_dict(), **settings), seed=seed, data=data,
-                 licence=LICENCE if "bandai" in label.lower() else "see the data's licence", extra={"report": report})
+                 command=command(arch, seed, cfg.to_dict(), data=label, **settings), seed=seed, data=data,
+                 licence=weights_licence(label), extra={"report": report})
     return net, report
 
 
@@ -280,7 +281,7 @@ def _cli(args) -> int:
     settings = cli_settings(args, DEFAULTS)
     if args.fixed_weights:
         settings["weighted"] = False
-    motions = load_bandai_mini()
+    motions = load_bandai_mini() if args.data == "bandai-mini" else cli_data(args)[0]
     config = ProtoResConfig(len(body_joints(motions.skeleton)), arch=args.arch, width=args.width, gpd=not args.no_gpd)
     out = Path(args.out) if args.out else None
     net, report = train_protores(motions, arch=args.arch, seed=args.seed, out=out, config=config,
@@ -305,7 +306,9 @@ register_trainer(
     what="ProtoRes and its Masked-FCR and Transformer baselines (Oreshkin et al. 2022)",
     used_by="lesson 05 (05_protores.ipynb), the protores solvers, posekit bench protores",
     takes="about 11-12 minutes each on one core (it trains on one thread)",
-    args=[arg("--arch", choices=ARCHS, default="protores",
+    args=[arg("--data", default="bandai-mini", help="training data: bandai-mini (default, its own split), or any "
+              "posekit data set name / path (split by clip; e.g. bandai1 for the full Bandai set 1)"),
+          arg("--arch", choices=ARCHS, default="protores",
               help="encoder: protores (default), masked-fcr or transformer (the paper's baselines)"),
           arg("--steps", type=int, default=None,
               help="training steps (default: " + ", ".join(f"{k} {v}" for k, v in STEPS.items()) + ")")]
