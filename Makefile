@@ -1,6 +1,6 @@
 # posekit — the two commands of the README:
 #   make lab    set up (virtual environment, packages) and open JupyterLab on the notebooks
-#   (make studio: lesson 06's posing studio served by Voila as a browser app)
+#   (make studio: the posing studio alone, served by Voila as a browser app)
 #   make test   set up (and Chromium for the browser test) and run every test: unit tests,
 #               every notebook under nbval, the headless-browser check of the 3D widget (both cores)
 #   make test-unit        the inner loop: the unit tests only (no notebook, no browser)
@@ -65,9 +65,13 @@ lab: setup
 	$(VENV)/bin/jupyter lab notebooks/ $(ROOT_FLAG) --LabApp.news_url= \
 	  --LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate $(LAB_ARGS)
 
-# lesson 06's posing studio as a browser app (Voila); Ctrl-C stops it and its kernel
+# the posing studio alone as a browser app (Voila, notebooks/studio.ipynb; lesson 06 teaches it), one kernel kept
+# preheated for the next visitor; Ctrl-C stops it and its kernels. STUDIO_DATA (a data set or BVH folder),
+# STUDIO_WEIGHTS (your trained models), STUDIO_SOLVERS (2-4 names) choose what it poses
 studio: setup
-	cd notebooks && ../$(VENV)/bin/voila 06_posing_studio.ipynb --port=$(or $(STUDIO_PORT),8866) \
+	cd notebooks && POSEKIT_STUDIO_DATA="$(if $(wildcard $(STUDIO_DATA)),$(abspath $(STUDIO_DATA)),$(STUDIO_DATA))" POSEKIT_STUDIO_SOLVERS="$(STUDIO_SOLVERS)" \
+	  $(if $(STUDIO_WEIGHTS),POSEKIT_WEIGHTS_DIR="$(abspath $(STUDIO_WEIGHTS))") \
+	  ../$(VENV)/bin/voila studio.ipynb --port=$(or $(STUDIO_PORT),8866) --preheat_kernel=True --pool_size=1 \
 	  --MappingKernelManager.cull_idle_timeout=600 --MappingKernelManager.cull_interval=60 $(STUDIO_ARGS)
 
 # both cores: tests grouped by module, each notebook on one worker, the browser tests together

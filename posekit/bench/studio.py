@@ -43,7 +43,8 @@ from .plugin import arg, register_benchmark
 __all__ = ["serve_voila", "launch_chromium", "update_number", "open_studio", "choose_solvers", "rapid_updates", "kernel_processes", "run", "GOALS",
            "CHROMIUM", "CHROMIUM_FLAGS", "NOTEBOOK"]
 
-NOTEBOOK = notebooks_dir() / "06_posing_studio.ipynb"
+NOTEBOOK = notebooks_dir() / "studio.ipynb"
+"""What ``make studio`` serves: the studio alone (:mod:`posekit.viz.studio_app`; lesson 06 builds the same)."""
 CHROMIUM = os.environ.get("POSEKIT_CHROMIUM", "/usr/bin/chromium")
 CHROMIUM_FLAGS = ["--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader", "--disable-background-networking",
                   "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-quic"]
@@ -115,11 +116,13 @@ class VoilaServer:
 
 
 @contextlib.contextmanager
-def serve_voila(notebook=NOTEBOOK, folder=None, cull_idle_s: int = 600, startup_s: float = 120.0):
+def serve_voila(notebook=NOTEBOOK, folder=None, cull_idle_s: int = 600, startup_s: float = 120.0,
+                preheat: int = 0):
     """Serve a copy of ``notebook`` with Voila on a free local port; yields a :class:`VoilaServer`.
 
     The copy lives in ``folder`` (default a new temporary folder); kernels idle for ``cull_idle_s`` seconds
-    are culled, and leaving the block stops the server and its kernels.
+    are culled, and leaving the block stops the server and its kernels. ``preheat``: that many kernels kept
+    with the notebook already run (Voila's kernel pool, what ``make studio`` does), 0 none.
     """
     own = folder is None
     folder = Path(tempfile.mkdtemp(prefix="posekit-studio-") if own else folder)
@@ -130,6 +133,8 @@ def serve_voila(notebook=NOTEBOOK, folder=None, cull_idle_s: int = 600, startup_
     cmd = [sys.executable, "-m", "voila", Path(notebook).name, "--no-browser", f"--port={port}",
            "--Voila.ip=127.0.0.1", f"--MappingKernelManager.cull_idle_timeout={cull_idle_s}",
            "--MappingKernelManager.cull_interval=30", "--VoilaConfiguration.show_tracebacks=True"]
+    if preheat > 0:
+        cmd += ["--preheat_kernel=True", f"--pool_size={int(preheat)}"]
     log = open(log_path, "w")
     proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, cwd=folder)
     server = VoilaServer(proc, f"http://127.0.0.1:{port}/", folder, log_path)

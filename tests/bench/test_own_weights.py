@@ -79,3 +79,16 @@ def test_weights_path_prefers_the_users_file_and_falls_back_to_the_shipped_one(o
         assert paths.weights_path("ae_solvers.pt") == weights / "ae_solvers.pt"
         assert paths.weights_path("protores.pt") == shipped  # a file the folder lacks: the shipped one
     assert paths.weights_path("ae_solvers.pt") == paths.samples_dir() / "weights" / "ae_solvers.pt"
+
+
+def test_the_studio_app_poses_with_the_users_own_models(own, tmp_path, monkeypatch):
+    """make studio STUDIO_DATA=clips/ STUDIO_WEIGHTS=weights/: the user's network is offered and poses; the shipped
+    Bandai models are left out by name."""
+    from posekit.viz.studio_app import app_studio
+
+    bvh, weights = own
+    monkeypatch.setenv("POSEKIT_WEIGHTS_DIR", str(weights))
+    studio, refused = app_studio(str(bvh), "fabrik,neural+dls", export_dir=tmp_path)
+    assert list(studio.editor.solvers) == ["fabrik", "neural+dls"]
+    assert studio.editor.results["neural+dls"].converged
+    assert {"neural", "neural-fabrik"} <= set(studio.available) and "protores" in refused

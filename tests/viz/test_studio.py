@@ -267,3 +267,28 @@ def test_skeleton_sides_from_names():
     parents = [-1, 0, 0, 0, 3, 3, 1, 4, 3]
     s = Skeleton(names, np.array(parents), np.zeros((len(names), 3)))
     assert list(s.sides()) == [0, 1, -1, 0, 1, -1, 1, 1, 0]
+
+
+def test_app_studio_is_lesson_06s_studio(tmp_path):
+    """What make studio shows: lesson 06's held-out case and first four solvers, the left hand selected."""
+    from posekit.viz.studio_app import SOLVERS, app_studio
+
+    studio, refused = app_studio(export_dir=tmp_path)
+    assert refused == {} and list(studio.editor.solvers) == list(SOLVERS)
+    assert studio.editor.first.selected == "Hand_L"
+    assert all(r.converged for r in studio.editor.results.values())
+
+
+def test_app_studio_on_another_skeleton_leaves_out_the_learned_solvers(tmp_path, monkeypatch):
+    """Another data set (STUDIO_DATA): the shipped learned models, made for the Bandai skeleton, are left out by
+    name with the reason; FABRIK and DLS pose it; unknown names are refused with the registered ones."""
+    from posekit.viz.studio_app import app_studio, refused_note
+
+    monkeypatch.setenv("POSEKIT_STUDIO_DATA", "sample")
+    studio, refused = app_studio(export_dir=tmp_path)
+    assert list(studio.editor.solvers) == ["fabrik", "dls"]
+    assert {"protores+dls", "latent-opt+dls", "neural"} <= set(refused)
+    assert "fabrik" in studio.available and "protores" not in studio.available
+    assert "left out (made for another skeleton): " in refused_note(refused)
+    with pytest.raises(ValueError, match="unknown solver.*'nope'.*registered: fabrik"):
+        app_studio("sample", "fabrik,nope", export_dir=tmp_path)

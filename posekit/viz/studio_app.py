@@ -1,0 +1,100 @@
+"""The posing studio on its own page: what ``make studio`` serves (``notebooks/studio.ipynb``, one cell).
+
+Introduced in ``notebooks/06_posing_studio.ipynb``, which builds the same :class:`~posekit.viz.studio.PosingStudio`
+on the same held-out case step by step (:func:`studio_case` is its first cell's set-up). The app adds only the
+choice of data and solvers from the environment, so ``make studio STUDIO_DATA=my_clips/ STUDIO_WEIGHTS=my_weights/``
+poses a user's own skeleton with the models they trained (README, "Your own mocap, end to end"):
+
+* ``POSEKIT_STUDIO_DATA`` — a data set name or a BVH folder (:func:`posekit.data.open_dataset`; default the Bandai
+  mini set);
+* ``POSEKIT_STUDIO_SOLVERS`` — 2-4 registered solver names shown first (default :data:`SOLVERS`);
+* ``POSEKIT_WEIGHTS_DIR`` — a folder of the user's checkpoints (:func:`posekit.paths.weights_path`).
+
+A learned solver whose weights were made for another skeleton is left out of the choice, with its reason.
+"""
+
+from __future__ import annotations
+
+import os
+
+__all__ = ["SOLVERS", "studio_case", "usable_solvers", "app_studio", "refused_note"]
+
+SOLVERS = ("fabrik", "dls", "protores+dls", "latent-opt+dls")
+"""Lesson 06's first four: two classical solvers and the two learned ones with an exact finish."""
+
+
+def studio_case(motions, case: int = 3, cases: int = 20, seed: int = 0):
+    """Lesson 06's set-up: held-out case ``case`` of :func:`posekit.data.cases.build_cases` (``cases`` of them,
+    same-clip start) — the start pose, the target pose's joint positions (the ghost, (J, 3) metres), five
+    position effectors where the target pose has the hands, feet and head, and lesson 05's tolerance slider
+    mapping (Lambda -> metres or radians)."""
+    from ..data.cases import build_cases
+    from ..ik import effector_set
+    from ..models.protores.networks import tolerance_to_sigma
+
+    built = build_cases(motions, cases, seed=seed, start="same-clip")
+    if not 0 <= case < len(built.target_pos):
+        raise ValueError(f"case {case}: the data gave {len(built.target_pos)} held-out cases")
+    goal = built.target_pos[case]
+    effectors = effector_set(motions.skeleton, "5", goal)
+    return built.pose(case), goal, effectors, lambda lam, kind: max(tolerance_to_sigma(lam), 1e-4)
+
+
+def usable_solvers(skeleton, data: str, names=None):
+    """The registered solvers that can pose ``skeleton``: classical ones always; a learned one when its
+    weights were made for ``data`` (:attr:`SolverInfo.data`), else only if it builds (the user's own weights
+    for this skeleton). Returns ``(usable, refused)``: a list of names and {name: reason}."""
+    from ..ik import make_solver, solver_info, solver_names
+
+    usable, refused = [], {}
+    for name in names or solver_names():
+        made_for = solver_info(name).data
+        if not made_for or made_for == data:
+            usable.append(name)
+            continue
+        try:
+            make_solver(name, skeleton)
+            usable.append(name)
+        except ValueError as err:
+            refused[name] = str(err).split("\n")[0]
+    return usable, refused
+
+
+def app_studio(data: str | None = None, solvers=None, export_dir="studio_exports"):
+    """The studio ``make studio`` shows: :func:`studio_case` of ``data`` (default ``$POSEKIT_STUDIO_DATA`` or the
+    Bandai mini set), the first 2-4 usable of ``solvers`` (default ``$POSEKIT_STUDIO_SOLVERS`` or
+    :data:`SOLVERS`; FABRIK and DLS when fewer than two are usable), the target pose as a ghost, the left hand
+    selected. Returns the :class:`~posekit.viz.studio.PosingStudio` and the solvers left out, {name: reason}."""
+    from ..data.sources import open_dataset
+    from .studio import PosingStudio
+
+    data = data or os.environ.get("POSEKIT_STUDIO_DATA") or "bandai-mini"
+    if solvers is None:
+        solvers = os.environ.get("POSEKIT_STUDIO_SOLVERS") or ",".join(SOLVERS)
+    if isinstance(solvers, str):
+        solvers = [s.strip() for s in solvers.split(",") if s.strip()]
+    motions = open_dataset(data)
+    start, goal, effectors, tolerance_of = studio_case(motions)
+    available, refused = usable_solvers(motions.skeleton, data)
+    unknown = [s for s in solvers if s not in available and s not in refused]
+    if unknown:
+        raise ValueError(f"POSEKIT_STUDIO_SOLVERS: unknown solver(s) {', '.join(map(repr, unknown))}; "
+                         f"registered: {', '.join(available + list(refused))}")
+    first = [s for s in solvers if s in available][:4]
+    if len(first) < 2:
+        first = ["fabrik", "dls"]
+    studio = PosingStudio(motions.skeleton, start, first, effectors, available=available,
+                          tolerance_of=tolerance_of, export_dir=export_dir)
+    for v in studio.editor.viewers.values():
+        v.set_ghost(goal)
+    sk = motions.skeleton
+    studio.editor.first.select(sk.names[sk.index(effectors[0].joint)])
+    return studio, refused
+
+
+def refused_note(refused: dict) -> str:
+    """One line naming the solvers left out and the first reason (empty when none)."""
+    if not refused:
+        return ""
+    name, why = next(iter(refused.items()))
+    return (f"left out (made for another skeleton): {', '.join(refused)} — e.g. {name}: {why}")
