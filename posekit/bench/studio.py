@@ -15,6 +15,11 @@ Introduced in ``notebooks/06_posing_studio.ipynb``. One run:
 4. records the kernel's resident memory (RSS) after the first tenth of the updates and at the end, and
    whether the kernel process survived.
 
+``--sessions 1,2,4,8`` measures a class instead (:func:`class_sessions`): that many sessions against one server,
+moving their targets at once — latency per session, lost updates, every kernel's memory, and that the cull
+frees every kernel once the pages close. The browsers run on the same machine as the server here, so their
+software WebGL shares its cores: a pessimistic figure for students on their own machines.
+
 Goals (issue: the posing studio): p95 <= 100 ms with FABRIK, <= 150 ms with the learned solvers. These are
 measured and printed, never asserted: ``tests/viz/test_studio_browser.py`` asserts only that 1,000 rapid
 updates all arrive, the kernel survives and its memory does not grow.
@@ -117,11 +122,11 @@ class VoilaServer:
 
 @contextlib.contextmanager
 def serve_voila(notebook=NOTEBOOK, folder=None, cull_idle_s: int = 600, startup_s: float = 120.0,
-                preheat: int = 0):
+                preheat: int = 0, cull_interval_s: int = 30):
     """Serve a copy of ``notebook`` with Voila on a free local port; yields a :class:`VoilaServer`.
 
     The copy lives in ``folder`` (default a new temporary folder); kernels idle for ``cull_idle_s`` seconds
-    are culled, and leaving the block stops the server and its kernels. ``preheat``: that many kernels kept
+    are culled (looked for every ``cull_interval_s``), and leaving the block stops the server and its kernels. ``preheat``: that many kernels kept
     with the notebook already run (Voila's kernel pool, what ``make studio`` does), 0 none.
     """
     own = folder is None
@@ -132,7 +137,7 @@ def serve_voila(notebook=NOTEBOOK, folder=None, cull_idle_s: int = 600, startup_
     log_path = folder / "voila.log"
     cmd = [sys.executable, "-m", "voila", Path(notebook).name, "--no-browser", f"--port={port}",
            "--Voila.ip=127.0.0.1", f"--MappingKernelManager.cull_idle_timeout={cull_idle_s}",
-           "--MappingKernelManager.cull_interval=30", "--VoilaConfiguration.show_tracebacks=True"]
+           f"--MappingKernelManager.cull_interval={cull_interval_s}", "--VoilaConfiguration.show_tracebacks=True"]
     if preheat > 0:
         cmd += ["--preheat_kernel=True", f"--pool_size={int(preheat)}"]
     log = open(log_path, "w")
@@ -273,17 +278,108 @@ def rapid_updates(page, n: int, kernel=None, timeout_s: float = 30.0, progress: 
         arrived += 1
         if kernel is not None and i == max(n // 10 - 1, 0):
             rss_early = kernel.memory_info().rss / 2 ** 20
-    rec = page.evaluate("() => window.__posekit")
-    keys = np.asarray(rec["keys"], float)
-    ups = np.sort(np.asarray([u[1] for u in rec["updates"]], float))
-    # each key press's latency: the first summary change after it
-    first = np.searchsorted(ups, keys)  # the first change at or after each press
-    answered = first < len(ups)
-    lat = ups[first[answered]] - keys[answered]
+    lat = _latencies(page)
     alive = kernel.is_running() if kernel is not None else None
     rss_end = kernel.memory_info().rss / 2 ** 20 if alive else None
     return {"latency_ms": lat, "rss_mb_early": rss_early, "rss_mb_end": rss_end, "kernel_alive": alive,
             "updates": arrived}
+
+
+def _latencies(page) -> np.ndarray:
+    """Each recorded key press's latency (ms): the first summary change at or after it (:data:`_RECORD`)."""
+    rec = page.evaluate("() => window.__posekit")
+    keys = np.asarray(rec["keys"], float)
+    ups = np.sort(np.asarray([u[1] for u in rec["updates"]], float))
+    first = np.searchsorted(ups, keys)
+    answered = first < len(ups)
+    return ups[first[answered]] - keys[answered]
+
+
+def class_sessions(sessions: int, updates: int = 100, solvers=None, cull_idle_s: int = 20, cull_interval_s: int = 5,
+                   timeout_s: float = 30.0, progress: bool = True) -> list[dict]:
+    """``sessions`` students at once: one Voila server, that many browser sessions (each its own kernel), every
+    session moving its target slider at the same time, ``updates`` times; then every page closes and the idle
+    kernels must be culled.
+
+    Each round presses a key in every session, then waits for every session's update (``timeout_s`` each): a
+    press whose update never comes counts as **lost**. The kernels' resident memory is summed while all
+    sessions are open. After the pages close, the server is watched until it holds no kernel (its cull:
+    ``cull_idle_s`` idle seconds, looked for every ``cull_interval_s``) or 90 s have passed.
+
+    Returns
+    -------
+    list of dict
+        One row per session (``sessions`` in the class, ``session``, ``updates``, ``lost``, ``p50_ms``, ``p95_ms``, ``max_ms``, its kernel's
+        ``rss_mb``), then one row for the class (``sessions``, ``kernels``, ``rss_mb_total``, ``lost``,
+        the worst ``p95_ms``, ``kernels_after_cull``, ``cull_s``).
+    """
+    from playwright.sync_api import sync_playwright
+
+    if sessions < 1 or updates < 1:
+        raise ValueError(f"--sessions and --updates must be at least 1, got {sessions} and {updates}")
+    rows = []
+    with serve_voila(cull_idle_s=cull_idle_s, cull_interval_s=cull_interval_s) as server, sync_playwright() as p:
+        browser = launch_chromium(p)
+        try:
+            pages = []
+            for _ in range(sessions):  # one after another, as students arrive; each page starts its own kernel
+                page = open_studio(browser, server.url)
+                if solvers:
+                    choose_solvers(page, solvers)
+                pages.append(page)
+            kernels = server.note_kernels()
+            for page in pages:
+                _settle(page)
+                page.evaluate(_RECORD)
+                handle = page.locator(".posekit-target-x .noUi-handle").first
+                handle.scroll_into_view_if_needed()
+                handle.focus()
+            lost = [0] * sessions
+            it = range(updates)
+            if progress:
+                from tqdm.auto import tqdm
+
+                it = tqdm(it, desc=f"{sessions} sessions", unit="round")
+            for i in it:
+                before = [update_number(page) for page in pages]
+                for page in pages:  # every student moves at once: the kernels solve side by side
+                    page.keyboard.press("ArrowRight" if i % 2 == 0 else "ArrowLeft")
+                for k, (page, b) in enumerate(zip(pages, before)):
+                    try:
+                        page.wait_for_function(f"() => ({_UPDATE})() > {b}", timeout=timeout_s * 1000, polling=5)
+                    except Exception:  # noqa: BLE001 - playwright's TimeoutError: this update was lost
+                        lost[k] += 1
+            rss = {}
+            for k in kernels:
+                try:
+                    rss[k.pid] = k.memory_info().rss / 2 ** 20
+                except Exception:  # noqa: BLE001 - psutil: a kernel that died
+                    rss[k.pid] = None
+            worst = 0.0
+            for k, page in enumerate(pages):
+                lat = _latencies(page)
+                kernel = kernels[k] if k < len(kernels) else None
+                p95 = float(np.percentile(lat, 95)) if len(lat) else float("nan")
+                worst = max(worst, p95)
+                rows.append({"sessions": sessions, "session": k + 1, "updates": updates, "lost": lost[k],
+                             "p50_ms": round(float(np.percentile(lat, 50)), 1) if len(lat) else None,
+                             "p95_ms": round(p95, 1), "max_ms": round(float(lat.max()), 1) if len(lat) else None,
+                             "rss_mb": None if kernel is None or rss.get(kernel.pid) is None
+                             else round(rss[kernel.pid], 1)})
+            for page in pages:
+                page.close()
+            t0 = time.time()
+            left = kernel_processes(server.process.pid)
+            while left and time.time() - t0 < 90:
+                time.sleep(1)
+                left = [k for k in kernel_processes(server.process.pid) if k.is_running()]
+            rows.append({"class": f"{sessions} sessions", "sessions": sessions, "kernels": len(kernels),
+                         "rss_mb_total": round(sum(v for v in rss.values() if v is not None), 1),
+                         "lost": sum(lost), "worst_p95_ms": round(worst, 1), "kernels_after_cull": len(left),
+                         "cull_s": round(time.time() - t0, 1) if not left else None})
+        finally:
+            browser.close()
+    return rows
 
 
 def run(updates: int = 1000, configs=("fabrik,dls", "protores,neural"), progress: bool = True) -> list[dict]:
@@ -325,15 +421,43 @@ def run(updates: int = 1000, configs=("fabrik,dls", "protores,neural"), progress
     return rows
 
 
+def _run(args) -> list[dict]:
+    if args.sessions:
+        try:
+            counts = [int(v) for v in args.sessions.split(",")]
+        except ValueError:
+            raise ValueError(f"--sessions: expected comma-separated counts such as 1,2,4,8, got {args.sessions!r}") from None
+        if min(counts) < 1:
+            raise ValueError(f"--sessions: every count must be at least 1, got {args.sessions!r}")
+        rows = []
+        for k in counts:
+            rows += class_sessions(k, args.updates or 100, progress=not args.json)
+        return rows
+    return run(updates=args.updates or 1000, configs=args.configs.split(";"), progress=not args.json)
+
+
 register_benchmark(
-    "studio", lambda args: run(updates=args.updates, configs=args.configs.split(";"), progress=not args.json),
+    "studio", _run,
     help="the posing studio in Voila + headless Chromium: p50/p95 latency of rapid target updates, kernel memory",
-    args=[arg("--updates", type=int, default=1000, help="target updates per configuration"),
+    args=[arg("--updates", type=int, default=None,
+              help="target updates per configuration (default: 1000), or per session with --sessions (default: 100)"),
           arg("--configs", default="fabrik,dls;protores,neural",
-              help="semicolon-separated configurations, each 2-4 comma-separated registered solvers")],
+              help="semicolon-separated configurations, each 2-4 comma-separated registered solvers"),
+          arg("--sessions", default=None,
+              help="a class at once instead: comma-separated session counts (e.g. 1,2,4,8), each that many browser "
+                   "sessions against one server moving their targets together (--updates each, default 100 here); "
+                   "latency per session, lost updates, kernel memory, and the cull after they leave")],
     tables=[("End-to-end update latency in the browser (key press -> every view solved and drawn)",
-             ["solvers", "updates", "p50_ms", "p95_ms", "max_ms", "goal_p95_ms", "met"]),
-            ("Kernel", ["solvers", "rss_mb_early", "rss_mb_end", "kernel_alive"])],
+             ["solvers", "updates", "p50_ms", "p95_ms", "max_ms", "goal_p95_ms", "met"], lambda r: "solvers" in r),
+            ("Kernel", ["solvers", "rss_mb_early", "rss_mb_end", "kernel_alive"], lambda r: "solvers" in r),
+            ("Each session of a class (every session moving its target at once)",
+             ["sessions", "session", "updates", "lost", "p50_ms", "p95_ms", "max_ms", "rss_mb"],
+             lambda r: "session" in r),
+            ("The class: one server, every kernel; after the sessions leave, the cull",
+             ["class", "kernels", "rss_mb_total", "lost", "worst_p95_ms", "kernels_after_cull", "cull_s"],
+             lambda r: "class" in r)],
     labels={"p50_ms": "p50 ms", "p95_ms": "p95 ms", "max_ms": "max ms", "goal_p95_ms": "goal p95 ms",
-            "rss_mb_early": "RSS MB at 10%", "rss_mb_end": "RSS MB at end", "kernel_alive": "kernel alive"},
+            "rss_mb_early": "RSS MB at 10%", "rss_mb_end": "RSS MB at end", "kernel_alive": "kernel alive",
+            "rss_mb": "kernel MB", "rss_mb_total": "kernels MB", "worst_p95_ms": "worst p95 ms",
+            "kernels_after_cull": "kernels left", "cull_s": "culled after s", "sessions": "class of"},
     lesson="notebooks/06_posing_studio.ipynb")

@@ -30,7 +30,7 @@ def studio_case(motions, case: int = 3, cases: int = 20, seed: int = 0):
     mapping (Lambda -> metres or radians)."""
     from ..data.cases import build_cases
     from ..ik import effector_set
-    from ..models.protores.networks import tolerance_to_sigma
+    from ..models.protores.tolerance import tolerance_to_sigma  # numpy only: no torch for classical solvers
 
     built = build_cases(motions, cases, seed=seed, start="same-clip")
     if not 0 <= case < len(built.target_pos):

@@ -258,6 +258,12 @@ def test_bench_studio_refuses_bad_configurations_before_starting_anything():
         run(updates=10, configs=["fabrik,nope"])
     with pytest.raises(ValueError, match="at least 1"):
         rapid_updates(None, 0)
+    from posekit.bench.studio import class_sessions
+    from posekit.cli import main
+
+    with pytest.raises(ValueError, match="--sessions and --updates must be at least 1"):
+        class_sessions(0)
+    assert main(["bench", "studio", "--sessions", "two"]) == 2
 
 
 def test_skeleton_sides_from_names():

@@ -23,6 +23,7 @@ import torch
 from torch import nn
 
 from ...ik.effectors import KIND_CODES
+from .tolerance import ETA, SIGMA_M, sigma_to_tolerance, tolerance_to_sigma  # noqa: F401 - re-exported
 
 __all__ = ["ARCHS", "KIND_IDS", "SIGMA_M", "ETA", "ProtoResConfig", "centroid", "effector_inputs", "Tokens",
            "FCBlock", "FCR", "tolerance_to_sigma", "sigma_to_tolerance"]
@@ -34,21 +35,6 @@ KIND_IDS = KIND_CODES
 """Effector kind -> type id (the type embedding's row): the solvers' own codes
 (:data:`posekit.ik.effectors.KIND_CODES`, position 0, rotation 1, look-at 2)."""
 
-SIGMA_M = 0.1
-"""sigma_M: the noise scale of tolerance 1 (Appendix B): 0.1 m for positions, 0.1 rad for angles."""
-
-ETA = 13.0
-"""eta: the tolerance-to-noise exponent, ``sigma = sigma_M Lambda^eta`` (Appendix B)."""
-
-
-def tolerance_to_sigma(lam):
-    """``sigma = sigma_M Lambda^eta``: a tolerance in [0, 1] as a noise scale (metres or radians)."""
-    return SIGMA_M * lam ** ETA
-
-
-def sigma_to_tolerance(sigma):
-    """The inverse of :func:`tolerance_to_sigma`: a noise scale in [0, sigma_M] as ``Lambda`` in [0, 1]."""
-    return (np.asarray(sigma, dtype=float) / SIGMA_M) ** (1.0 / ETA)
 
 
 @dataclass
