@@ -289,10 +289,10 @@ def test_voila_shuts_its_kernel_down(page, server):
 
 def test_a_class_of_two_loses_no_update_and_the_cull_frees_every_kernel():
     """posekit bench studio --sessions: two sessions on one server moving their targets at once, each with its own
-    kernel; no update lost; after the pages close the cull (10 s idle) leaves no kernel behind."""
+    kernel; no update lost; after the pages close the cull (5 s idle) leaves no kernel behind."""
     from posekit.bench.studio import class_sessions
 
-    rows = class_sessions(2, 10, cull_idle_s=10, cull_interval_s=2, progress=False)
+    rows = class_sessions(2, 10, cull_idle_s=5, cull_interval_s=1, progress=False)
     each = [r for r in rows if "session" in r]
     whole = rows[-1]
     assert [r["session"] for r in each] == [1, 2] and all(r["lost"] == 0 and r["p95_ms"] > 0 for r in each)
