@@ -188,12 +188,11 @@ def _train_list(args) -> int:
 
 def _train(args) -> int:
     """``posekit train NAME``: run a registered trainer (:mod:`posekit.learn.trainers`)."""
-    from .learn.trainers import get_trainer
-
     import contextlib
     import os
 
     from .learn.distributed import start
+    from .learn.trainers import get_trainer
 
     if args.list:
         return _train_list(args)
