@@ -286,32 +286,3 @@ def test_voila_shuts_its_kernel_down(page, server):
     assert alive == [], f"kernels still running after Voila stopped: {alive}"
     assert all(not k.is_running() or k.status() == "zombie" for k in kernels)
 
-
-def test_a_class_of_two_loses_no_update_and_the_cull_frees_every_kernel():
-    """posekit bench studio --sessions: two sessions on one server moving their targets at once, each with its own
-    kernel; no update lost; after the pages close the cull (5 s idle) leaves no kernel behind."""
-    from posekit.bench.studio import class_sessions
-
-    rows = class_sessions(2, 10, cull_idle_s=5, cull_interval_s=1, progress=False)
-    each = [r for r in rows if "session" in r]
-    whole = rows[-1]
-    assert [r["session"] for r in each] == [1, 2] and all(r["lost"] == 0 and r["p95_ms"] > 0 for r in each)
-    assert whole["kernels"] == 2 and whole["lost"] == 0 and whole["rss_mb_total"] > 100
-    assert whole["kernels_after_cull"] == 0 and whole["cull_s"] < 60
-
-
-def test_the_floor_page_answers_every_key_press(tmp_path):
-    """posekit bench studio's floor: served beside the studio by the same server, a bare slider whose label counts
-    its changes answers every key press (the latency every studio update is compared with)."""
-    from playwright.sync_api import sync_playwright
-
-    from posekit.bench.studio import floor_notebook, launch_chromium, open_floor, rapid_updates, serve_voila
-
-    with serve_voila(extra=[floor_notebook(tmp_path)], cull_idle_s=60) as server, sync_playwright() as p:
-        assert server.url.endswith("voila/render/studio.ipynb")
-        browser = launch_chromium(p)
-        try:
-            r = rapid_updates(open_floor(browser, server.url_of("floor.ipynb")), 20)
-        finally:
-            browser.close()
-    assert r["updates"] == 20 and len(r["latency_ms"]) == 20 and (r["latency_ms"] > 0).all()
