@@ -17,6 +17,9 @@ A checkpoint is one ``torch.save`` file holding a plain dict (nanoGPT style)::
 
 Only tensors and plain Python values (dict, list, str, int, float, bool, None) are stored, so the
 file loads with ``torch.load(..., weights_only=True)``: reading a checkpoint runs no pickled code.
+:func:`load_checkpoint` reads it without torch (:func:`posekit.io.torch_file.read_torch_file`, which
+refuses anything else likewise) and gives the weights as tensors, or as numpy arrays with ``arrays=True``
+for the numpy inference paths, which then never import torch.
 numpy arrays in ``config`` / ``extra`` are stored as tensors and come back as numpy arrays; tuples
 come back as lists.
 
@@ -31,8 +34,8 @@ import os
 from pathlib import Path
 
 import numpy as np
-import torch
 
+from ..io.torch_file import read_torch_file
 from ..records import NormStats
 from ..skeleton import Skeleton
 
@@ -46,6 +49,8 @@ _OFFSET_ATOL = 1e-6  # metres: offsets read back from float32 files still match
 
 def _plain(value, where: str):
     """``value`` as tensors and plain Python types only (what ``weights_only=True`` loads)."""
+    import torch
+
     if value is None:
         return None
     for t in (bool, int, float, str):  # exact types: a subclass (TorchVersion, IntEnum) would not load
@@ -73,7 +78,7 @@ def _plain(value, where: str):
 def _unplain(value):
     if isinstance(value, dict):
         if set(value) == {_ARRAY}:
-            return value[_ARRAY].numpy()
+            return np.asarray(value[_ARRAY])
         return {k: _unplain(v) for k, v in value.items()}
     if isinstance(value, list):
         return [_unplain(v) for v in value]
@@ -118,6 +123,8 @@ def save_checkpoint(path, model_state, *, kind: str, config: dict, skeleton: Ske
     -------
     Path
     """
+    import torch
+
     if not kind or not isinstance(kind, str):
         raise ValueError("save_checkpoint: kind must be a non-empty string such as 'invrig_nn'")
     if not isinstance(config, dict):
@@ -175,7 +182,7 @@ def _check_skeleton(path, ckpt: dict, skeleton: Skeleton):
         j = next(i for i, (a, b) in enumerate(zip(parents, mine_p)) if a != b)
         raise ValueError(f"checkpoint {path} was trained for skeleton parents {parents} — this skeleton has "
                          f"{mine_p} (joint {names[j]!r}: parent {parents[j]} vs {mine_p[j]})")
-    offsets = stored["offsets"].numpy()
+    offsets = np.asarray(stored["offsets"])
     mine_o = np.asarray(skeleton.offsets, dtype=np.float64)
     if offsets.shape != mine_o.shape or not np.allclose(offsets, mine_o, rtol=0, atol=_OFFSET_ATOL):
         if offsets.shape != mine_o.shape:
@@ -204,7 +211,7 @@ def _check_norms(path, ckpt: dict, norms: dict):
 
 
 def load_checkpoint(path, *, kind: str | None = None, skeleton: Skeleton | None = None, norms: dict | None = None,
-                    expect: dict | None = None) -> dict:
+                    expect: dict | None = None, arrays: bool = False) -> dict:
     """Read a file written by :func:`save_checkpoint` and check it was made for what the caller has.
 
     Parameters
@@ -218,12 +225,14 @@ def load_checkpoint(path, *, kind: str | None = None, skeleton: Skeleton | None 
         Each must equal the stored normalisation of that name (``NormStats.same_as``).
     expect : dict, optional
         Config fields that must have these values (``{"hidden": 2048}``).
+    arrays : bool
+        ``state`` as numpy arrays instead of tensors: nothing imports torch (the numpy inference paths).
 
     Returns
     -------
     dict
-        ``state`` (floating tensors float32 when saved with ``half``), ``kind``, ``config``,
-        ``skeleton`` (a :class:`~posekit.skeleton.Skeleton` or None), ``norms`` (str -> NormStats,
+        ``state`` (tensors, or numpy arrays with ``arrays``; floating ones float32 when saved with ``half``),
+        ``kind``, ``config``, ``skeleton`` (a :class:`~posekit.skeleton.Skeleton` or None), ``norms`` (str -> NormStats,
         float64), ``command``, ``seed``, ``data``, ``licence``, ``extra``, ``half``, ``version``,
         ``torch`` and ``path``.
 
@@ -240,8 +249,8 @@ def load_checkpoint(path, *, kind: str | None = None, skeleton: Skeleton | None 
     if not path.is_file():
         raise FileNotFoundError(f"no checkpoint at {path}")
     try:
-        ckpt = torch.load(path, map_location="cpu", weights_only=True)
-    except Exception as e:  # torch raises RuntimeError, UnpicklingError, EOFError, ... on a bad file
+        ckpt = read_torch_file(path)
+    except ValueError as e:  # truncated, corrupt, another format, or an object that is not a plain value
         raise ValueError(f"{path} is not a readable posekit checkpoint ({type(e).__name__}: "
                          f"{str(e).splitlines()[0] if str(e) else 'no detail'}); the file may be truncated, "
                          "corrupt or written by an older posekit — remake it with its `posekit train` "
@@ -258,9 +267,9 @@ def load_checkpoint(path, *, kind: str | None = None, skeleton: Skeleton | None 
         _check_skeleton(path, ckpt, skeleton)
     stored = ckpt["skeleton"]
     ckpt["skeleton"] = None if stored is None else Skeleton(stored["names"], np.asarray(stored["parents"]),
-                                                            stored["offsets"].numpy(), roles=stored["roles"],
+                                                            np.asarray(stored["offsets"]), roles=stored["roles"],
                                                             name=stored["name"])
-    ckpt["norms"] = {k: NormStats.from_arrays({n: v.numpy() for n, v in d.items()}, prefix="")
+    ckpt["norms"] = {k: NormStats.from_arrays({n: np.asarray(v) for n, v in d.items()}, prefix="")
                      for k, d in ckpt["norms"].items()}
     ckpt["config"], ckpt["extra"] = _unplain(ckpt["config"]), _unplain(ckpt["extra"])
     if norms:
@@ -271,8 +280,14 @@ def load_checkpoint(path, *, kind: str | None = None, skeleton: Skeleton | None 
         got = ckpt["config"][field]
         if not _same(got, want):
             raise ValueError(f"checkpoint {path}: config field {field!r} is {got!r}, expected {want!r}")
+    state = {k: np.asarray(v) for k, v in ckpt["state"].items()}
     if ckpt["half"]:
-        ckpt["state"] = {k: v.float() if v.is_floating_point() else v for k, v in ckpt["state"].items()}
+        state = {k: v.astype(np.float32) if v.dtype == np.float16 else v for k, v in state.items()}
+    if not arrays:
+        import torch
+
+        state = {k: torch.from_numpy(v) for k, v in state.items()}
+    ckpt["state"] = state
     ckpt["path"] = path
     return ckpt
 

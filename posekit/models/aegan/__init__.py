@@ -6,7 +6,7 @@ Introduced in ``notebooks/04_aegan_latent_space.ipynb``. Poses are lesson 03's r
 
 * Sec. 3.2, the four networks (encoder, generator, pose and latent discriminators) —
   :mod:`~posekit.models.aegan.networks`, top to bottom, with the generator's numpy twin
-  (:class:`~posekit.models.aegan.networks.NumpyAEGAN`); the structured prediction layer they are built
+  (:class:`~posekit.models.aegan.numpy_nets.NumpyAEGAN`); the structured prediction layer they are built
   from (Aksan et al. 2019, Eq. 4) — :mod:`~posekit.models.aegan.spl`;
 * Eq. (1)-(5), the adversarial training — :mod:`~posekit.models.aegan.train` (``posekit train aegan``);
 * Sec. 3.3, Eq. (6), IK by optimising the code — :mod:`~posekit.models.aegan.latent_opt` (Adam and

@@ -3,7 +3,7 @@
 Introduced in ``notebooks/04_aegan_latent_space.ipynb``. One iteration on one pose is a few small
 matrix-vector products through the generator and back; numpy's per-call overhead would cost several
 times that arithmetic, so a single solve runs in these numba kernels: the generator's forward and
-backward pass (:class:`posekit.models.aegan.networks.NumpyAEGAN`, parent-only SPL) and the same optimisers —
+backward pass (:class:`posekit.models.aegan.numpy_nets.NumpyAEGAN`, parent-only SPL) and the same optimisers —
 projected L-BFGS and Adam with the same stopping rule — for one problem. ``tests/models/test_aegan.py``
 checks them against the batched numpy path.
 
@@ -22,7 +22,7 @@ __all__ = ["flatten_generator", "loss_grad", "lbfgs_one", "adam_one"]
 
 
 def flatten_generator(net) -> tuple:
-    """The arrays the kernels read, from a :class:`~posekit.models.aegan.networks.NumpyAEGAN` (parent-only SPL)."""
+    """The arrays the kernels read, from a :class:`~posekit.models.aegan.numpy_nets.NumpyAEGAN` (parent-only SPL)."""
     spl = net.g_spl
     J, h, o = spl.J, spl.hidden, spl.out
     A = np.zeros((J, o, h), np.float32)

@@ -19,39 +19,20 @@ gradient (:class:`NumpyAEGAN`) for latent optimisation.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 import torch
 from torch import nn
 
-from ... import paths
 from ...records import NormStats
-from ...data.metrics import body_joints
 from ...learn import load_checkpoint, save_checkpoint
-from .spl import NumpySPL, StructuredPrediction, dense_twin
+from .spl import StructuredPrediction, dense_twin
 
 __all__ = ["KIND", "WEIGHTS", "weights_path", "AEGANConfig", "body_parents", "Encoder", "Generator", "PoseDiscriminator", "LatentDiscriminator",
            "AEGAN", "NumpyAEGAN", "sample_prior"]
 
-KIND = "aegan"
-
-WEIGHTS = "aegan.pt"
-"""File name of the shipped weights in ``data_samples/weights/``."""
-
-
-def weights_path(folder=None) -> Path:
-    """The weights' file, :data:`WEIGHTS` in ``folder`` or the shipped weights' folder
-    (:func:`posekit.paths.weights_path`)."""
-    return paths.weights_path(WEIGHTS, folder)
-
-
-def body_parents(skeleton) -> np.ndarray:
-    """The body-joint tree: for each body joint (:func:`~posekit.data.metrics.body_joints`, in order), the
-    position of its parent among them, -1 for the pelvis (a helper root above it is not a body joint)."""
-    b = [int(j) for j in body_joints(skeleton)]
-    return np.array([b.index(int(skeleton.parents[j])) if int(skeleton.parents[j]) in b else -1 for j in b],
-                    dtype=np.int64)
+# the checkpoint kind, the shipped file and the body tree: defined with the torch-free numpy networks
+from .numpy_nets import KIND, WEIGHTS, NumpyAEGAN, body_parents, weights_path  # noqa: E402,F401
 
 
 @dataclass
@@ -256,34 +237,3 @@ class AEGAN:
         m.x_range = ck["extra"].get("x_range")
         m.info = {k: ck[k] for k in ("command", "seed", "data", "licence", "path")} | {"extra": ck["extra"]}
         return m
-
-
-class NumpyAEGAN:
-    """The encoder and the generator in numpy float32, with the generator's gradient: :meth:`encode`,
-    :meth:`forward` and :meth:`vjp` (the gradient of a loss on the output back to ``z``) on (N, .)
-    batches — what latent optimisation calls every iteration, without torch's per-call cost."""
-
-    def __init__(self, model: "AEGAN"):
-        if not model.config.structured:
-            raise ValueError("NumpyAEGAN needs the SPL networks (config.structured = True)")
-        f32 = lambda t: t.detach().numpy().astype(np.float32).copy()  # noqa: E731
-        e, g = model.encoder, model.generator
-        self.e_spl, self.e_W, self.e_b = NumpySPL(e.spl), f32(e.fc.weight).T.copy(), f32(e.fc.bias)
-        self.g_W, self.g_b, self.g_spl = f32(g.fc.weight).T.copy(), f32(g.fc.bias), NumpySPL(g.spl)
-
-    def encode(self, x):
-        """z-scored poses (N, 3 B) -> codes (N, d)."""
-        h = np.maximum(self.e_spl.forward(x)[0], 0.0)
-        return np.tanh(h @ self.e_W + self.e_b)
-
-    def forward(self, z):
-        """Codes (N, d) -> z-scored poses (N, 3 B), and the cache for :meth:`vjp`."""
-        h = np.maximum(np.asarray(z, np.float32) @ self.g_W + self.g_b, 0.0)
-        x, cache = self.g_spl.forward(h)
-        return x, (h, cache)
-
-    def vjp(self, cache, grad_x):
-        """d loss / d z (N, d) from d loss / d x (N, 3 B)."""
-        h, spl_cache = cache
-        g_h = self.g_spl.backward(spl_cache, grad_x) * (h > 0)
-        return g_h @ self.g_W.T

@@ -28,7 +28,7 @@ from ...ik.registry import register
 from ...learn import load_cached, require_skeleton
 from . import fast as LK
 from ...data.pose_vectors import feature_columns, pose_vectors, poses_from_vectors, targets_in_root_frame
-from .networks import AEGAN, weights_path
+from .numpy_nets import NumpyAEGAN, weights_path
 from .latent_opt import OPTIMIZERS, Problem, optimize
 
 __all__ = ["LatentOptSolver", "load_aegan", "RANGE_MARGIN", "SETTINGS"]
@@ -41,8 +41,11 @@ SETTINGS = {"adam": dict(max_iter=50, lr=0.05, patience=10, stall=1e-3),
 """Each optimiser's defaults (iteration budget, Adam's step, the stall rule)."""
 
 
-def load_aegan(weights=None, skeleton=None) -> AEGAN:
-    """The shipped (or given) :class:`AEGAN`, checked against ``skeleton``; cached per file."""
+def load_aegan(weights=None, skeleton=None):
+    """The shipped (or given) :class:`~posekit.models.aegan.networks.AEGAN`, checked against ``skeleton``; cached
+    per file. Imports torch."""
+    from .networks import AEGAN
+
     return load_cached(AEGAN.load, weights_path() if weights is None else weights, skeleton)
 
 
@@ -61,6 +64,9 @@ class LatentOptSolver(SolverBase):
         A model already in memory (e.g. the notebook's live demo).
     **options
         Override :data:`SETTINGS` (``max_iter``, ``lr``, ``patience``, ``stall``).
+
+    Every solve runs numpy and compiled code only: without ``model`` the encoder and generator are read from
+    the checkpoint without torch (:meth:`NumpyAEGAN.load <posekit.models.aegan.numpy_nets.NumpyAEGAN.load>`).
     """
 
     name = "latent-opt"
@@ -68,7 +74,7 @@ class LatentOptSolver(SolverBase):
     needs_start = True
 
     def __init__(self, skeleton, weights=None, optimizer: str = "lbfgs", post: str = "bones",
-                 model: AEGAN | None = None, **options):
+                 model=None, **options):
         if optimizer not in OPTIMIZERS:
             raise ValueError(f"optimizer must be one of {', '.join(OPTIMIZERS)}, got {optimizer!r}")
         if post not in ("bones", "none"):
@@ -76,24 +82,32 @@ class LatentOptSolver(SolverBase):
         bad = set(options) - set(SETTINGS[optimizer])
         if bad:
             raise ValueError(f"unknown option(s) {sorted(bad)} for {optimizer}; valid: {sorted(SETTINGS[optimizer])}")
-        self.model = model if model is not None else load_aegan(weights, skeleton)
-        require_skeleton("latent-opt solver: the AE-GAN", self.model.skeleton, skeleton)
+        self.net = model.compile() if model is not None else load_cached(
+            NumpyAEGAN.load, weights_path() if weights is None else weights, skeleton)
+        require_skeleton("latent-opt solver: the AE-GAN", self.net.skeleton, skeleton)
+        self._model, self._weights = model, weights
         self.skeleton = skeleton
         self.optimizer, self.post = optimizer, post
         self.options = {**SETTINGS[optimizer], **options}
         self.keeps_bone_lengths = post != "none"
-        self.net = self.model.compile()
-        self.mean = self.model.norm.mean.astype(np.float32)
-        self.std = self.model.norm.std.astype(np.float32)
-        self._gen = LK.flatten_generator(self.net) if self.model.config.ancestors == "parent" else None
+        self.mean = self.net.norm.mean.astype(np.float32)
+        self.std = self.net.norm.std.astype(np.float32)
+        self._gen = LK.flatten_generator(self.net) if self.net.config["ancestors"] == "parent" else None
         self._work = LK.workspace(self._gen) if self._gen is not None else None
-        xr = self.model.x_range
+        xr = self.net.x_range
         self.lo, self.hi = (None, None) if xr is None else (np.asarray(xr[0], np.float32) - RANGE_MARGIN,
                                                             np.asarray(xr[1], np.float32) + RANGE_MARGIN)
 
+    @property
+    def model(self):
+        """The torch :class:`~posekit.models.aegan.networks.AEGAN` (loaded, with torch, when first asked)."""
+        if self._model is None:
+            self._model = load_aegan(self._weights, self.skeleton)
+        return self._model
+
     def sizes_kb(self, joints=None) -> dict:
         """Float32 size of the networks one solve runs (encoder + generator), kB; no per-set solver."""
-        n = self.model.n_parameters("encoder") + self.model.n_parameters("generator")
+        n = self.net.n_parameters("encoder") + self.net.n_parameters("generator")
         return {"model_kb": round(4 * n / 1024, 1), "solver_kb": 0.0}
 
     def predict(self, start_pos, joints, targets, tol=1e-3):

@@ -27,59 +27,20 @@ single poses (:meth:`AESolvers.compile`), where torch's per-call overhead would 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 import torch
 from torch import nn
 
-from ... import paths
 from ...records import NormStats
 from ...learn import load_checkpoint, save_checkpoint
 from ...data.pose_vectors import feature_columns
 
-__all__ = ["KIND", "WEIGHTS", "weights_path", "GROUPS", "CHAIN", "chain_groups", "stages", "AEConfig", "PoseAutoencoder", "LatentSolver", "AESolvers", "NumpyAESolvers"]
+__all__ = ["KIND", "WEIGHTS", "weights_path", "GROUPS", "CHAIN", "chain_groups", "stages", "AEConfig", "PoseAutoencoder",
+           "LatentSolver", "AESolvers", "NumpyAESolvers"]
 
-KIND = "ae_solvers"
-
-WEIGHTS = "ae_solvers.pt"
-"""File name of the shipped weights in ``data_samples/weights/``."""
-
-
-def weights_path(folder=None) -> Path:
-    """The weights' file, :data:`WEIGHTS` in ``folder`` or the shipped weights' folder
-    (:func:`posekit.paths.weights_path`)."""
-    return paths.weights_path(WEIGHTS, folder)
-
-
-GROUPS = {
-    "hands": ("left_hand", "right_hand"),
-    "feet": ("left_foot", "right_foot"),
-    "head": ("head",),
-    "all": ("left_hand", "right_hand", "left_foot", "right_foot", "head"),
-}
-"""The joint sets (roles) of the paper's solvers: name -> joints, in the order of their targets."""
-
-CHAIN = ("hands", "feet", "head")
-"""The order in which chained solvers run (Sec. 3.5)."""
-
-
-def chain_groups(joints, available=tuple(GROUPS)) -> list:
-    """The groups of :data:`CHAIN` (those in ``available``) that the joint set ``joints`` (roles) covers,
-    in chain order: the stages of a chained solve (Sec. 3.5)."""
-    have = set(joints)
-    return [g for g in CHAIN if g in available and set(GROUPS[g]) <= have]
-
-
-def stages(groups, chain=None, chain_aware: bool = True, chained=()) -> list:
-    """The stages of a solve: ``[(group, use its chaining-aware copy)]``.
-
-    ``groups`` are the joint sets with targets. One group and no ``chain``: its own solver. Otherwise the
-    chain of Sec. 3.5 in ``chain`` (default :data:`CHAIN`) order; with ``chain_aware`` every stage after
-    the first runs its chaining-aware copy when there is one (``chained``)."""
-    groups = list(groups)
-    order = [g for g in (chain or CHAIN) if g in groups] if len(groups) > 1 or chain else groups
-    return [(g, bool(chain_aware and i > 0 and g in chained)) for i, g in enumerate(order)]
+# the checkpoint kind, the shipped file and the solver groups: defined with the torch-free numpy networks
+from .numpy_nets import CHAIN, GROUPS, KIND, WEIGHTS, NumpyAESolvers, chain_groups, stages, weights_path  # noqa: E402,F401
 
 
 @dataclass
@@ -277,48 +238,3 @@ class AESolvers:
     def compile(self) -> "NumpyAESolvers":
         """The same networks as float32 numpy arrays, for fast single-pose solves."""
         return NumpyAESolvers(self)
-
-
-def _layers(seq: nn.Sequential):
-    return [(m.weight.detach().numpy().T.astype(np.float32).copy(), m.bias.detach().numpy().astype(np.float32).copy())
-            for m in seq if isinstance(m, nn.Linear)]
-
-
-class NumpyAESolvers:
-    """:class:`AESolvers` in numpy float32: ``encode``, ``decode``, ``solve`` on (N, ...) arrays.
-
-    Same numbers as the torch modules (to float32 rounding); no autograd, no per-call dispatch cost.
-    """
-
-    def __init__(self, m: AESolvers):
-        a = m.ae
-        self.enc = _layers(nn.Sequential(a.enc1, a.enc2, a.enc3))
-        if a.tied:  # x = W1^T relu(W2^T relu(W3^T z)): the encoder's matrices, transposed, no biases
-            self.dec = [(w.T.copy(), None) for w, _ in reversed(self.enc)]
-        else:
-            self.dec = _layers(nn.Sequential(a.dec1, a.dec2, a.dec3))
-        self.solvers = {g: _layers(net.net) for g, net in m.solvers.items()}
-        self.chained = {g: _layers(net.net) for g, net in m.chained.items()}
-
-    @staticmethod
-    def _mlp(layers, h):
-        for i, (w, b) in enumerate(layers):
-            h = h @ w
-            if b is not None:
-                h += b
-            if i < len(layers) - 1:
-                np.maximum(h, 0.0, out=h)
-        return h
-
-    def encode(self, x):
-        return self._mlp(self.enc, np.asarray(x, dtype=np.float32))
-
-    def decode(self, z):
-        return self._mlp(self.dec, np.asarray(z, dtype=np.float32))
-
-    def latent(self, z, targets: dict, chain=None, chain_aware: bool = True):
-        """:meth:`AESolvers.latent` in numpy."""
-        for g, aware in stages(targets, chain, chain_aware, self.chained):
-            z = self._mlp((self.chained if aware else self.solvers)[g],
-                          np.concatenate([z, np.asarray(targets[g], dtype=np.float32)], axis=-1))
-        return z

@@ -35,7 +35,7 @@ from ...ik.registry import make_solver, register
 from ...learn import load_cached, require_skeleton
 from . import fast as K
 from ...data.pose_vectors import feature_columns, pose_vectors, poses_from_vectors, targets_in_root_frame
-from .networks import GROUPS, AESolvers, chain_groups, stages, weights_path
+from .numpy_nets import GROUPS, NumpyAESolvers, chain_groups, stages, weights_path
 
 __all__ = ["NeuralIKSolver", "POSTS", "load_model"]
 
@@ -51,8 +51,11 @@ except ImportError:  # pragma: no cover - numba is a dependency
     _List = list
 
 
-def load_model(weights=None, skeleton=None) -> AESolvers:
-    """The shipped (or given) :class:`AESolvers`, checked against ``skeleton``; cached per file."""
+def load_model(weights=None, skeleton=None):
+    """The shipped (or given) :class:`~posekit.models.pose_autoencoder.networks.AESolvers`, checked against
+    ``skeleton``; cached per file. Imports torch."""
+    from .networks import AESolvers
+
     return load_cached(AESolvers.load, weights_path() if weights is None else weights, skeleton)
 
 
@@ -74,6 +77,10 @@ class NeuralIKSolver(SolverBase):
     chain_aware : bool
         With ``chain``: use the fine-tuned stages (False: naive chaining of the independent solvers).
     model : AESolvers, optional
+
+    Every solve runs numpy and compiled code only: without ``model`` the networks are read from the checkpoint
+    without torch (:meth:`NumpyAESolvers.load <posekit.models.pose_autoencoder.numpy_nets.NumpyAESolvers.load>`);
+    :attr:`model`, the torch networks, is loaded when first asked.
     """
 
     name = "neural"
@@ -82,23 +89,32 @@ class NeuralIKSolver(SolverBase):
     batch_atol = 1e-5  # float32 networks: the batched numpy path and the compiled single path round differently
 
     def __init__(self, skeleton, weights=None, post: str = "bones", chain: bool = False, chain_aware: bool = True,
-                 model: AESolvers | None = None):
+                 model=None):
         if post not in POSTS:
             raise ValueError(f"post must be one of {', '.join(POSTS)}, got {post!r}")
-        self.model = model if model is not None else load_model(weights, skeleton)
-        require_skeleton("neural solver: the model", self.model.skeleton, skeleton)
+        self.net = model.compile() if model is not None else load_cached(
+            NumpyAESolvers.load, weights_path() if weights is None else weights, skeleton)
+        require_skeleton("neural solver: the model", self.net.skeleton, skeleton)
+        self._model, self._weights = model, weights
         self.skeleton = skeleton
         self.post, self.chain, self.chain_aware = post, bool(chain), bool(chain_aware)
         self.keeps_bone_lengths = post != "none"
-        self.net = self.model.compile()
-        self.mean = self.model.norm.mean.astype(np.float32)
-        self.std = self.model.norm.std.astype(np.float32)
-        self.lo, self.hi = (None, None) if self.model.x_range is None else np.asarray(self.model.x_range, np.float32)
-        self._cols = {g: feature_columns(skeleton, GROUPS[g]) for g in self.model.solvers}
-        self._groups = {frozenset(skeleton.indices(GROUPS[g])): g for g in self.model.solvers}
+        self.mean = self.net.norm.mean.astype(np.float32)
+        self.std = self.net.norm.std.astype(np.float32)
+        self.lo, self.hi = (None, None) if self.net.x_range is None else np.asarray(self.net.x_range, np.float32)
+        self._cols = {g: feature_columns(skeleton, GROUPS[g]) for g in self.net.solvers}
+        self._groups = {frozenset(skeleton.indices(GROUPS[g])): g for g in self.net.solvers}
         self._fabrik = make_solver("fabrik", skeleton) if post == "fabrik" else None
         self._plans: dict = {}
         self._compile_single()
+
+    @property
+    def model(self):
+        """The torch :class:`~posekit.models.pose_autoencoder.networks.AESolvers` (loaded, with torch, when first
+        asked)."""
+        if self._model is None:
+            self._model = load_model(self._weights, self.skeleton)
+        return self._model
 
     def _compile_single(self):
         """Arrays of the compiled single-pose path (:mod:`posekit.models.pose_autoencoder.fast`)."""
@@ -158,7 +174,7 @@ class NeuralIKSolver(SolverBase):
     def _stages(self, plan) -> list:
         """``[(group, use its chaining-aware copy)]`` of a plan (:func:`posekit.models.pose_autoencoder.networks.stages`)."""
         return stages([g for g, _ in plan], chain=[g for g, _ in plan] if self.chain else None,
-                      chain_aware=self.chain_aware, chained=self.model.chained)
+                      chain_aware=self.chain_aware, chained=self.net.chained)
 
     def _post(self, raw, joints, targets):
         """Post-processing (module docstring) of decoded poses (..., J, 3) for targets (..., K, 3)."""
@@ -172,7 +188,7 @@ class NeuralIKSolver(SolverBase):
         """Float32 size of what a solve for ``joints`` runs, kB: ``model_kb`` (autoencoder + solver(s),
         the paper's figure) and ``solver_kb`` (the solver network(s) alone)."""
         groups = [g for g, _ in self.plan(self.skeleton.indices(joints))]
-        total, ae = self.model.n_parameters(groups), self.model.n_parameters()
+        total, ae = self.net.n_parameters(groups), self.net.n_parameters()
         return {"model_kb": round(4 * total / 1024, 1), "solver_kb": round(4 * (total - ae) / 1024, 1)}
 
     # ------------------------------------------------------------------------------------ plans
@@ -189,11 +205,11 @@ class NeuralIKSolver(SolverBase):
             found = [self._groups[frozenset(key)]]
         elif self.chain:
             roles = {r for r in s.roles if s.index(r) in have}
-            groups = chain_groups(roles, self.model.solvers)
+            groups = chain_groups(roles, self.net.solvers)
             covered = {int(j) for g in groups for j in s.indices(GROUPS[g])}
             found = groups if covered == have else []
         if not found:
-            sets = "; ".join(f"{g}: {', '.join(GROUPS[g])}" for g in self.model.solvers)
+            sets = "; ".join(f"{g}: {', '.join(GROUPS[g])}" for g in self.net.solvers)
             how = "a union of hands, feet and head (chain)" if self.chain else "exactly one of them"
             raise ValueError(f"neural solver {self.name!r} has solvers for these joint sets — {sets}; the effectors "
                              f"are on {', '.join(s.names[j] for j in key)}, which is not {how}")

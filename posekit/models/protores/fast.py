@@ -6,25 +6,50 @@ cost per operation, not arithmetic, sets the time. :class:`NumpyPosingNet` holds
 float32 arrays and runs Eq. 2-6 with plain matrix products (and FK joint by joint), which is what
 :meth:`ProtoResSolver.solve <posekit.models.protores.solver.ProtoResSolver>` uses for the ProtoRes and
 Masked-FCR encoders; batches, and the Transformer, go through torch. Tested equal to the torch pass to
-float32 rounding.
+float32 rounding. :meth:`NumpyPosingNet.load` reads the weights without torch (the studio's small kernels).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from ...data.metrics import body_joints
 from ...rotations import sixd_to_matrix
 
-__all__ = ["NumpyPosingNet"]
+__all__ = ["NumpyPosingNet", "KIND", "WEIGHTS", "weights_path"]
+
+KIND = "protores"
+"""Checkpoint kind of every :class:`~posekit.models.protores.networks.PosingNet` (ProtoRes and its baselines)."""
+
+WEIGHTS = {"protores": "protores.pt", "masked-fcr": "protores_masked_fcr.pt", "transformer": "protores_transformer.pt"}
+"""File names of the shipped weights in ``data_samples/weights/``."""
 
 
-def _lin(layer):
-    return (np.ascontiguousarray(layer.weight.detach().numpy().T, dtype=np.float32),
-            layer.bias.detach().numpy().astype(np.float32))
+def weights_path(arch: str = "protores", folder=None):
+    """The weights' file of the encoder ``arch`` (:data:`WEIGHTS`) in ``folder`` or the shipped weights'
+    folder (:func:`posekit.paths.weights_path`)."""
+    from ... import paths
+
+    if arch not in WEIGHTS:
+        raise ValueError(f"arch must be one of {', '.join(WEIGHTS)}, got {arch!r}")
+    return paths.weights_path(WEIGHTS[arch], folder)
 
 
-def _block(block):
-    return ([_lin(fc) for fc in block.fc], _lin(block.skip), _lin(block.forecast))
+def _lin(state, name):
+    return (np.ascontiguousarray(np.asarray(state[f"{name}.weight"]).T, dtype=np.float32),
+            np.asarray(state[f"{name}.bias"]).astype(np.float32))
+
+
+def _block(state, name, layers):
+    return ([_lin(state, f"{name}.fc.{k}") for k in range(layers)], _lin(state, f"{name}.skip"),
+            _lin(state, f"{name}.forecast"))
+
+
+def _fcr(state, name, blocks, layers):
+    """An FCR stack's blocks ``{name}.blocks.{i}``; exactly ``blocks`` of ``layers`` layers each."""
+    if f"{name}.blocks.{blocks}.skip.weight" in state or f"{name}.blocks.0.fc.{layers}.weight" in state:
+        raise KeyError(f"{name}: more blocks or layers than the config's {blocks} x {layers}")
+    return [_block(state, f"{name}.blocks.{i}", layers) for i in range(blocks)]
 
 
 def _run_block(blk, x):
@@ -54,30 +79,61 @@ class NumpyPosingNet:
     """
 
     def __init__(self, net):
-        from .networks import centroid  # noqa: F401  (the same centroid rule, written below in numpy)
+        state = {k: v.detach().cpu().numpy() for k, v in net.state_dict().items()}
+        self._build(state, net.config.to_dict(), net.skeleton)
+        self.checkpoint = getattr(net, "checkpoint", None)
 
-        cfg = net.config
-        if cfg.arch == "transformer":
+    @classmethod
+    def load(cls, path, skeleton=None) -> "NumpyPosingNet":
+        """Read a :meth:`PosingNet.save <posekit.models.protores.networks.PosingNet.save>` file without torch;
+        with ``skeleton`` it must be the one the weights were made for, else a ``ValueError`` names the
+        difference (as :meth:`PosingNet.load <posekit.models.protores.networks.PosingNet.load>`)."""
+        from ...learn.checkpoint import load_checkpoint
+
+        ck = load_checkpoint(path, kind=KIND, skeleton=skeleton, arrays=True)
+        self = cls.__new__(cls)
+        try:
+            self._build(ck["state"], ck["config"], ck["skeleton"])
+        except KeyError as err:
+            raise ValueError(f"checkpoint {path}: weights do not match its config (missing or extra {err})") from None
+        self.checkpoint = {k: ck[k] for k in ("command", "seed", "data", "licence", "extra")}
+        return self
+
+    def _build(self, state, config: dict, skeleton):
+        """The arrays of the forward pass from a state dict (name -> array) and the config's fields (the
+        :class:`~posekit.models.protores.networks.PosingNet` layout)."""
+        arch, gpd = config.get("arch", "protores"), bool(config.get("gpd", True))
+        if arch == "transformer":
             raise ValueError("NumpyPosingNet covers the ProtoRes and Masked-FCR encoders; the Transformer runs in "
                              "torch")
-        self.arch = cfg.arch
-        if cfg.arch == "protores":
-            self.emb_joint = net.tokens.joint.weight.detach().numpy().astype(np.float32)
-            self.emb_kind = net.tokens.kind.weight.detach().numpy().astype(np.float32)
-            self.encoder = [_block(b) for b in net.encoder.blocks]
+        blocks, layers = int(config["blocks"]), int(config["layers"])
+        self.arch, self.config, self.skeleton = arch, dict(config), skeleton
+        f32 = lambda name: np.asarray(state[name]).astype(np.float32)  # noqa: E731
+        if arch == "protores":
+            self.emb_joint, self.emb_kind = f32("tokens.joint.weight"), f32("tokens.kind.weight")
+            self.encoder = _fcr(state, "encoder", blocks, layers)
         else:
-            self.placeholder = net.encoder.placeholder.detach().numpy().astype(np.float32)
-            self.encoder = [_block(b) for b in net.encoder.fcr.blocks]
-        self.gpd = None if net.gpd is None else [_block(b) for b in net.gpd.blocks]
-        self.ikd = [_block(b) for b in net.ikd.blocks]
-        s = net.skeleton
+            self.placeholder = f32("encoder.placeholder")
+            self.encoder = _fcr(state, "encoder.fcr", blocks, layers)
+        self.gpd = _fcr(state, "gpd", blocks, layers) if gpd else None
+        self.ikd = _fcr(state, "ikd", blocks * (1 if gpd else 2), layers)
+        s = skeleton
         self.parents = np.asarray(s.parents)
         self.offsets = np.asarray(s.offsets, dtype=np.float64)
-        self.body = net.body
-        self.pelvis_index = net.pelvis_index
-        self.helper_root = net.helper_root
-        self.pelvis_offset = np.asarray(s.offsets[s.pelvis()], dtype=np.float64)
+        self.body = np.asarray(body_joints(s), dtype=np.int64)
+        if int(config["n_joints"]) != len(self.body):
+            raise ValueError(f"config.n_joints is {config['n_joints']} but skeleton {s.name!r} has {len(self.body)} "
+                             "body joints")
+        pel = s.pelvis()
+        self.pelvis_index = int(np.nonzero(self.body == pel)[0][0])
+        self.helper_root = int(s.parents[pel]) if s.parents[pel] >= 0 else -1
+        self.pelvis_offset = np.asarray(s.offsets[pel], dtype=np.float64)
         self.J = s.n_joints
+        self.n_params = sum(int(np.asarray(v).size) for k, v in state.items() if k != "pelvis_offset")
+
+    def n_parameters(self) -> int:
+        """Weights in the network (the torch :class:`~posekit.models.protores.networks.PosingNet`'s count)."""
+        return self.n_params
 
     def _centroid(self, kind, value, tol):
         w = (kind == 0).astype(np.float32) * (np.float32(1) - tol + np.float32(1e-3))

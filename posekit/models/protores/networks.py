@@ -32,13 +32,11 @@ A :class:`PosingNet` saves to one :mod:`posekit.learn.checkpoint` (kind ``"proto
 
 from __future__ import annotations
 
-from pathlib import Path
 
 import numpy as np
 import torch
 from torch import nn
 
-from ... import paths
 from ...data.metrics import body_joints
 from ...kinematics import fk
 from ...learn import load_checkpoint, save_checkpoint
@@ -50,20 +48,8 @@ from .blocks import (ARCHS, ETA, KIND_IDS, SIGMA_M, FCBlock, FCR, ProtoResConfig
 __all__ = ["KIND", "WEIGHTS", "weights_path", "ARCHS", "KIND_IDS", "SIGMA_M", "ETA", "ProtoResConfig", "centroid", "effector_inputs",
            "Tokens", "FCBlock", "FCR", "ProtoResEncoder", "PosingNet", "tolerance_to_sigma", "sigma_to_tolerance"]
 
-KIND = "protores"
-"""Checkpoint kind of every :class:`PosingNet` (ProtoRes and its baselines)."""
-
-WEIGHTS = {"protores": "protores.pt", "masked-fcr": "protores_masked_fcr.pt", "transformer": "protores_transformer.pt"}
-"""File names of the shipped weights in ``data_samples/weights/``."""
-
-
-def weights_path(arch: str = "protores", folder=None) -> Path:
-    """The weights' file of the encoder ``arch`` (:data:`WEIGHTS`) in ``folder`` or the shipped weights'
-    folder (:func:`posekit.paths.weights_path`)."""
-    if arch not in WEIGHTS:
-        raise ValueError(f"arch must be one of {', '.join(WEIGHTS)}, got {arch!r}")
-    return paths.weights_path(WEIGHTS[arch], folder)
-
+# the checkpoint kind and the shipped files: defined with the torch-free numpy pass, which reads them too
+from .fast import KIND, WEIGHTS, weights_path  # noqa: E402
 
 
 # ------------------------------------------------------------------------------------------ Eq. 2

@@ -22,7 +22,6 @@ valid (FK of predicted rotations) and ``info["out_of_range"]`` names the effecto
 from __future__ import annotations
 
 import numpy as np
-import torch
 
 from ...data.metrics import body_joints
 from ...ik.api import Pose, SolverBase
@@ -31,10 +30,14 @@ from ...ik.registry import register
 from ...kinematics import fk
 from ...learn import load_cached, require_skeleton
 from ...rotations import matrix_to_quat, matrix_to_sixd
-from .networks import ARCHS, KIND_IDS, SIGMA_M, PosingNet, sigma_to_tolerance, weights_path
-from .fast import NumpyPosingNet
+from ...ik.effectors import KIND_CODES as KIND_IDS
+from .fast import NumpyPosingNet, weights_path
+from .tolerance import SIGMA_M, sigma_to_tolerance
 
-__all__ = ["ProtoResSolver", "load_protores", "skeleton_span", "run_learned", "MAX_EFFECTORS"]
+__all__ = ["ProtoResSolver", "load_protores", "load_numpy", "skeleton_span", "run_learned", "MAX_EFFECTORS", "ARCHS"]
+
+ARCHS = ("protores", "masked-fcr", "transformer")
+"""Encoders: the paper's model and its two baselines (Table 1; :data:`posekit.models.protores.blocks.ARCHS`)."""
 
 NUMPY_BATCH = 8
 """Up to this many requests go through :class:`~posekit.models.protores.fast.NumpyPosingNet` (no torch
@@ -44,9 +47,17 @@ MAX_EFFECTORS = 64
 """Most effectors one prediction takes (a valid set has at most two per body joint; training drew 3-16)."""
 
 
-def load_protores(arch: str = "protores", weights=None, skeleton=None) -> PosingNet:
-    """The shipped (or given) network of ``arch``, checked against ``skeleton``; cached per file."""
+def load_protores(arch: str = "protores", weights=None, skeleton=None):
+    """The shipped (or given) :class:`~posekit.models.protores.networks.PosingNet` of ``arch``, checked against
+    ``skeleton``; cached per file. Imports torch."""
+    from .networks import PosingNet
+
     return load_cached(PosingNet.load, weights_path(arch) if weights is None else weights, skeleton)
+
+
+def load_numpy(arch: str = "protores", weights=None, skeleton=None) -> NumpyPosingNet:
+    """The same network as :func:`load_protores` for the numpy pass, read without torch; cached per file."""
+    return load_cached(NumpyPosingNet.load, weights_path(arch) if weights is None else weights, skeleton)
 
 
 def skeleton_span(skeleton) -> float:
@@ -77,6 +88,9 @@ class ProtoResSolver(SolverBase):
         A ``protores`` checkpoint (default the shipped one of ``arch``).
     net : PosingNet, optional
         A network already in memory (the notebook's live demo).
+
+    The ProtoRes and Masked-FCR encoders are read without torch and pose up to :data:`NUMPY_BATCH` requests in
+    numpy; the torch network (:attr:`net`) is loaded the first time a larger batch, or the Transformer, needs it.
     """
 
     kinds = KINDS
@@ -84,20 +98,35 @@ class ProtoResSolver(SolverBase):
     keeps_bone_lengths = True
     batch_atol = 1e-4
 
-    def __init__(self, skeleton, arch: str = "protores", weights=None, net: PosingNet | None = None):
+    def __init__(self, skeleton, arch: str = "protores", weights=None, net=None):
         if arch not in ARCHS:
             raise ValueError(f"arch must be one of {', '.join(ARCHS)}, got {arch!r}")
-        self.net = net if net is not None else load_protores(arch, weights, skeleton)
-        require_skeleton(f"{arch} solver: the network", self.net.skeleton, skeleton)
-        self.net.eval()
+        self._weights, self._net, self.arch, self.skeleton = weights, net, arch, skeleton
+        if net is not None:
+            net.eval()
+            self._numpy = NumpyPosingNet(net) if net.config.arch != "transformer" else None
+            trained, self.arch = net.skeleton, net.config.arch
+        elif arch == "transformer":
+            self._numpy = None
+            trained = self.net.skeleton
+        else:
+            self._numpy = load_numpy(arch, weights, skeleton)
+            trained, self.arch = self._numpy.skeleton, self._numpy.arch
+        require_skeleton(f"{arch} solver: the network", trained, skeleton)
         self.skeleton = skeleton
-        self.arch = self.net.config.arch
         self.name = "protores" if self.arch == "protores" else f"protores-{self.arch}"
         self.body = np.asarray(body_joints(skeleton), dtype=np.int64)
         self._body_lookup = np.full(skeleton.n_joints, -1, dtype=np.int64)
         self._body_lookup[self.body] = np.arange(len(self.body))
         self.span = skeleton_span(skeleton)
-        self._numpy = NumpyPosingNet(self.net) if self.arch != "transformer" else None
+
+    @property
+    def net(self):
+        """The torch :class:`~posekit.models.protores.networks.PosingNet` (loaded, with torch, when first asked)."""
+        if self._net is None:
+            self._net = load_protores(self.arch, self._weights, self.skeleton)
+            self._net.eval()
+        return self._net
 
     # ------------------------------------------------------------------------------ arrays
     def predict(self, joint, kind, value, tol):
@@ -160,6 +189,8 @@ class ProtoResSolver(SolverBase):
         if exact:  # its pose is float64 FK of its rotations already
             out = self._numpy.forward(bj, kind, value, tol)
         else:
+            import torch
+
             with torch.no_grad():
                 t = [torch.as_tensor(bj), torch.as_tensor(kind, dtype=torch.int64),
                      torch.as_tensor(value, dtype=torch.float32), torch.as_tensor(tol, dtype=torch.float32)]
@@ -169,7 +200,7 @@ class ProtoResSolver(SolverBase):
         f64 = lambda a: None if a is None else a.astype(np.float64)  # noqa: E731
         # the pose as float64 quaternions and root, and its FK in float64: a Pose that is exactly what
         # FK of its rotations gives (the network's own float32 FK agrees to about 1e-6 m)
-        quats = matrix_to_quat(torch.from_numpy(f64(out["local_rot"]))).numpy()
+        quats = matrix_to_quat(f64(out["local_rot"]))
         quats /= np.linalg.norm(quats, axis=-1, keepdims=True)
         root = f64(out["root_pos"])
         gpos, grot = (out["global_pos"], out["global_rot"]) if exact else fk(self.skeleton, quats, root)

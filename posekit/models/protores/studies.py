@@ -10,6 +10,11 @@ writes ``data_samples/results/protores_ablation.json`` (read by ``posekit bench 
   the shipped benchmarks, with the shipped (8,000-step) ProtoRes beside them.
 * **Width** — ProtoRes of widths 64, 128 (the ablations' reference run) and 256, the same :data:`STEPS`
   steps: parameters, seconds per step, one-pose time on one thread, and the benchmarks' errors.
+* **Scaling** (``--scaling``, :func:`run_scaling`) — the widths × step counts of :data:`SCALING_GRID`, each a
+  full run with its own schedule (warm-up, cosine decay over its own steps), plus the shipped 8,000-step
+  network: error against training compute (parameters × poses seen), written to
+  ``data_samples/results/protores_scaling.json`` for lesson 05's scaling curve
+  (:func:`posekit.models.protores.scaling.fit_power_law`).
 
 Every run is seeded and single-threaded; ``workers`` runs train side by side, one per core (under ``torchrun``
 or on a GPU, :mod:`posekit.learn.distributed`: one after another, each data-parallel).
@@ -26,17 +31,28 @@ import numpy as np
 from ...learn.trainers import register_trainer
 from ...plugins import arg
 
-__all__ = ["ABLATIONS", "WIDTHS", "STEPS", "run_studies", "studies_path", "score_net"]
+__all__ = ["ABLATIONS", "WIDTHS", "STEPS", "SCALING_GRID", "run_studies", "run_scaling", "studies_path",
+           "scaling_path", "score_net"]
 
 ABLATIONS = {"no GPD": {"gpd": False}, "fixed weights": {"weighted": False}}
 WIDTHS = (64, 128, 256)
 STEPS = 2000
+SCALING_GRID = tuple((w, s) for w in (64, 128) for s in (500, 1000, 2000, 4000)) + tuple(
+    (256, s) for s in (500, 1000, 2000))
+"""(width, steps) of the scaling study; width 256 stops at 2,000 steps (4,000 would take about half an hour of
+one core on its own). The shipped network adds width 128 at 8,000 steps."""
 
 
 def studies_path():
     from ...paths import samples_dir
 
     return samples_dir() / "results" / "protores_ablation.json"
+
+
+def scaling_path():
+    from ...paths import samples_dir
+
+    return samples_dir() / "results" / "protores_scaling.json"
 
 
 def score_net(net, motions=None) -> dict:
@@ -83,31 +99,75 @@ def _job(job):
             "val_mpjpe_mm": round(rep["val"]["mpjpe_mm"], 1)}
 
 
+def _shipped_row(motions) -> dict:
+    """The shipped ProtoRes scored like a study run (its training report gives steps and time)."""
+    from .solver import load_protores
+
+    shipped = load_protores("protores")
+    rep = shipped.checkpoint["extra"]["report"]
+    return {"method": "ProtoRes (shipped)", **score_net(shipped, motions),
+            "parameters": shipped.n_parameters(), "steps": rep["steps"],
+            "train_min": round(rep["train_seconds"] / 60, 1),
+            "ms_per_step": round(rep["seconds_per_step"] * 1000), "val_mpjpe_mm": round(rep["val"]["mpjpe_mm"], 1)}
+
+
+def _pool_map(jobs, workers: int) -> list:
+    """Run study jobs: side by side in a process pool on the CPU, else (torchrun or a GPU) one after another,
+    each on every process, data-parallel."""
+    from ...learn.distributed import current
+
+    run = current()
+    if run.distributed or run.device.type != "cpu" or workers <= 1:
+        return [_job(j) for j in jobs]
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        return list(pool.map(_job, jobs))
+
+
+def run_scaling(seed: int = 0, out=None, workers: int = 2, grid=SCALING_GRID) -> dict:
+    """Train and score every (width, steps) of ``grid`` and the shipped network (see the module docstring);
+    write the JSON (``out=False``: none). Each row adds ``width``, ``batch`` and ``compute`` (parameters ×
+    poses seen, the usual proxy of training FLOPs up to a constant factor)."""
+    from ...data.bandai_mini import load_bandai_mini
+    from ...learn.distributed import current
+    from .train import DEFAULTS
+
+    t0 = time.perf_counter()
+    batch = DEFAULTS["batch"]
+    jobs = sorted(((f"width {w}, {s} steps", {"width": w}, {"steps": s}, seed) for w, s in grid),
+                  key=lambda j: -j[1]["width"] ** 2 * j[2]["steps"])  # longest first
+    rows = _pool_map(jobs, workers)
+    shipped = _shipped_row(load_bandai_mini())
+    shipped["width"] = 128
+    for r, (w, s) in zip(rows, [(j[1]["width"], j[2]["steps"]) for j in jobs]):
+        r["width"] = w
+    rows.append(shipped)
+    for r in rows:
+        r["batch"] = batch
+        r["compute"] = float(r["parameters"]) * r["steps"] * batch
+    rows.sort(key=lambda r: (r["width"], r["steps"]))
+    res = {"rows": rows, "seed": seed, "batch": batch, "seconds": round(time.perf_counter() - t0),
+           "command": f"posekit train protores-studies --scaling --seed {seed}"}
+    if out is not False and current().main:
+        path = scaling_path() if out is None else out
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(res, indent=1) + "\n")
+    return res
+
+
 def run_studies(seed: int = 0, out=None, workers: int = 2, progress: bool = True) -> dict:
     """Train and score the studies of the module docstring; write the JSON (``out=False``: none)."""
     from ...data.bandai_mini import load_bandai_mini
-    from .solver import load_protores
+    from ...learn.distributed import current
 
     t0 = time.perf_counter()
     jobs = [(f"width {w}", {"width": w}, {"steps": STEPS}, seed) for w in (256, 64, 128)]  # longest first
     jobs += [(f"ProtoRes, {k}", {k2: v for k2, v in kw.items() if k2 == "gpd"},
               {"steps": STEPS, **{k2: v for k2, v in kw.items() if k2 != "gpd"}}, seed) for k, kw in ABLATIONS.items()]
-    from ...learn.distributed import current
-
     run = current()
-    if run.distributed or run.device.type != "cpu" or workers <= 1:  # torchrun or a GPU: one run after another,
-        done = [_job(j) for j in jobs]                                # each on every process, data-parallel
-    else:
-        with ProcessPoolExecutor(max_workers=workers) as pool:
-            done = list(pool.map(_job, jobs))
+    done = _pool_map(jobs, workers)
     width = lambda r: int(r["method"][6:]) if r["method"].startswith("width") else 0  # noqa: E731
     done.sort(key=lambda r: (not r["method"].startswith("width"), width(r)))
-    shipped = load_protores("protores")
-    rep = shipped.checkpoint["extra"]["report"]
-    full = {"method": "ProtoRes (shipped)", **score_net(shipped, load_bandai_mini()),
-            "parameters": shipped.n_parameters(), "steps": rep["steps"],
-            "train_min": round(rep["train_seconds"] / 60, 1),
-            "ms_per_step": round(rep["seconds_per_step"] * 1000), "val_mpjpe_mm": round(rep["val"]["mpjpe_mm"], 1)}
+    full = _shipped_row(load_bandai_mini())
     ref = dict(next(r for r in done if r["method"] == "width 128"), method=f"ProtoRes ({STEPS} steps)")
     res = {"rows": [full, ref] + [r for r in done if r["method"].startswith("ProtoRes")],
            "width": [r for r in done if r["method"].startswith("width")], "seed": seed,
@@ -125,6 +185,15 @@ def _cli(args) -> int:
     import sys
     from pathlib import Path
 
+    if args.scaling:
+        out = Path(args.out) if args.out else scaling_path()
+        res = run_scaling(seed=args.seed, out=out, workers=args.workers)
+        for r in res["rows"]:
+            print(f"width {r['width']:>4} {r['steps']:>5} steps ({r['compute']:.2e} parameter-poses): "
+                  f"random L_ikd-L2 {r['random_ikd_l2_e3']:.3f}e-3 m^2, 5-point {r['5point_ikd_l2_e3']:.3f}e-3; "
+                  f"{r['train_min']} min")
+        print(f"wrote {out} in {res['seconds']} s")
+        return 0
     out = Path(args.out) if args.out else studies_path()
     res = run_studies(seed=args.seed, out=out, workers=args.workers, progress=sys.stderr.isatty())
     for r in res["rows"] + res["width"]:
@@ -143,4 +212,8 @@ register_trainer(
     takes="about 15 minutes on 2 cores (five 2,000-step runs, two side by side)",
     args=[arg("--workers", type=int, default=2, help="runs side by side, one thread each (default: 2)"),
           arg("--seed", type=int, default=0, help="(default: 0)"),
-          arg("--out", default=None, help="JSON file (default data_samples/results/protores_ablation.json)")])
+          arg("--scaling", action="store_true",
+              help="the scaling study instead: widths x step counts (about 35 minutes on 2 cores), written to "
+                   "data_samples/results/protores_scaling.json"),
+          arg("--out", default=None, help="JSON file (default data_samples/results/protores_ablation.json, or "
+                                          "protores_scaling.json with --scaling)")])
