@@ -50,6 +50,8 @@ TARGET_COLOUR = "#d81b9c"
 """Position targets: magenta, apart from the right side's red bones and the look-at orange."""
 LOOK_COLOUR = "#e67e22"
 """Look-at targets and their rays: orange."""
+SELECTED_COLOUR = "#f1c40f"
+"""The selected joint: drawn larger, in yellow."""
 TRIAD_LENGTH = 0.12
 """Length (metres) of each axis of a rotation target's triad."""
 
@@ -120,14 +122,12 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         self.body = [int(j) for j in body_joints(skeleton)]  # what can be selected (not a helper root)
 
         self._bones = Bones(skeleton, radius=0.7 * joint_radius)
-        self._joints = Spheres(J, joint_radius, "#2e86c1")
+        self._joints = Spheres(J, joint_radius, "#2e86c1", highlight=SELECTED_COLOUR)  # selected: larger, yellow
         self._ghost_bones = Bones(skeleton, radius=0.45 * joint_radius, opacity=0.35, colour="#8c8c8c")
         self._ghost_joints = Spheres(J, joint_radius * 0.6, "#aaaaaa", opacity=0.4)
-        self._selected_marker = Spheres(1, joint_radius * 1.6, "#f1c40f", opacity=0.6)
         self._ghost_group = three.Group(children=[self._ghost_bones.mesh, self._ghost_joints.mesh])
         self._target_group = three.Group()
         self._targets_mesh, self._target_key = None, None
-        self._selected_marker.mesh.visible = False
         self._grabbable = three.Group(children=[self._joints.mesh, self._target_group])  # what a drag can grab
 
         # The scene content sits in a group shifted by -centre, so the orbit pivot (the origin,
@@ -136,7 +136,7 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         self._offset, self._radius = centre.copy(), radius
         self.camera = three.PerspectiveCamera(position=self._camera_position(radius), fov=self.FOV,
                                               aspect=self.aspect, near=0.01, far=200)
-        content = [self._bones.mesh, self._grabbable, self._ghost_group, self._selected_marker.mesh]
+        content = [self._bones.mesh, self._grabbable, self._ghost_group]
         if floor:
             content.append(three.GridHelper(size=6, divisions=24, colorCenterLine="#888888", colorGrid="#cccccc"))
         self._world = three.Group(children=content, position=[float(-c) for c in centre])
@@ -191,7 +191,6 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         self._draw_rays()
         self._follow()
         if self.selected is not None:
-            self._selected_marker.set(self.pose[[self.skeleton.index(self.selected)]])
             self._update_status()
 
     def set_ghost(self, global_pos=None):
@@ -303,9 +302,7 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         self._show_handle_choice()
         if self.joint_select.value != (name or ""):
             self.joint_select.value = name or ""
-        self._selected_marker.mesh.visible = name is not None
-        if name is not None:
-            self._selected_marker.set(self.pose[[self.skeleton.index(name)]])
+        self._joints.highlight(None if name is None else self.skeleton.index(name))
         self._sync_sliders(recentre=True)
         self._update_status()
         for cb in self._select_callbacks:

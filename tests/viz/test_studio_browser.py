@@ -140,7 +140,7 @@ def test_dragging_a_target_in_3d_resolves_every_view(page, server):
     first = _canvases(page)[0]
     first.scroll_into_view_if_needed()
     before, texts, n0 = _images(page), _texts(page), update_number(page)
-    # the selected joint (the left hand, with its target) wears a translucent yellow marker
+    # the selected joint (the left hand, on its target) is drawn larger and yellow
     img = _pixels(first)
     r, g, b = img[..., 0], img[..., 1], img[..., 2]
     ys, xs = np.nonzero((r > 180) & (g > 120) & (g < 215) & (b < 90))

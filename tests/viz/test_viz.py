@@ -25,8 +25,28 @@ def test_viewer_updates_buffers_not_scene(sample):
     axis = pos[b.pairs[:, 1]] - pos[b.pairs[:, 0]]
     radial = rings[:, 1] - pos[b.pairs[:, 1]][:, None]
     assert np.abs(np.einsum("bsk,bk->bs", radial, axis)).max() < 1e-5  # rings square to the bone
-    normals = b.geometry.attributes["normal"].array.reshape(rings.shape)
-    np.testing.assert_allclose(normals[:, 1] * b.radius, radial, atol=1e-5)
+    assert "normal" not in b.geometry.attributes and b.mesh.material.flatShading  # normals drawn on the GPU
+
+
+def test_selected_joint_is_drawn_larger_and_yellow_in_the_joints_mesh(sample):
+    s = sample.skeleton
+    v = SkeletonViewer(s, sample.global_pos[0])
+    j = s.index("left_hand")
+    v.select(j)
+    J = v._joints
+    V = len(J.unit)
+    colours = J.geometry.attributes["color"].array[: s.n_joints * V].reshape(s.n_joints, V, 3)[:, 0]
+    assert np.allclose(colours[j], [0xf1 / 255, 0xc4 / 255, 0x0f / 255]) and np.allclose(colours[0], colours[1])
+    verts = J.geometry.attributes["position"].array[: s.n_joints * V].reshape(s.n_joints, V, 3)
+    radius = np.linalg.norm(verts - sample.global_pos[0][:, None], axis=-1)
+    np.testing.assert_allclose(radius[j], J.radius * J.HIGHLIGHT_SCALE, rtol=1e-5)
+    np.testing.assert_allclose(np.delete(radius, j, axis=0), J.radius, rtol=1e-5)
+    v.set_pose(sample.global_pos[40])  # the highlight follows the joint in the same array
+    verts = J.geometry.attributes["position"].array[: s.n_joints * V].reshape(s.n_joints, V, 3)
+    np.testing.assert_allclose(np.linalg.norm(verts[j] - sample.global_pos[40][j], axis=-1),
+                               J.radius * J.HIGHLIGHT_SCALE, rtol=1e-5)
+    v.select(None)
+    assert J.highlighted is None and np.allclose(J.geometry.attributes["color"].array[j * V], colours[0])
 
 
 def test_bones_are_coloured_by_side(sample):
