@@ -118,7 +118,7 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         self.aspect = width / height
         self._select_callbacks, self._target_callbacks, self._look_callbacks = [], [], []
         self._init_drag()
-        self._held = False
+        self._held, self._status_due = False, False
         self.body = [int(j) for j in body_joints(skeleton)]  # what can be selected (not a helper root)
 
         self._bones = Bones(skeleton, radius=0.7 * joint_radius)
@@ -263,8 +263,9 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
 
     @contextmanager
     def drawing_once(self):
-        """Within the block, changes of pose and targets draw the rays and triads and move the camera once, at
-        the end (a live solve sets the targets, then the pose: one buffer message each instead of two)."""
+        """Within the block, changes of pose and targets draw the rays and triads, move the camera and write the
+        selected joint's readout once, at the end (a moved target solves, then sets the pose: one message each
+        instead of two)."""
         if self._held:
             yield
             return
@@ -275,6 +276,8 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
             self._held = False
             self._draw_rays()
             self._follow()
+            if self._status_due:
+                self._update_status()
 
     def _draw_rays(self):
         """Place the look-at rays (joint -> point) and the rotation triads (at their joints) on the current pose."""
@@ -327,11 +330,12 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
             raise ValueError(f"target for {name} contains NaN or inf")
         targets = dict(self.targets)
         targets[name] = position
-        self.set_targets(targets, self.look_targets, self.rotation_targets)
-        self._show_handle_choice()
-        self._update_status()
-        for cb in self._target_callbacks:
-            cb(name, self.targets[name].copy())
+        with self.drawing_once():  # the listeners' solve sets the pose: the readout is written once, after it
+            self.set_targets(targets, self.look_targets, self.rotation_targets)
+            self._show_handle_choice()
+            self._update_status()
+            for cb in self._target_callbacks:
+                cb(name, self.targets[name].copy())
 
     def move_look_target(self, joint, position):
         """Move the point a joint looks at (its orange marker) and notify ``on_look_target_change`` callbacks."""
@@ -343,13 +347,14 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
             raise ValueError(f"look-at target for {name} contains NaN or inf")
         looks = dict(self.look_targets)
         looks[name] = position
-        self.set_targets(self.targets, looks, self.rotation_targets)
-        self._update_status()
-        if not self._look_callbacks:  # nobody listens to look-at moves: the joint's target it is
-            for cb in self._target_callbacks:
+        with self.drawing_once():
+            self.set_targets(self.targets, looks, self.rotation_targets)
+            self._update_status()
+            if not self._look_callbacks:  # nobody listens to look-at moves: the joint's target it is
+                for cb in self._target_callbacks:
+                    cb(name, position.copy())
+            for cb in self._look_callbacks:
                 cb(name, position.copy())
-        for cb in self._look_callbacks:
-            cb(name, position.copy())
 
     def on_look_target_change(self, callback):
         """Call ``callback(joint_name, position)`` whenever an orange look-at marker is dragged (without such a
@@ -365,6 +370,10 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         self._target_callbacks.append(callback)
 
     def _update_status(self):
+        if self._held:  # written once, when the drawing_once block ends
+            self._status_due = True
+            return
+        self._status_due = False
         if self.selected is None:
             self.status.value = "double-click a joint to select it"
             return
