@@ -3,7 +3,7 @@
 Introduced in ``notebooks/05_protores.ipynb`` (the scaling curve). ``posekit train protores-studies --scaling``
 trains ProtoRes at several widths for several step counts (:data:`~posekit.models.protores.studies.SCALING_GRID`).
 Each run's training compute is ``C = N D``: parameters ``N`` times poses seen ``D`` (steps x batch), the usual
-proxy for training FLOPs (about ``6 N D``; Kaplan et al. 2020). For each budget the best width gives the
+proxy for training floating-point operations (about ``6 N D``). For each budget the best width gives the
 *compute frontier*; a straight line through the frontier in log-log axes is the power law
 
     L(C) = a C^(-b)
