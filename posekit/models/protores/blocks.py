@@ -28,8 +28,7 @@ from .tolerance import ETA, SIGMA_M, sigma_to_tolerance, tolerance_to_sigma  # n
 __all__ = ["ARCHS", "KIND_IDS", "SIGMA_M", "ETA", "ProtoResConfig", "centroid", "effector_inputs", "Tokens",
            "FCBlock", "FCR", "tolerance_to_sigma", "sigma_to_tolerance"]
 
-ARCHS = ("protores", "masked-fcr", "transformer")
-"""Encoders: the paper's model and its two baselines (Table 1)."""
+from .fast import ARCHS  # noqa: E402 - the encoders, named where the torch-free numpy pass reads them too
 
 KIND_IDS = KIND_CODES
 """Effector kind -> type id (the type embedding's row): the solvers' own codes

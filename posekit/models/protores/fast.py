@@ -16,7 +16,10 @@ import numpy as np
 from ...data.metrics import body_joints
 from ...rotations import sixd_to_matrix
 
-__all__ = ["NumpyPosingNet", "KIND", "WEIGHTS", "weights_path"]
+__all__ = ["NumpyPosingNet", "ARCHS", "KIND", "WEIGHTS", "weights_path"]
+
+ARCHS = ("protores", "masked-fcr", "transformer")
+"""Encoders: the paper's model and its two baselines (Table 1)."""
 
 KIND = "protores"
 """Checkpoint kind of every :class:`~posekit.models.protores.networks.PosingNet` (ProtoRes and its baselines)."""

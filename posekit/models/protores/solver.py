@@ -31,13 +31,10 @@ from ...kinematics import fk
 from ...learn import load_cached, require_skeleton
 from ...rotations import matrix_to_quat, matrix_to_sixd
 from ...ik.effectors import KIND_CODES as KIND_IDS
-from .fast import NumpyPosingNet, weights_path
+from .fast import ARCHS, NumpyPosingNet, weights_path
 from .tolerance import SIGMA_M, sigma_to_tolerance
 
 __all__ = ["ProtoResSolver", "load_protores", "load_numpy", "skeleton_span", "run_learned", "MAX_EFFECTORS", "ARCHS"]
-
-ARCHS = ("protores", "masked-fcr", "transformer")
-"""Encoders: the paper's model and its two baselines (Table 1; :data:`posekit.models.protores.blocks.ARCHS`)."""
 
 NUMPY_BATCH = 8
 """Up to this many requests go through :class:`~posekit.models.protores.fast.NumpyPosingNet` (no torch
@@ -113,7 +110,6 @@ class ProtoResSolver(SolverBase):
             self._numpy = load_numpy(arch, weights, skeleton)
             trained, self.arch = self._numpy.skeleton, self._numpy.arch
         require_skeleton(f"{arch} solver: the network", trained, skeleton)
-        self.skeleton = skeleton
         self.name = "protores" if self.arch == "protores" else f"protores-{self.arch}"
         self.body = np.asarray(body_joints(skeleton), dtype=np.int64)
         self._body_lookup = np.full(skeleton.n_joints, -1, dtype=np.int64)
