@@ -16,7 +16,7 @@ STAMP := $(VENV)/.posekit-installed
 export POSEKIT_DATA_DIR ?= $(if $(wildcard ../shared/data),$(abspath ../shared/data),)
 ROOT_FLAG := $(if $(filter 0,$(shell id -u)),--allow-root,)
 
-.PHONY: setup lab studio test test-unit test-portable browser-deps bench clean course-assets slides course solutions
+.PHONY: setup warm lab studio test test-unit test-portable browser-deps bench clean course-assets slides course solutions
 
 # JupyterLab settings for this environment: no news pop-up, no update check (nothing is fetched)
 LAB_OVERRIDES := $(VENV)/share/jupyter/lab/settings/overrides.json
@@ -29,6 +29,11 @@ $(STAMP): pyproject.toml tools/jupyterlab_overrides.json
 	touch $(STAMP)
 
 setup: $(STAMP)
+
+# every solver's numba kernels compiled into the on-disk cache once, before a lesson, the studio or the tests wait
+# for them (about 25 s on 2 cores after a fresh clone or a source change; a second or two once done)
+warm: setup
+	$(VENV)/bin/posekit warm
 
 browser-deps:
 	@if [ ! -x /usr/bin/chromium ]; then \
@@ -61,14 +66,14 @@ course: setup course-assets
 solutions: setup course-assets
 	$(VENV)/bin/posekit exercises solutions $(or $(LESSON),all) --html --out build/instructor
 
-lab: setup
+lab: setup warm
 	$(VENV)/bin/jupyter lab notebooks/ $(ROOT_FLAG) --LabApp.news_url= \
 	  --LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate $(LAB_ARGS)
 
 # the posing studio alone as a browser app (Voila, notebooks/studio.ipynb; lesson 06 teaches it), one kernel kept
 # preheated for the next visitor; Ctrl-C stops it and its kernels. STUDIO_DATA (a data set or BVH folder),
 # STUDIO_WEIGHTS (your trained models), STUDIO_SOLVERS (2-4 names) choose what it poses
-studio: setup
+studio: setup warm
 	cd notebooks && POSEKIT_STUDIO_DATA="$(if $(wildcard $(STUDIO_DATA)),$(abspath $(STUDIO_DATA)),$(STUDIO_DATA))" POSEKIT_STUDIO_SOLVERS="$(STUDIO_SOLVERS)" \
 	  $(if $(STUDIO_WEIGHTS),POSEKIT_WEIGHTS_DIR="$(abspath $(STUDIO_WEIGHTS))") \
 	  ../$(VENV)/bin/voila studio.ipynb --port=$(or $(STUDIO_PORT),8866) --preheat_kernel=True --pool_size=1 \
@@ -78,10 +83,10 @@ studio: setup
 # (tests/conftest.py); PYTEST_WORKERS=0 runs everything in one process
 PYTEST_WORKERS ?= 2
 XDIST = $(if $(filter 0,$(PYTEST_WORKERS)),,-n $(PYTEST_WORKERS) --dist loadfile)
-test: setup browser-deps course-assets
+test: setup browser-deps course-assets warm
 	$(PY) -m pytest $(XDIST) --durations=15 $(PYTEST_ARGS)
 
-test-unit: setup
+test-unit: setup warm
 	$(PY) -m pytest tests -m "not browser and not slow" $(XDIST) $(PYTEST_ARGS)
 
 # PORTABLE_VARIANTS: a subset of `python tools/test_portable.py --list`

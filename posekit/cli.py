@@ -203,6 +203,22 @@ def _train(args) -> int:
             return get_trainer(args.trainer).run(args)
 
 
+def _warm(args) -> int:
+    """``posekit warm``: :func:`posekit.warm.warm`, one line on what it did."""
+    from .warm import warm
+
+    r = warm(workers=args.workers, force=args.force)
+    if r["cache"] is None:
+        print("posekit warm: kernel caching is off (POSEKIT_NUMBA_CACHE, or no numba): nothing to compile ahead")
+    elif r["done"]:
+        print(f"posekit warm: kernels already compiled in {r['cache']}")
+    else:
+        print(f"posekit warm: compiled the kernels of {r['solvers']} solvers in {r['seconds']:.0f} s into {r['cache']}")
+    for name, why in r["skipped"].items():
+        print(f"posekit warm: warning: {name} not compiled ahead: {why}", file=sys.stderr)
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="posekit", description="posekit: data tools and benchmarks")
     sub = parser.add_subparsers(dest="group", required=True)
@@ -264,6 +280,11 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--device", default="cpu", help="where to train: cpu (default), cuda or cuda:N; under torchrun "
                        "every process trains its share of each batch (data-parallel, README: training at scale)")
         p.set_defaults(fn=_train, trainer=name)
+    p = sub.add_parser("warm", help="compile every solver's kernels into the cache (make lab, studio and test run it "
+                       "first; a second at most once done)")
+    p.add_argument("--workers", type=int, default=2, help="processes compiling side by side (default: 2)")
+    p.add_argument("--force", action="store_true", help="compile again even when the cache is warm")
+    p.set_defaults(fn=_warm)
     from .course.commands import add_commands
 
     add_commands(sub)

@@ -55,3 +55,32 @@ def test_any_source_change_moves_the_cache(tmp_path, monkeypatch):
     assert _jit.cache_dir().name == f"numba-{_jit.source_hash()}"
     monkeypatch.setenv("POSEKIT_NUMBA_CACHE", "off")
     assert _jit.cache_dir() is None
+
+
+WARM = """
+import json, sys
+from posekit import warm
+from posekit.ik import registry
+
+def broken(skeleton):
+    raise RuntimeError("no weights here")
+
+registry.register("broken-for-test", broken, description="a solver that cannot be made")
+registry.solver_names = lambda: ["ccd", "broken-for-test"]  # what this test compiles ahead (ccd: a few seconds)
+first, second = warm.warm(workers=1), warm.warm(workers=1)
+print(json.dumps([first, second]))
+"""
+
+
+def test_warm_compiles_ahead_so_the_next_process_only_loads_and_reports_what_it_could_not(tmp_path):
+    import json
+
+    env = {**os.environ, "POSEKIT_NUMBA_CACHE": str(tmp_path)}
+    out = subprocess.run([sys.executable, "-c", WARM], env=env, capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    first, second = json.loads(out.stdout)
+    assert not first["done"] and first["solvers"] == 1 and first["cache"].startswith(str(tmp_path))
+    assert first["skipped"] == {"broken-for-test": "RuntimeError: no weights here"}
+    assert second["done"] and second["cache"] == first["cache"]  # warm already: nothing compiled again
+    folder, hits, misses = _run(env)
+    assert folder == first["cache"] and (hits, misses) == (1, 0)  # the next process loads ccd, compiles nothing

@@ -27,7 +27,6 @@ import warnings
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from ..ik.two_bone import two_bone_ik
 from ..kinematics import fk
@@ -51,6 +50,23 @@ CONTROLS = [
     ("r_foot_pitch", -0.8, 0.8),
     ("l_hand_curl", 0.0, 1.0), ("r_hand_curl", 0.0, 1.0), ("jaw_open", 0.0, 1.0),
 ]
+
+
+def _euler(order: str, angles) -> np.ndarray:
+    """Intrinsic Euler angles to matrices: ``order`` of upper-case axes, e.g. ``"YZX"`` gives
+    ``Ry(a0) @ Rz(a1) @ Rx(a2)``; angles (N, len(order)) in radians -> (N, 3, 3). (What
+    ``scipy.spatial.transform.Rotation.from_euler(order, angles).as_matrix()`` gives, to rounding, at a
+    fraction of its cost on the few poses a Jacobian step evaluates.)"""
+    angles = np.asarray(angles, dtype=float)
+    out = None
+    for k, axis in enumerate(order):
+        c, s = np.cos(angles[:, k]), np.sin(angles[:, k])
+        a, b = {"X": (1, 2), "Y": (2, 0), "Z": (0, 1)}[axis]  # the plane it turns: a -> b
+        R = np.zeros((len(angles), 3, 3))
+        R[:, 3 - a - b, 3 - a - b] = 1.0
+        R[:, a, a], R[:, b, b], R[:, a, b], R[:, b, a] = c, c, -s, s
+        out = R if out is None else out @ R
+    return out
 
 
 def _axis(R, k):
@@ -159,16 +175,15 @@ class HumanoidRig:
         half = lambda a: 0.5 * a
         # pelvis: COG yaw, roll, pitch, then the lower spine bend about the same axis as the pitch
         # (hence the rig is not injective), then half of the side bend and twist
-        R[:, 0] = (Rotation.from_euler("YZX", np.stack([g("root_yaw"), g("root_roll"),
-                                                        g("root_pitch") + g("spine_lower_bend")], 1)).as_matrix()
-                   @ Rotation.from_euler("ZY", np.stack([half(g("spine_side")), half(g("spine_twist"))], 1)).as_matrix())
-        R[:, self._j["chest"]] = Rotation.from_euler("XZY", np.stack([
-            g("spine_upper_bend"), half(g("spine_side")), half(g("spine_twist"))], 1)).as_matrix()
-        R[:, self._j["neck"]] = Rotation.from_euler("XYZ", np.stack([
-            g("neck_nod"), g("neck_turn"), g("neck_tilt")], 1)).as_matrix()
+        R[:, 0] = (_euler("YZX", np.stack([g("root_yaw"), g("root_roll"),
+                                                        g("root_pitch") + g("spine_lower_bend")], 1))
+                   @ _euler("ZY", np.stack([half(g("spine_side")), half(g("spine_twist"))], 1)))
+        R[:, self._j["chest"]] = _euler("XZY", np.stack([
+            g("spine_upper_bend"), half(g("spine_side")), half(g("spine_twist"))], 1))
+        R[:, self._j["neck"]] = _euler("XYZ", np.stack([g("neck_nod"), g("neck_turn"), g("neck_tilt")], 1))
         root = np.stack([g("root_tx"), g("root_ty") + self.rest_pelvis_height, g("root_tz")], 1)
         pos, grot = fk(s, R, root)
-        yaw = Rotation.from_euler("Y", g("root_yaw")[:, None]).as_matrix()
+        yaw = _euler("Y", g("root_yaw")[:, None])
         for side, full in (("l", "left"), ("r", "right")):
             # arm: two-bone IK from the shoulder, elbow bending behind and down (chest frame), swivelled
             S, E, W = (pos[:, self._j[f"{full}_{p}"]] for p in ("shoulder", "elbow", "hand"))
@@ -187,7 +202,7 @@ class HumanoidRig:
             pole_dir = _rotate_about(_axis(yaw, 2), u, g(f"{side}_knee_swivel"))
             K2, A2, _ = two_bone_ik(H, K, A, foot, H + pole_dir)
             pos[:, self._j[f"{full}_knee"]], pos[:, self._j[f"{full}_foot"]] = K2, A2
-            toe_rot = yaw @ Rotation.from_euler("X", g(f"{side}_foot_pitch")[:, None]).as_matrix()
+            toe_rot = yaw @ _euler("X", g(f"{side}_foot_pitch")[:, None])
             off = self._toe_offset if side == "l" else self._toe_offset_r
             pos[:, self._j[f"{full}_toe"]] = A2 + toe_rot @ off
         return pos.reshape(batch + (J, 3))
