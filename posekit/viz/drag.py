@@ -49,7 +49,7 @@ class DragTargets:
 
     Expects of the viewer: ``camera``, ``orbit``, ``_offset`` (world position of the scene origin),
     ``_grabbable`` (the group of joints and markers), ``pose``, ``targets``, ``look_targets``,
-    ``_joints.radius``, ``select``, ``move_target``, ``move_look_target``, ``_look_callbacks``.
+    ``_joint_radius``, ``select``, ``move_target``, ``move_look_target``, ``_look_callbacks``.
 
     Attributes
     ----------
@@ -109,7 +109,7 @@ class DragTargets:
         looks = self.look_targets
         red = [(float(np.linalg.norm(q - p)), n, False) for n, q in self.targets.items()]
         orange = [(float(np.linalg.norm(q - p)), n, True) for n, q in looks.items()]
-        near = [c for c in red + orange if c[0] <= 2.6 * self._joints.radius]
+        near = [c for c in red + orange if c[0] <= 2.6 * self._joint_radius]
         # on a marker: that target (an orange one: the point the joint looks at); else the nearest joint's
         _, name, self.dragging_look = min(near) if near else (0.0, self._nearest_joint(p), False)
         self.dragging = name

@@ -1,17 +1,20 @@
-"""The viewer's geometry: many spheres or many bone cylinders in one pythreejs mesh each.
+"""The viewer's geometry: many spheres or many bone cylinders in one pythreejs mesh each, and a view's whole
+figure (bones, joints, target markers, rays, triads) drawn from one shared position array.
 
 Introduced in ``notebooks/00_skeletons_and_poses.ipynb`` (through :class:`~posekit.viz.SkeletonViewer`).
-Every shape of a kind lives in one buffer, so moving a pose rewrites one position array per mesh instead of
-rebuilding the scene: playback and live solving stay smooth. Bones are flat-shaded (three.js derives each
-face's normal on the graphics card), so a moved pose sends no normals. Units: metres; axes:
-:mod:`posekit.conventions`.
+Every shape of a kind lives in one buffer, so moving a pose rewrites position arrays instead of rebuilding the
+scene: playback and live solving stay smooth. :class:`Figure` goes further: its parts are separate meshes (each
+its own material, picking and visibility) indexing **one** position array, so a solved pose with its targets
+costs one message to the browser (and one acknowledgement back), not one per part. Bones are flat-shaded
+(three.js derives each face's normal on the graphics card), so a moved pose sends no normals. Units: metres;
+axes: :mod:`posekit.conventions`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["icosphere", "Spheres", "Bones", "SIDE_COLOURS", "PICK_BOUND", "attribute"]
+__all__ = ["icosphere", "Spheres", "Bones", "Figure", "SIDE_COLOURS", "PICK_BOUND", "attribute"]
 
 PICK_BOUND = 100.0
 """Half-size (metres) of a box two unused vertices of every pickable mesh span. three.js tests a mouse ray
@@ -144,6 +147,50 @@ class Spheres:
         self.set(self._centres)
 
 
+class _Tubes:
+    """Every bone (parent -> child) of a skeleton as an open cylinder of ``sides`` faces: the arithmetic of
+    :class:`Bones` and :class:`Figure` (vertices, triangles, colours), no widget."""
+
+    def __init__(self, skeleton, radius: float, colour: str | None = None, sides: int = 8):
+        self.pairs = np.array([(skeleton.parents[j], j) for j in range(1, skeleton.n_joints)], dtype=int)
+        self.radius, self.sides = float(radius), int(sides)
+        angle = 2 * np.pi * np.arange(sides) / sides
+        self._cos, self._sin = np.cos(angle)[:, None], np.sin(angle)[:, None]
+        B, S = len(self.pairs), self.sides
+        # per bone: ring at the parent (vertices 0..S-1), ring at the child (S..2S-1); two triangles per side
+        k, k1 = np.arange(S), (np.arange(S) + 1) % S
+        quad = np.stack([np.stack([k, k1, S + k], -1), np.stack([k1, S + k1, S + k], -1)], 1).reshape(-1, 3)
+        self.faces = (quad[None] + (np.arange(B) * 2 * S)[:, None, None]).reshape(-1, 3)
+        side = skeleton.sides()[self.pairs[:, 1]]
+        rgb = np.array([_hex(colour or SIDE_COLOURS[int(s)]) for s in side], dtype=np.float32)
+        self.colours = np.repeat(rgb, 2 * S, axis=0)
+        self.n_vertices = 2 * S * B
+
+    def vertices(self, pos):
+        """Vertices (2 S B, 3) of the bones on global joint positions ``pos`` (J, 3), metres."""
+        a, b = pos[self.pairs[:, 0]], pos[self.pairs[:, 1]]
+        d = b - a
+        length = np.linalg.norm(d, axis=-1, keepdims=True)
+        axis = np.where(length > 1e-9, d / np.maximum(length, 1e-12), np.array([0.0, 1.0, 0.0]))
+        # a vector not parallel to the axis, then two unit vectors spanning the cross-section
+        helper = np.where(np.abs(axis[:, 1:2]) < 0.9, np.array([0.0, 1.0, 0.0]), np.array([1.0, 0.0, 0.0]))
+        u = np.cross(axis, helper)
+        u /= np.linalg.norm(u, axis=-1, keepdims=True)
+        v = np.cross(axis, u)
+        ring = self._cos[None] * u[:, None] + self._sin[None] * v[:, None]  # (B, S, 3) outward
+        verts = np.concatenate([a[:, None] + self.radius * ring, b[:, None] + self.radius * ring], axis=1)
+        return verts.reshape(-1, 3)
+
+
+def _bone_material(opacity: float = 1.0):
+    """Flat shading: each face's normal comes from its vertices on the graphics card, so moving a pose sends
+    positions only (an 8-sided cylinder reads the same faceted or smooth at this size); no shine."""
+    import pythreejs as three
+
+    return three.MeshPhongMaterial(vertexColors="VertexColors", flatShading=True, shininess=0, specular="#000000",
+                                   transparent=opacity < 1, opacity=opacity)
+
+
 class Bones:
     """Every bone (parent -> child) as an open cylinder of ``sides`` faces, coloured by the child's side of
     the body (:data:`SIDE_COLOURS`), in one mesh. With joint spheres of at least the same radius at both
@@ -163,43 +210,181 @@ class Bones:
                  sides: int = 8):
         import pythreejs as three
 
-        self.pairs = np.array([(skeleton.parents[j], j) for j in range(1, skeleton.n_joints)], dtype=int)
-        self.radius, self.sides = float(radius), int(sides)
-        angle = 2 * np.pi * np.arange(sides) / sides
-        self._cos, self._sin = np.cos(angle)[:, None], np.sin(angle)[:, None]
-        B, S = len(self.pairs), self.sides
-        # per bone: ring at the parent (vertices 0..S-1), ring at the child (S..2S-1); two triangles per side
-        k, k1 = np.arange(S), (np.arange(S) + 1) % S
-        quad = np.stack([np.stack([k, k1, S + k], -1), np.stack([k1, S + k1, S + k], -1)], 1).reshape(-1, 3)
-        index = (quad[None] + (np.arange(B) * 2 * S)[:, None, None]).reshape(-1).astype(np.uint32)
-        side = skeleton.sides()[self.pairs[:, 1]]
-        rgb = np.array([_hex(colour or SIDE_COLOURS[int(s)]) for s in side], dtype=np.float32)
-        colours = np.repeat(rgb, 2 * S, axis=0)
+        self._tubes = _Tubes(skeleton, radius, colour, sides)
+        self.pairs, self.radius, self.sides = self._tubes.pairs, self._tubes.radius, self._tubes.sides
         self.geometry = three.BufferGeometry(attributes={
             "position": attribute(self._buffers(np.zeros((skeleton.n_joints, 3)))),
-            "color": three.BufferAttribute(colours, normalized=False),
-            "index": three.BufferAttribute(index, normalized=False),
+            "color": three.BufferAttribute(self._tubes.colours, normalized=False),
+            "index": three.BufferAttribute(self._tubes.faces.reshape(-1).astype(np.uint32), normalized=False),
         })
-        # flat shading: each face's normal comes from its vertices on the graphics card, so moving a pose sends
-        # positions only (an 8-sided cylinder reads the same faceted or smooth at this size); no shine
-        material = three.MeshPhongMaterial(vertexColors="VertexColors", flatShading=True, shininess=0,
-                                           specular="#000000", transparent=opacity < 1, opacity=opacity)
-        self.mesh = three.Mesh(self.geometry, material)
+        self.mesh = three.Mesh(self.geometry, _bone_material(opacity))
 
     def _buffers(self, pos):
-        a, b = pos[self.pairs[:, 0]], pos[self.pairs[:, 1]]
-        d = b - a
-        length = np.linalg.norm(d, axis=-1, keepdims=True)
-        axis = np.where(length > 1e-9, d / np.maximum(length, 1e-12), np.array([0.0, 1.0, 0.0]))
-        # a vector not parallel to the axis, then two unit vectors spanning the cross-section
-        helper = np.where(np.abs(axis[:, 1:2]) < 0.9, np.array([0.0, 1.0, 0.0]), np.array([1.0, 0.0, 0.0]))
-        u = np.cross(axis, helper)
-        u /= np.linalg.norm(u, axis=-1, keepdims=True)
-        v = np.cross(axis, u)
-        ring = self._cos[None] * u[:, None] + self._sin[None] * v[:, None]  # (B, S, 3) outward
-        verts = np.concatenate([a[:, None] + self.radius * ring, b[:, None] + self.radius * ring], axis=1)
-        return verts.reshape(-1, 3).astype(np.float32)
+        return self._tubes.vertices(pos).astype(np.float32)
 
     def set(self, pos):
         """Place the bones on global joint positions, shape (J, 3), metres."""
         self.geometry.attributes["position"].array = self._buffers(np.asarray(pos, float))
+
+
+class Figure:
+    """One view's skeleton and target markers, every part drawn from one position array.
+
+    Parts, in the order of the array's rows: the bones (:class:`Bones`' cylinders, side colours), the joints
+    (spheres; one at a time can be highlighted: larger, in ``highlight``), the position targets and the look-at
+    targets (spheres of ``marker_radius``), the look-at rays (joint -> point), the rotation triads (three axes of
+    ``triad_length`` per target: x red, y green, z blue), then the two :data:`PICK_BOUND` corners. Each part is
+    a mesh (or line segments) of its own, with its own index into the shared rows and its own material, so
+    picking, colours and visibility stay per part; the normal and colour arrays are shared as well and sent
+    again only when the number of targets of a kind changes (:meth:`layout`) or the highlight moves.
+    :meth:`draw` writes every part and sends the positions once.
+
+    Attributes
+    ----------
+    bones, joints, targets, looks : pythreejs.Mesh
+    rays, triads : pythreejs.LineSegments
+    counts : tuple of int
+        Position targets, look-at targets and rotation targets the layout holds.
+    """
+
+    HIGHLIGHT_SCALE = 1.6
+    """Radius of the highlighted joint, times :attr:`joint_radius`."""
+
+    def __init__(self, skeleton, joint_radius: float, bone_radius: float, joint_colour: str, highlight: str,
+                 target_colour: str, look_colour: str, marker_radius: float, triad_length: float):
+        import pythreejs as three
+
+        self.n_joints = skeleton.n_joints
+        self.joint_radius, self.marker_radius, self.triad_length = joint_radius, marker_radius, triad_length
+        self._tubes = _Tubes(skeleton, bone_radius)
+        self.unit, self._sphere_faces = icosphere(1)
+        self._joint_rgb, self._highlight_rgb = _hex(joint_colour), _hex(highlight)
+        self.highlighted = None
+        self._materials = [_bone_material(), three.MeshLambertMaterial(vertexColors="VertexColors"),
+                           three.MeshLambertMaterial(color=target_colour), three.MeshLambertMaterial(color=look_colour),
+                           three.LineBasicMaterial(color=look_colour, linewidth=1),
+                           three.LineBasicMaterial(vertexColors="VertexColors", linewidth=2)]
+        self.bones = self.joints = self.targets = self.looks = self.rays = self.triads = None
+        self.counts = None
+        self._shared = {}
+        self.layout(0, 0, 0)
+
+    # ---------------------------------------------------------------- layout
+    def _spheres(self, n, first):
+        """Triangle indices (n F, 3) of ``n`` spheres whose vertices start at row ``first``."""
+        V = len(self.unit)
+        return (self._sphere_faces[None] + (first + np.arange(n) * V)[:, None, None]).reshape(-1, 3)
+
+    def layout(self, n_targets: int, n_looks: int, n_rotations: int):
+        """Make room for that many position, look-at and rotation targets: new shared arrays and an index per
+        part (done only when a count changes: a new marker, not a moved one)."""
+        import pythreejs as three
+
+        counts = (int(n_targets), int(n_looks), int(n_rotations))
+        if counts == self.counts:
+            return
+        T, L, R = counts
+        V, J = len(self.unit), self.n_joints
+        sizes = {"bones": self._tubes.n_vertices, "joints": J * V, "targets": T * V, "looks": L * V,
+                 "rays": 2 * L, "triads": 6 * R, "corners": 2}
+        rows, start = {}, 0
+        for name, n in sizes.items():
+            rows[name], start = slice(start, start + n), start + n
+        self._rows, self.counts = rows, counts
+        n = start
+        self._positions = np.zeros((n, 3))
+        self._positions[rows["corners"]] = [[-PICK_BOUND] * 3, [PICK_BOUND] * 3]
+        normals = np.zeros((n, 3), np.float32)
+        for part, k in (("joints", J), ("targets", T), ("looks", L)):
+            normals[rows[part]] = np.tile(self.unit, (k, 1))
+        self._colours = np.zeros((n, 3), np.float32)
+        self._colours[rows["bones"]] = self._tubes.colours
+        axes = np.eye(3, dtype=np.float32)  # each triad: x red, y green, z blue, both ends of each axis
+        self._colours[rows["triads"]] = np.repeat(np.tile(axes, (R, 1)), 2, axis=0)
+        self._colour_joints()
+        old = list(self._shared.values())
+        self._shared = {"position": attribute(self._positions.astype(np.float32)),
+                        "normal": three.BufferAttribute(normals, normalized=False),
+                        "color": three.BufferAttribute(self._colours, normalized=False)}
+        corner = rows["corners"].start  # an empty part draws one degenerate triangle (or line) on a corner
+        first = {p: rows[p].start for p in rows}
+        indices = {"bones": self._tubes.faces + first["bones"],
+                   "joints": self._spheres(J, first["joints"]),
+                   "targets": self._spheres(T, first["targets"]) if T else np.full((1, 3), corner),
+                   "looks": self._spheres(L, first["looks"]) if L else np.full((1, 3), corner),
+                   "rays": np.arange(2 * L) + first["rays"] if L else np.full(2, corner),
+                   "triads": np.arange(6 * R) + first["triads"] if R else np.full(2, corner)}
+        kinds = [three.Mesh] * 4 + [three.LineSegments] * 2
+        for name, kind, material in zip(indices, kinds, self._materials):
+            index = three.BufferAttribute(np.asarray(indices[name], np.uint32).reshape(-1), normalized=False)
+            geometry = three.BufferGeometry(attributes={**self._shared, "index": index})
+            mesh = getattr(self, name)
+            if mesh is None:
+                setattr(self, name, kind(geometry, material))
+            else:  # the same mesh (what pickers and groups hold), a new geometry; the old one closed
+                previous, mesh.geometry = mesh.geometry, geometry
+                previous.attributes["index"].close()
+                previous.close()
+        for a in old:
+            a.close()
+        for mesh, shown in ((self.targets, T), (self.looks, L), (self.rays, L), (self.triads, R)):
+            mesh.visible = bool(shown)
+
+    def _colour_joints(self):
+        rgb = np.repeat(self._joint_rgb[None], self.n_joints, axis=0)
+        if self.highlighted is not None:
+            rgb[self.highlighted] = self._highlight_rgb
+        self._colours[self._rows["joints"]] = np.repeat(rgb, len(self.unit), axis=0)
+
+    def highlight(self, k):
+        """Draw joint ``k`` larger in the highlight colour (None: no joint); the size shows at the next
+        :meth:`draw`."""
+        k = None if k is None else int(k)
+        if k == self.highlighted:
+            return
+        self.highlighted = k
+        self._colour_joints()
+        self._shared["color"].array = self._colours.copy()
+
+    # ---------------------------------------------------------------- drawing
+    def _sphere_vertices(self, centres, radius):
+        """Vertices (n V, 3) of spheres at ``centres`` (n, 3) with radii ``radius`` (scalar or (n,))."""
+        r = np.broadcast_to(np.asarray(radius, float), (len(centres),))
+        return (centres[:, None, :] + r[:, None, None] * self.unit[None]).reshape(-1, 3)
+
+    def draw(self, pose, targets=None, looks=None, look_joints=(), rotations=None, rotation_joints=()):
+        """Place every part and send the positions once.
+
+        Parameters
+        ----------
+        pose : ndarray, shape (J, 3), metres
+        targets : ndarray, shape (T, 3), optional
+        looks : ndarray, shape (L, 3), optional
+            Look-at points; ``look_joints`` (L,) the joints that look at them (the rays' other ends).
+        rotations : ndarray, shape (R, 3, 3), optional
+            World rotations asked for; ``rotation_joints`` (R,) the joints their triads sit on.
+        """
+        rows, P = self._rows, self._positions
+        pose = np.asarray(pose, float)
+        T, L, R = self.counts
+        P[rows["bones"]] = self._tubes.vertices(pose)
+        radius = np.full(self.n_joints, self.joint_radius)
+        if self.highlighted is not None:
+            radius[self.highlighted] *= self.HIGHLIGHT_SCALE
+        P[rows["joints"]] = self._sphere_vertices(pose, radius)
+        if T:
+            P[rows["targets"]] = self._sphere_vertices(np.asarray(targets, float).reshape(T, 3), self.marker_radius)
+        if L:
+            looks = np.asarray(looks, float).reshape(L, 3)
+            P[rows["looks"]] = self._sphere_vertices(looks, self.marker_radius)
+            P[rows["rays"]] = np.stack([pose[list(look_joints)], looks], axis=1).reshape(-1, 3)
+        if R:
+            at = pose[list(rotation_joints)]  # (R, 3); a triad's axes are the columns of its rotation
+            tips = at[:, None, :] + self.triad_length * np.asarray(rotations, float).reshape(R, 3, 3).transpose(0, 2, 1)
+            P[rows["triads"]] = np.stack([np.repeat(at[:, None, :], 3, axis=1), tips], axis=2).reshape(-1, 3)
+        self._shared["position"].array = P.astype(np.float32)
+
+    def part(self, name: str) -> np.ndarray:
+        """The last drawn rows of one part (``"bones"``, ``"joints"``, ``"targets"``, ``"looks"``, ``"rays"``,
+        ``"triads"``, ``"corners"``), float32, metres."""
+        return np.asarray(self._shared["position"].array)[self._rows[name]]

@@ -41,7 +41,7 @@ from ..data.metrics import body_joints
 from ..skeleton import Skeleton
 from .camera import FramedCamera
 from .drag import DragTargets
-from .meshes import Bones, Spheres, icosphere
+from .meshes import Bones, Figure, Spheres, icosphere
 from .sliders import TargetSliders
 
 __all__ = ["SkeletonViewer", "icosphere", "show_widget", "TARGET_COLOUR", "LOOK_COLOUR"]
@@ -121,14 +121,17 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         self._held, self._status_due = False, False
         self.body = [int(j) for j in body_joints(skeleton)]  # what can be selected (not a helper root)
 
-        self._bones = Bones(skeleton, radius=0.7 * joint_radius)
-        self._joints = Spheres(J, joint_radius, "#2e86c1", highlight=SELECTED_COLOUR)  # selected: larger, yellow
+        # bones, joints (the selected one larger and yellow), targets, rays and triads: one position array
+        self._figure = Figure(skeleton, joint_radius, 0.7 * joint_radius, "#2e86c1", SELECTED_COLOUR, TARGET_COLOUR,
+                              LOOK_COLOUR, 1.3 * joint_radius, TRIAD_LENGTH)
+        self._joint_radius = joint_radius
+        self._draw_due = False
         self._ghost_bones = Bones(skeleton, radius=0.45 * joint_radius, opacity=0.35, colour="#8c8c8c")
         self._ghost_joints = Spheres(J, joint_radius * 0.6, "#aaaaaa", opacity=0.4)
         self._ghost_group = three.Group(children=[self._ghost_bones.mesh, self._ghost_joints.mesh])
-        self._target_group = three.Group()
-        self._targets_mesh, self._target_key = None, None
-        self._grabbable = three.Group(children=[self._joints.mesh, self._target_group])  # what a drag can grab
+        self._target_key = None
+        f = self._figure
+        self._grabbable = three.Group(children=[f.joints, f.targets, f.looks])  # what a drag can grab
 
         # The scene content sits in a group shifted by -centre, so the orbit pivot (the origin,
         # where OrbitControls starts) is the middle of the pose.
@@ -136,7 +139,7 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         self._offset, self._radius = centre.copy(), radius
         self.camera = three.PerspectiveCamera(position=self._camera_position(radius), fov=self.FOV,
                                               aspect=self.aspect, near=0.01, far=200)
-        content = [self._bones.mesh, self._grabbable, self._ghost_group]
+        content = [f.bones, self._grabbable, f.rays, f.triads, self._ghost_group]
         if floor:
             content.append(three.GridHelper(size=6, divisions=24, colorCenterLine="#888888", colorGrid="#cccccc"))
         self._world = three.Group(children=content, position=[float(-c) for c in centre])
@@ -145,7 +148,7 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
                                            three.DirectionalLight(color="#ffffff", position=[3, 5, 4], intensity=0.75)],
                                  background=background)
         self.orbit = three.OrbitControls(controlling=self.camera)
-        self.picker = three.Picker(controlling=self._joints.mesh, event="dblclick")
+        self.picker = three.Picker(controlling=f.joints, event="dblclick")
         self.picker.observe(self._on_pick, names=["point"])
         self.renderer = three.Renderer(camera=self.camera, scene=self.scene,
                                        controls=[self.orbit, self.picker, *self._drag_pickers()],
@@ -186,9 +189,7 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         """Show a new pose: global joint positions, shape (J, 3), metres (the view follows a pose that
         leaves the framed region, when ``follow``)."""
         self.pose = self._check(global_pos, "pose").copy()
-        self._bones.set(self.pose)
-        self._joints.set(self.pose)
-        self._draw_rays()
+        self._draw()
         self._follow()
         if self.selected is not None:
             self._update_status()
@@ -230,42 +231,19 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
             rots[name] = R
         self.rotation_targets = rots
         key = (tuple(new), tuple(looks), tuple(rots))
-        rebuild = key != self._target_key or self._targets_mesh is None
+        rebuild = key != self._target_key
         self.targets, self.look_targets, self._target_key = new, looks, key
         if rebuild:
-            import pythreejs as three
-
-            self._targets_mesh = Spheres(max(len(new), 1), self._joints.radius * 1.3, TARGET_COLOUR)
-            self._targets_mesh.mesh.visible = bool(new)
-            self._look_mesh = Spheres(max(len(looks), 1), self._joints.radius * 1.3, LOOK_COLOUR)
-            self._look_mesh.mesh.visible = bool(looks)
-            self._rays = three.LineSegments(
-                three.BufferGeometry(attributes={"position": three.BufferAttribute(
-                    np.zeros((2 * max(len(looks), 1), 3), np.float32), normalized=False)}),
-                three.LineBasicMaterial(color=LOOK_COLOUR, linewidth=1))
-            self._rays.visible = bool(looks)
-            n = max(len(rots), 1)
-            rgb = np.repeat(np.eye(3, dtype=np.float32)[None].repeat(n, 0), 2, axis=1).reshape(-1, 3)
-            self._triads = three.LineSegments(
-                three.BufferGeometry(attributes={
-                    "position": three.BufferAttribute(np.zeros((6 * n, 3), np.float32), normalized=False),
-                    "color": three.BufferAttribute(rgb, normalized=False)}),
-                three.LineBasicMaterial(vertexColors="VertexColors", linewidth=2))
-            self._triads.visible = bool(rots)
-            self._target_group.children = [self._targets_mesh.mesh, self._look_mesh.mesh, self._rays, self._triads]
-        if new:
-            self._targets_mesh.set(np.array(list(new.values())))
-        if looks:
-            self._look_mesh.set(np.array(list(looks.values())))
-        self._draw_rays()
+            self._figure.layout(len(new), len(looks), len(rots))
+        self._draw()
         self._follow()
         self._sync_sliders()
 
     @contextmanager
     def drawing_once(self):
-        """Within the block, changes of pose and targets draw the rays and triads, move the camera and write the
-        selected joint's readout once, at the end (a moved target solves, then sets the pose: one message each
-        instead of two)."""
+        """Within the block, changes of pose, targets and selection are drawn (one position array), the camera
+        moved and the selected joint's readout written once, at the end (a moved target solves, then sets the
+        pose: one message each instead of two)."""
         if self._held:
             yield
             return
@@ -274,26 +252,23 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
             yield
         finally:
             self._held = False
-            self._draw_rays()
+            if self._draw_due:
+                self._draw()
             self._follow()
             if self._status_due:
                 self._update_status()
 
-    def _draw_rays(self):
-        """Place the look-at rays (joint -> point) and the rotation triads (at their joints) on the current pose."""
+    def _draw(self):
+        """Send the pose, its targets, look-at rays and rotation triads (:class:`~posekit.viz.meshes.Figure`: one
+        array); within :meth:`drawing_once`, once at its end."""
         if self._held:
+            self._draw_due = True
             return
-        rots = self.rotation_targets
-        if rots:
-            at = self.pose[[self.skeleton.index(n) for n in rots]]  # (R, 3)
-            tips = at[:, None, :] + TRIAD_LENGTH * np.stack(list(rots.values())).transpose(0, 2, 1)  # columns: axes
-            seg = np.stack([np.repeat(at[:, None, :], 3, axis=1), tips], axis=2).reshape(-1, 3)
-            self._triads.geometry.attributes["position"].array = seg.astype(np.float32)
-        looks = self.look_targets
-        if looks:
-            joints = self.pose[[self.skeleton.index(n) for n in looks]]
-            seg = np.stack([joints, np.array(list(looks.values()))], axis=1).reshape(-1, 3)
-            self._rays.geometry.attributes["position"].array = seg.astype(np.float32)
+        self._draw_due = False
+        index = self.skeleton.index
+        self._figure.draw(self.pose, list(self.targets.values()), list(self.look_targets.values()),
+                          [index(n) for n in self.look_targets], list(self.rotation_targets.values()),
+                          [index(n) for n in self.rotation_targets])
 
     # ------------------------------------------------------------------ selection and targets
     def select(self, joint):
@@ -305,7 +280,8 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         self._show_handle_choice()
         if self.joint_select.value != (name or ""):
             self.joint_select.value = name or ""
-        self._joints.highlight(None if name is None else self.skeleton.index(name))
+        self._figure.highlight(None if name is None else self.skeleton.index(name))
+        self._draw()  # the selected joint drawn larger
         self._sync_sliders(recentre=True)
         self._update_status()
         for cb in self._select_callbacks:

@@ -12,12 +12,16 @@ from posekit.viz import SkeletonViewer, SolverPanel
 def test_viewer_updates_buffers_not_scene(sample):
     v = SkeletonViewer(sample.skeleton, sample.global_pos[0])
     children = v.scene.children
-    attr = v._joints.geometry.attributes["position"]
+    f = v._figure
+    attr, normals, colours = (f._shared[k] for k in ("position", "normal", "color"))
+    parts = [f.bones, f.joints, f.targets, f.looks, f.rays, f.triads]
+    assert all(m.geometry.attributes["position"] is attr for m in parts)  # one array for the whole figure
     v.set_pose(sample.global_pos[50])
-    assert v.scene.children is children and v._joints.geometry.attributes["position"] is attr
+    assert v.scene.children is children and all(m.geometry.attributes["position"] is attr for m in parts)
+    assert f._shared["normal"] is normals and f._shared["color"] is colours  # a pose sends positions only
     # each bone is a ring of vertices round the parent and one round the child, at the bone's radius
-    b = v._bones
-    rings = b.geometry.attributes["position"].array.reshape(-1, 2, b.sides, 3)
+    b = f._tubes
+    rings = f.part("bones").reshape(-1, 2, b.sides, 3)
     pos = sample.global_pos[50]
     np.testing.assert_allclose(rings[:, 1].mean(1), pos[b.pairs[:, 1]], atol=1e-5)
     np.testing.assert_allclose(rings[:, 0].mean(1), pos[b.pairs[:, 0]], atol=1e-5)
@@ -25,7 +29,7 @@ def test_viewer_updates_buffers_not_scene(sample):
     axis = pos[b.pairs[:, 1]] - pos[b.pairs[:, 0]]
     radial = rings[:, 1] - pos[b.pairs[:, 1]][:, None]
     assert np.abs(np.einsum("bsk,bk->bs", radial, axis)).max() < 1e-5  # rings square to the bone
-    assert "normal" not in b.geometry.attributes and b.mesh.material.flatShading  # normals drawn on the GPU
+    assert f.bones.material.flatShading  # the bones' normals are made on the GPU, from the positions
 
 
 def test_selected_joint_is_drawn_larger_and_yellow_in_the_joints_mesh(sample):
@@ -33,27 +37,29 @@ def test_selected_joint_is_drawn_larger_and_yellow_in_the_joints_mesh(sample):
     v = SkeletonViewer(s, sample.global_pos[0])
     j = s.index("left_hand")
     v.select(j)
-    J = v._joints
+    J = v._figure
     V = len(J.unit)
-    colours = J.geometry.attributes["color"].array[: s.n_joints * V].reshape(s.n_joints, V, 3)[:, 0]
+    joint_colours = lambda: np.asarray(J._shared["color"].array)[J._rows["joints"]].reshape(s.n_joints, V, 3)[:, 0]
+    colours = joint_colours()
     assert np.allclose(colours[j], [0xf1 / 255, 0xc4 / 255, 0x0f / 255]) and np.allclose(colours[0], colours[1])
-    verts = J.geometry.attributes["position"].array[: s.n_joints * V].reshape(s.n_joints, V, 3)
+    verts = J.part("joints").reshape(s.n_joints, V, 3)
     radius = np.linalg.norm(verts - sample.global_pos[0][:, None], axis=-1)
-    np.testing.assert_allclose(radius[j], J.radius * J.HIGHLIGHT_SCALE, rtol=1e-5)
-    np.testing.assert_allclose(np.delete(radius, j, axis=0), J.radius, rtol=1e-5)
+    np.testing.assert_allclose(radius[j], J.joint_radius * J.HIGHLIGHT_SCALE, rtol=1e-5)
+    np.testing.assert_allclose(np.delete(radius, j, axis=0), J.joint_radius, rtol=1e-5)
     v.set_pose(sample.global_pos[40])  # the highlight follows the joint in the same array
-    verts = J.geometry.attributes["position"].array[: s.n_joints * V].reshape(s.n_joints, V, 3)
+    verts = J.part("joints").reshape(s.n_joints, V, 3)
     np.testing.assert_allclose(np.linalg.norm(verts[j] - sample.global_pos[40][j], axis=-1),
-                               J.radius * J.HIGHLIGHT_SCALE, rtol=1e-5)
+                               J.joint_radius * J.HIGHLIGHT_SCALE, rtol=1e-5)
     v.select(None)
-    assert J.highlighted is None and np.allclose(J.geometry.attributes["color"].array[j * V], colours[0])
+    assert J.highlighted is None and np.allclose(joint_colours()[j], colours[0])
 
 
 def test_bones_are_coloured_by_side(sample):
     s = sample.skeleton
     v = SkeletonViewer(s)
-    colours = v._bones.geometry.attributes["color"].array.reshape(len(v._bones.pairs), -1, 3)[:, 0]
-    side = s.sides()[v._bones.pairs[:, 1]]
+    f = v._figure
+    colours = np.asarray(f._shared["color"].array)[f._rows["bones"]].reshape(len(f._tubes.pairs), -1, 3)[:, 0]
+    side = s.sides()[f._tubes.pairs[:, 1]]
     left, right, centre = (colours[side == k] for k in (1, -1, 0))
     assert len(left) and len(right) and len(centre)
     assert np.ptp(left, axis=0).max() == 0 and np.ptp(right, axis=0).max() == 0
@@ -248,11 +254,17 @@ def test_effector_editor_edits_every_kind_and_re_solves():
     assert ed.effectors[look].kind == "look_at" and np.isclose(np.linalg.norm(ed.effectors[look].axis), 1)
     ed.move_target(look, ed.effectors[look].target + [0.0, 0.5, 0.0])
     v = ed.viewers["ProtoRes"]  # the look-at target: an orange marker and a ray from the hand to it
-    assert set(v.look_targets) == {"Hand_L"} and v._look_mesh.mesh.visible and v._rays.visible
-    ray = v._rays.geometry.attributes["position"].array
+    assert set(v.look_targets) == {"Hand_L"} and v._figure.looks.visible and v._figure.rays.visible
+    ray = v._figure.part("rays")
     hand = ed.results["ProtoRes"].pose.global_pos[s.index("Hand_L")]
     assert np.allclose(ray[0], hand, atol=1e-5) and np.allclose(ray[1], ed.effectors[look].target, atol=1e-5)
-    assert v._targets_mesh.n == 5 and v._look_mesh.n == 1  # five red position targets, one orange look-at
+    assert v._figure.counts == (5, 1, 1)  # five magenta position targets, one orange look-at, one rotation
+    from posekit.viz.viewer import TRIAD_LENGTH
+
+    tri = v._figure.part("triads").reshape(3, 2, 3)  # the head's triad: (axis, start/tip, xyz)
+    head = ed.results["ProtoRes"].pose.global_pos[s.index("Head")]
+    assert np.allclose(tri[:, 0], head, atol=1e-5)
+    assert np.allclose(tri[:, 1] - head, TRIAD_LENGTH * v.rotation_targets["Head"].T, atol=1e-5)  # columns: axes
     ed.set_tolerance(0, 1.0)
     assert ed.effectors[0].tolerance == pytest.approx(0.1)
     assert not np.allclose(ed.results["ProtoRes"].pose.global_pos, before)
@@ -396,10 +408,10 @@ def test_helper_joints_are_not_selectable_and_markers_stay_pickable():
         v.select("joint_Root")
     assert v._nearest_joint(m.global_pos[0][0]) != "joint_Root"  # a double-click at the origin point
     # every pickable mesh's buffer spans the far corners, so the browser's bounding sphere holds every pose
-    pos = np.asarray(v._joints.geometry.attributes["position"].array)
-    assert np.allclose(pos[-2:], [[-PICK_BOUND] * 3, [PICK_BOUND] * 3])
+    pos = v._figure.part("corners")
+    assert np.allclose(pos, [[-PICK_BOUND] * 3, [PICK_BOUND] * 3])
     v.set_pose(m.global_pos[0] + [5.0, 0.0, 0.0])
-    assert np.allclose(np.asarray(v._joints.geometry.attributes["position"].array)[-2:], pos[-2:])
+    assert np.allclose(v._figure.part("corners"), pos)
 
 
 def test_a_target_outside_the_view_brings_the_camera_along(sample):
