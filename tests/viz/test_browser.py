@@ -186,12 +186,17 @@ def _open_and_run_all(page, url, token, work, notebook):
     page.wait_for_selector(".jp-Notebook-ExecutionIndicator[data-status='idle'], "
                            "#jp-main-statusbar :text('Idle')", timeout=120_000)
     # Run All, then check that the kernel took the cells (a "[*]" prompt: the saved outputs already
-    # carry numbers); a click lost while the page settles is repeated, not waited on for minutes
-    for _ in range(3):
-        page.locator(".lm-MenuBar-itemLabel", has_text="Run").first.click()
-        page.locator(".lm-Menu-itemLabel", has_text="Run All Cells").first.click()
+    # carry numbers). Right after loading, the notebook may not be JupyterLab's current panel yet, and Run All
+    # Cells is then greyed out and a click on it does nothing: the notebook is clicked first, the item is
+    # clicked once enabled, and a try that still started nothing is repeated after 20 s (3 minutes in all),
+    # not waited on for a minute.
+    for _ in range(9):
         try:
-            page.wait_for_function(_RUNNING, timeout=60_000, polling=100)
+            page.locator(".jp-Notebook:visible .jp-Cell").first.click(timeout=5_000)
+            page.locator(".lm-MenuBar-itemLabel", has_text="Run").first.click(timeout=5_000)
+            page.locator(".lm-Menu-item:not(.lm-mod-disabled) .lm-Menu-itemLabel",
+                         has_text="Run All Cells").first.click(timeout=5_000)
+            page.wait_for_function(_RUNNING, timeout=10_000, polling=100)
             if page.dialogs:  # say what was in the way (the run went on)
                 warnings.warn(f"{notebook}: JupyterLab dialogs closed on the way: {page.dialogs}")
             return
