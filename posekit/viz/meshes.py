@@ -292,7 +292,10 @@ class Figure:
             rows[name], start = slice(start, start + n), start + n
         self._rows, self.counts = rows, counts
         n = start
+        before = getattr(self, "_positions", None)
         self._positions = np.zeros((n, 3))
+        if before is not None:  # bones and joints keep their rows: the figure does not blink to the origin
+            self._positions[:rows["targets"].start] = before[:rows["targets"].start]
         self._positions[rows["corners"]] = [[-PICK_BOUND] * 3, [PICK_BOUND] * 3]
         normals = np.zeros((n, 3), np.float32)
         for part, k in (("joints", J), ("targets", T), ("looks", L)):

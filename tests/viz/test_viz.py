@@ -30,6 +30,9 @@ def test_viewer_updates_buffers_not_scene(sample):
     radial = rings[:, 1] - pos[b.pairs[:, 1]][:, None]
     assert np.abs(np.einsum("bsk,bk->bs", radial, axis)).max() < 1e-5  # rings square to the bone
     assert f.bones.material.flatShading  # the bones' normals are made on the GPU, from the positions
+    joints, mesh = f.part("joints").copy(), f.joints
+    f.layout(2, 1, 0)  # room for new markers: new arrays, the same meshes, the skeleton where it was
+    assert f.joints is mesh and f._shared["position"] is not attr and np.array_equal(f.part("joints"), joints)
 
 
 def test_selected_joint_is_drawn_larger_and_yellow_in_the_joints_mesh(sample):
