@@ -84,67 +84,32 @@ def _hex(colour: str) -> np.ndarray:
 
 
 class Spheres:
-    """``n`` spheres of one radius and colour in one mesh; :meth:`set` moves them (centres (n, 3), metres).
+    """``n`` spheres of one radius and colour in one mesh; :meth:`set` moves them (centres (n, 3), metres)."""
 
-    With ``highlight`` (a colour) one sphere at a time can be shown larger in that colour (:meth:`highlight`:
-    a selected joint) without a mesh of its own, so moving the pose still sends one array."""
-
-    HIGHLIGHT_SCALE = 1.6
-    """Radius of the highlighted sphere, times :attr:`radius`."""
-
-    def __init__(self, n, radius, color, opacity=1.0, highlight: str | None = None):
+    def __init__(self, n, radius, color, opacity=1.0):
         import pythreejs as three
 
         self.unit, faces = icosphere(1)
         self.radius = radius
         self.n = n
-        self._scale = np.ones(n)
-        self._colour, self._highlight_colour, self.highlighted = _hex(color), highlight, None
         V = len(self.unit)
         index = (faces[None] + (np.arange(n) * V)[:, None, None]).reshape(-1).astype(np.uint32)
         normals = np.concatenate([np.tile(self.unit, (n, 1)), np.zeros((2, 3))]).astype(np.float32)
-        attributes = {
+        self.geometry = three.BufferGeometry(attributes={
             "position": attribute(self._positions(np.zeros((n, 3)))),
             "normal": three.BufferAttribute(normals, normalized=False),
             "index": three.BufferAttribute(index, normalized=False),
-        }
-        if highlight is not None:
-            attributes["color"] = three.BufferAttribute(self._colours(), normalized=False)
-            material = three.MeshLambertMaterial(vertexColors="VertexColors", transparent=opacity < 1,
-                                                 opacity=opacity)
-        else:
-            material = three.MeshLambertMaterial(color=color, transparent=opacity < 1, opacity=opacity)
-        self.geometry = three.BufferGeometry(attributes=attributes)
+        })
+        material = three.MeshLambertMaterial(color=color, transparent=opacity < 1, opacity=opacity)
         self.mesh = three.Mesh(self.geometry, material)
-        self._centres = np.zeros((n, 3))
 
     def _positions(self, centres):
         """Vertex positions (n V + 2, 3): each sphere's, then the two far corners (:data:`PICK_BOUND`)."""
-        verts = (centres[:, None, :] + (self.radius * self._scale)[:, None, None] * self.unit[None]).reshape(-1, 3)
+        verts = (centres[:, None, :] + self.radius * self.unit[None]).reshape(-1, 3)
         return np.concatenate([verts, [[-PICK_BOUND] * 3, [PICK_BOUND] * 3]]).astype(np.float32)
 
-    def _colours(self):
-        rgb = np.repeat(self._colour[None], self.n, axis=0)
-        if self.highlighted is not None:
-            rgb[self.highlighted] = _hex(self._highlight_colour)
-        return np.concatenate([np.repeat(rgb, len(self.unit), axis=0), np.zeros((2, 3))]).astype(np.float32)
-
     def set(self, centres):
-        self._centres = np.asarray(centres, float)
-        self.geometry.attributes["position"].array = self._positions(self._centres)
-
-    def highlight(self, k):
-        """Show sphere ``k`` larger in the highlight colour (None: none); needs ``highlight`` at construction."""
-        if self._highlight_colour is None:
-            raise ValueError("these spheres were made without a highlight colour")
-        if k == self.highlighted:
-            return
-        self.highlighted = None if k is None else int(k)
-        self._scale = np.ones(self.n)
-        if k is not None:
-            self._scale[int(k)] = self.HIGHLIGHT_SCALE
-        self.geometry.attributes["color"].array = self._colours()
-        self.set(self._centres)
+        self.geometry.attributes["position"].array = self._positions(np.asarray(centres, float))
 
 
 class _Tubes:
