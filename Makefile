@@ -31,7 +31,7 @@ $(STAMP): pyproject.toml tools/jupyterlab_overrides.json
 setup: $(STAMP)
 
 # every solver's numba kernels compiled into the on-disk cache once, before a lesson, the studio or the tests wait
-# for them (about 25 s on 2 cores after a fresh clone or a source change; a second or two once done)
+# for them (25-30 s on 2 cores after a fresh clone or a source change; about 2 s once done)
 warm: setup
 	$(VENV)/bin/posekit warm
 

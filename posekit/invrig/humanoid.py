@@ -175,8 +175,7 @@ class HumanoidRig:
         half = lambda a: 0.5 * a
         # pelvis: COG yaw, roll, pitch, then the lower spine bend about the same axis as the pitch
         # (hence the rig is not injective), then half of the side bend and twist
-        R[:, 0] = (_euler("YZX", np.stack([g("root_yaw"), g("root_roll"),
-                                                        g("root_pitch") + g("spine_lower_bend")], 1))
+        R[:, 0] = (_euler("YZX", np.stack([g("root_yaw"), g("root_roll"), g("root_pitch") + g("spine_lower_bend")], 1))
                    @ _euler("ZY", np.stack([half(g("spine_side")), half(g("spine_twist"))], 1)))
         R[:, self._j["chest"]] = _euler("XZY", np.stack([
             g("spine_upper_bend"), half(g("spine_side")), half(g("spine_twist"))], 1))

@@ -83,6 +83,13 @@ def _hex(colour: str) -> np.ndarray:
     return np.array([int(colour[k:k + 2], 16) / 255 for k in (0, 2, 4)], dtype=np.float32)
 
 
+def _sphere_vertices(unit, centres, radius):
+    """Vertices (n V, 3) of spheres of the unit mesh ``unit`` (V, 3) at ``centres`` (n, 3) with radii ``radius``
+    (scalar or (n,)), metres."""
+    r = np.broadcast_to(np.asarray(radius, float), (len(centres),))
+    return (centres[:, None, :] + r[:, None, None] * unit[None]).reshape(-1, 3)
+
+
 class Spheres:
     """``n`` spheres of one radius and colour in one mesh; :meth:`set` moves them (centres (n, 3), metres)."""
 
@@ -105,7 +112,7 @@ class Spheres:
 
     def _positions(self, centres):
         """Vertex positions (n V + 2, 3): each sphere's, then the two far corners (:data:`PICK_BOUND`)."""
-        verts = (centres[:, None, :] + self.radius * self.unit[None]).reshape(-1, 3)
+        verts = _sphere_vertices(self.unit, centres, self.radius)
         return np.concatenate([verts, [[-PICK_BOUND] * 3, [PICK_BOUND] * 3]]).astype(np.float32)
 
     def set(self, centres):
@@ -315,11 +322,6 @@ class Figure:
         self._shared["color"].array = self._colours.copy()
 
     # ---------------------------------------------------------------- drawing
-    def _sphere_vertices(self, centres, radius):
-        """Vertices (n V, 3) of spheres at ``centres`` (n, 3) with radii ``radius`` (scalar or (n,))."""
-        r = np.broadcast_to(np.asarray(radius, float), (len(centres),))
-        return (centres[:, None, :] + r[:, None, None] * self.unit[None]).reshape(-1, 3)
-
     def draw(self, pose, targets=None, looks=None, look_joints=(), rotations=None, rotation_joints=()):
         """Place every part and send the positions once.
 
@@ -339,12 +341,13 @@ class Figure:
         radius = np.full(self.n_joints, self.joint_radius)
         if self.highlighted is not None:
             radius[self.highlighted] *= self.HIGHLIGHT_SCALE
-        P[rows["joints"]] = self._sphere_vertices(pose, radius)
+        P[rows["joints"]] = _sphere_vertices(self.unit, pose, radius)
         if T:
-            P[rows["targets"]] = self._sphere_vertices(np.asarray(targets, float).reshape(T, 3), self.marker_radius)
+            targets = np.asarray(targets, float).reshape(T, 3)
+            P[rows["targets"]] = _sphere_vertices(self.unit, targets, self.marker_radius)
         if L:
             looks = np.asarray(looks, float).reshape(L, 3)
-            P[rows["looks"]] = self._sphere_vertices(looks, self.marker_radius)
+            P[rows["looks"]] = _sphere_vertices(self.unit, looks, self.marker_radius)
             P[rows["rays"]] = np.stack([pose[list(look_joints)], looks], axis=1).reshape(-1, 3)
         if R:
             at = pose[list(rotation_joints)]  # (R, 3); a triad's axes are the columns of its rotation

@@ -23,12 +23,11 @@ import torch
 from torch import nn
 
 from ...ik.effectors import KIND_CODES
+from .fast import ARCHS  # the encoders, named where the torch-free numpy pass reads them too
 from .tolerance import ETA, SIGMA_M, sigma_to_tolerance, tolerance_to_sigma  # noqa: F401 - re-exported
 
 __all__ = ["ARCHS", "KIND_IDS", "SIGMA_M", "ETA", "ProtoResConfig", "centroid", "effector_inputs", "Tokens",
            "FCBlock", "FCR", "tolerance_to_sigma", "sigma_to_tolerance"]
-
-from .fast import ARCHS  # noqa: E402 - the encoders, named where the torch-free numpy pass reads them too
 
 KIND_IDS = KIND_CODES
 """Effector kind -> type id (the type embedding's row): the solvers' own codes
