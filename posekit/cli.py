@@ -196,11 +196,32 @@ def _train(args) -> int:
 
     if args.list:
         return _train_list(args)
-    with start(args.device) as run:  # the device checked, torchrun's processes joined, before any data is read
-        if run.main:
+    if int(os.environ.get("WORLD_SIZE", "1") or 1) <= 1:
+        with start(args.device):  # the device checked before any data is read
             return get_trainer(args.trainer).run(args)
-        with open(os.devnull, "w") as quiet, contextlib.redirect_stdout(quiet):  # one report, from rank 0
-            return get_trainer(args.trainer).run(args)
+    # One of torchrun's processes. It leaves with os._exit once its process group is left, without the
+    # interpreter's finalization: gloo's worker threads outlive destroy_process_group while a
+    # DistributedDataParallel has ever held the group, and one that frees the last collective's work during
+    # finalization needs the GIL for that work's Python tensors and aborts the process ("terminate called
+    # without an active exception", SIGABRT, after the checkpoint was written: 2 of 58 two-process runs here).
+    try:
+        with start(args.device) as run:  # the device checked, the processes joined, before any data is read
+            if run.main:
+                rc = get_trainer(args.trainer).run(args)
+            else:
+                with open(os.devnull, "w") as quiet, contextlib.redirect_stdout(quiet):  # one report, rank 0's
+                    rc = get_trainer(args.trainer).run(args)
+    except (ValueError, FileNotFoundError, OSError) as e:
+        print(f"posekit: error: {e}", file=sys.stderr)
+        rc = 2
+    except BaseException:
+        import traceback
+
+        traceback.print_exc()
+        rc = 1
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(int(rc or 0))
 
 
 def _warm(args) -> int:
