@@ -108,7 +108,10 @@ def save_checkpoint(path, model_state, *, kind: str, config: dict, skeleton: Ske
     norms : dict of str -> NormStats, optional
         Named normalisations (``{"x": ..., "y": ...}``), stored as float64.
     command : str
-        The command that makes this file (``"posekit train invrig --methods pca ..."``).
+        The command that makes this file (``"posekit train invrig --methods pca ..."``). Saved under torchrun,
+        a ``posekit ...`` command is stored with the launcher in front (``torchrun --nproc-per-node 2 -m
+        posekit ...``): each process trains on its own share of every batch, so one process does not remake
+        the file.
     seed : int, optional
     data : str
         Provenance of the training data.
@@ -149,14 +152,17 @@ def save_checkpoint(path, model_state, *, kind: str, config: dict, skeleton: Ske
             raise TypeError(f"save_checkpoint: norms[{name!r}] is a {type(ns).__name__}, not a NormStats")
         stored_norms[str(name)] = {k: torch.from_numpy(np.array(v, dtype=np.float64))
                                    for k, v in ns.to_arrays(prefix="").items()}
+    from .distributed import current, launcher
+
+    run = current()
+    command = str(command)
+    if run.distributed and command.startswith("posekit "):
+        command = launcher(run.world) + command
     ckpt = {"format": FORMAT, "version": FORMAT_VERSION, "kind": str(kind), "config": _plain(config, "config"),
-            "state": state, "half": bool(half), "skeleton": skel, "norms": stored_norms, "command": str(command),
+            "state": state, "half": bool(half), "skeleton": skel, "norms": stored_norms, "command": command,
             "seed": None if seed is None else int(seed), "data": str(data), "licence": str(licence),
             "extra": _plain(extra or {}, "extra"), "torch": str(torch.__version__)}
     path = Path(path)
-    from .distributed import current
-
-    run = current()
     if run.main:  # under torchrun every process holds the same weights: rank 0 writes them, the others wait
         path.parent.mkdir(parents=True, exist_ok=True)
         tmp = path.with_name(path.name + ".tmp")

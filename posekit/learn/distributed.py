@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-__all__ = ["Run", "current", "start", "check_device", "DEVICES"]
+__all__ = ["Run", "current", "start", "check_device", "launcher", "DEVICES"]
 
 DEVICES = "cpu (default), cuda or cuda:N"
 
@@ -126,6 +126,14 @@ class Run:
 
 
 _CURRENT = [Run()]
+
+
+def launcher(world: int) -> str:
+    """What goes in front of a ``posekit ...`` command to start it as this run was started: ``torchrun
+    --nproc-per-node N -m `` (and ``--nnodes M`` past one machine, from torchrun's ``LOCAL_WORLD_SIZE``)."""
+    local = int(os.environ.get("LOCAL_WORLD_SIZE", "") or world)
+    nodes = max(1, int(world) // max(1, local))
+    return "torchrun " + (f"--nnodes {nodes} " if nodes > 1 else "") + f"--nproc-per-node {local} -m "
 
 
 def current() -> Run:

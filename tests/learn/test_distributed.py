@@ -47,6 +47,15 @@ def test_per_rank_seeds_rank_zero_keeps_the_seed_others_differ_and_repeat():
     assert Run(rank=1, world=4).seed(8) != seeds[1]
 
 
+def test_launcher_names_the_processes_per_node_and_the_nodes(monkeypatch):
+    from posekit.learn.distributed import launcher
+
+    monkeypatch.delenv("LOCAL_WORLD_SIZE", raising=False)
+    assert launcher(2) == "torchrun --nproc-per-node 2 -m "
+    monkeypatch.setenv("LOCAL_WORLD_SIZE", "4")
+    assert launcher(8) == "torchrun --nnodes 2 --nproc-per-node 4 -m "
+
+
 def _posekit(args, cwd, nproc=None, timeout=300):
     env = {**os.environ, "OMP_NUM_THREADS": "1"}
     pre = ([sys.executable, "-m", "torch.distributed.run", "--standalone", "--nproc-per-node", str(nproc),
@@ -84,6 +93,9 @@ def test_protores_under_torchrun_two_gloo_processes(tmp_path):
     net = load_protores(weights=out)
     rep = net.checkpoint["extra"]["report"]
     assert rep["processes"] == 2 and rep["device"] == "cpu" and rep["steps"] == 120
+    # the command that remakes it starts 2 processes again: one process would draw other batches
+    assert net.checkpoint["command"].startswith("torchrun --nproc-per-node 2 -m posekit train protores "), \
+        net.checkpoint["command"]
     total = rep["curves"]["total"]
     assert len(total) == 3 and total[-1] < 0.7 * total[0], total
     b = load_benchmark("random")
