@@ -191,12 +191,12 @@ def _train(args) -> int:
     import contextlib
     import os
 
-    from .learn.distributed import start
+    from .learn.distributed import launched_world, start
     from .learn.trainers import get_trainer
 
     if args.list:
         return _train_list(args)
-    if int(os.environ.get("WORLD_SIZE", "1") or 1) <= 1:
+    if launched_world() <= 1:
         with start(args.device):  # the device checked before any data is read
             return get_trainer(args.trainer).run(args)
     # One of torchrun's processes. It leaves with os._exit once its process group is left, without the
@@ -204,16 +204,15 @@ def _train(args) -> int:
     # DistributedDataParallel has ever held the group, and one that frees the last collective's work during
     # finalization needs the GIL for that work's Python tensors and aborts the process ("terminate called
     # without an active exception", SIGABRT, after the checkpoint was written: 2 of 58 two-process runs here).
-    try:
+    def joined(args):
         with start(args.device) as run:  # the device checked, the processes joined, before any data is read
             if run.main:
-                rc = get_trainer(args.trainer).run(args)
-            else:
-                with open(os.devnull, "w") as quiet, contextlib.redirect_stdout(quiet):  # one report, rank 0's
-                    rc = get_trainer(args.trainer).run(args)
-    except (ValueError, FileNotFoundError, OSError) as e:
-        print(f"posekit: error: {e}", file=sys.stderr)
-        rc = 2
+                return get_trainer(args.trainer).run(args)
+            with open(os.devnull, "w") as quiet, contextlib.redirect_stdout(quiet):  # one report, rank 0's
+                return get_trainer(args.trainer).run(args)
+
+    try:
+        rc = _status(joined, args)
     except BaseException:
         import traceback
 
@@ -317,14 +316,21 @@ def _one_line(message, category, filename, lineno, line=None) -> str:
     return f"posekit: warning: {message}\n"
 
 
+def _status(fn, args) -> int:
+    """``fn(args)``'s exit status; bad input (a ValueError, a missing or unreadable file) is printed as one line,
+    ``posekit: error: ...``, status 2."""
+    try:
+        return fn(args)
+    except (ValueError, FileNotFoundError, OSError) as e:
+        print(f"posekit: error: {e}", file=sys.stderr)
+        return 2
+
+
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
     shown, warnings.formatwarning = warnings.formatwarning, _one_line  # how a warning is printed, not whether
     try:
-        return args.fn(args)
-    except (ValueError, FileNotFoundError, OSError) as e:
-        print(f"posekit: error: {e}", file=sys.stderr)
-        return 2
+        return _status(args.fn, args)
     finally:
         warnings.formatwarning = shown
 

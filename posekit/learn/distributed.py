@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-__all__ = ["Run", "current", "start", "check_device", "launcher", "DEVICES"]
+__all__ = ["Run", "current", "start", "check_device", "launched_world", "launcher", "DEVICES"]
 
 DEVICES = "cpu (default), cuda or cuda:N"
 
@@ -128,6 +128,11 @@ class Run:
 _CURRENT = [Run()]
 
 
+def launched_world() -> int:
+    """How many processes ``torchrun`` started for this run (its ``WORLD_SIZE``); 1 outside torchrun."""
+    return int(os.environ.get("WORLD_SIZE", "1") or 1)
+
+
 def launcher(world: int) -> str:
     """What goes in front of a ``posekit ...`` command to start it as this run was started: ``torchrun
     --nproc-per-node N -m `` (and ``--nnodes M`` past one machine, from torchrun's ``LOCAL_WORLD_SIZE``)."""
@@ -153,7 +158,7 @@ def start(device: str | None = "cpu"):
         A bad ``device`` (:func:`check_device`), or ``torchrun``'s variables half set.
     """
     dev = check_device(device)
-    world = int(os.environ.get("WORLD_SIZE", "1") or 1)
+    world = launched_world()
     if world <= 1:
         _CURRENT.append(Run(dev))
         try:
