@@ -211,7 +211,9 @@ def _header(rows, args) -> str:
     return ("ProtoRes benchmarks (Oreshkin et al. 2022) on held-out Bandai mini-set poses: "
             + ", ".join(n) + ". L_ikd-L2 and L_gpd-L2: 1e-3 m^2 (MSE over every body joint's coordinates); "
             "L_loc-geo: radians; effector errors: medians. Learned models: one pass each; FABRIK and DLS start "
-            "from the rest pose fitted rigidly to the position targets (FABRIK gets the position effectors only).")
+            "from the rest pose fitted rigidly to the position targets (FABRIK gets the position effectors only)."
+            + (f" Weights: {args.weights} (the shipped file for each model it lacks)." if getattr(args, "weights", None)
+               else ""))
 
 
 TABLES = [
@@ -244,10 +246,23 @@ LABELS = {"ikd_l2_e3": "L_ikd-L2", "gpd_l2_e3": "L_gpd-L2", "loc_geo": "L_loc-ge
           "val_mpjpe_mm": "val MPJPE mm", "random_ikd_l2_e3": "random L_ikd", "random_loc_geo": "random L_loc",
           "5point_ikd_l2_e3": "5-pt L_ikd", "5point_loc_geo": "5-pt L_loc"}
 
+def _cli_run(args) -> list[dict]:
+    import contextlib
+
+    from ..paths import use_weights
+
+    with use_weights(args.weights) if args.weights else contextlib.nullcontext():  # a bad folder: refused first
+        return run(cases=args.cases, classical=not args.no_classical, speed=not args.no_speed)
+
+
 register_benchmark(
-    "protores", lambda args: run(cases=args.cases, classical=not args.no_classical, speed=not args.no_speed),
+    "protores", _cli_run,
     help="ProtoRes: Tables 1 and 2 of Oreshkin et al. 2022 at CPU scale, tolerance, speed and training time",
     args=[arg("--cases", type=int, default=None, help="cases per benchmark (default: all 1,000)"),
           arg("--no-classical", action="store_true", help="skip FABRIK and DLS"),
-          arg("--no-speed", action="store_true", help="skip the timing rows")],
+          arg("--no-speed", action="store_true", help="skip the timing rows"),
+          arg("--weights", default=None,
+              help="a folder of ProtoRes checkpoints trained on the Bandai mini set (protores.pt, "
+                   "protores_masked_fcr.pt, protores_transformer.pt; each one it lacks is the shipped one), e.g. "
+                   "data_samples/weights/hour")],
     tables=TABLES, labels=LABELS, header=_header, lesson="notebooks/05_protores.ipynb")

@@ -219,6 +219,7 @@ class EffectorEditor:
         if self._quiet:
             return
         self.solve()
+        self.first.flush()  # a target moved in the first view is drawn there before any listener hears of the change
         for cb in self._change_callbacks:
             cb(what, index)
 

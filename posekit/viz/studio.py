@@ -255,9 +255,10 @@ class PosingStudio(StudioExport, StudioTimeline):
             else:
                 mark = "✓" if res.converged else "✗"
                 rows.append((html.escape(name), f"{mark} {worst_errors(res)}, {self.editor.times.get(name, 0):.2f} ms"))
-        self.summary.value = status_table(f"update {self.editor.updates}", rows)
         self.undo_button.disabled = getattr(self, "position", 0) == 0
         self.redo_button.disabled = getattr(self, "position", 0) >= len(getattr(self, "history", [None])) - 1
+        # the update counter last: when the browser shows it, every view and button of this update is there
+        self.summary.value = status_table(f"update {self.editor.updates}", rows)
 
     # ------------------------------------------------------------------ undo and redo
     def _on_change(self, what, index):

@@ -258,6 +258,22 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
             if self._status_due:
                 self._update_status()
 
+    def flush(self):
+        """Within :meth:`drawing_once`, send what is due now (the pose, the camera, the readout) rather than at the
+        block's end: a listener whose news must reach the browser after this view's (the studio's update counter,
+        which says every view is drawn) calls it first. Outside the block it does nothing."""
+        if not self._held:
+            return
+        self._held = False
+        try:
+            if self._draw_due:
+                self._draw()
+            self._follow()
+            if self._status_due:
+                self._update_status()
+        finally:
+            self._held = True
+
     def _draw(self):
         """Send the pose, its targets, look-at rays and rotation triads (:class:`~posekit.viz.meshes.Figure`: one
         array); within :meth:`drawing_once`, once at its end."""

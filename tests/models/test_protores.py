@@ -308,3 +308,26 @@ def test_bench_protores_prints_every_table(capsys):
     methods = {r["method"] for r in rows if r["table"] == 1}
     assert methods == {"ProtoRes", "Masked-FCR", "Transformer", "FABRIK", "DLS"}
     assert all(isinstance(r["holds"], bool) for r in rows if r["table"] == "claims")
+
+
+def test_bench_protores_scores_a_weights_folder_and_refuses_a_bad_one(capsys, tmp_path, mini):
+    """``--weights DIR``: the folder's networks are scored (here ProtoRes a few steps old: worse than the shipped
+    one), each file it lacks is the shipped one; a folder without checkpoints is refused with a sentence."""
+    from posekit.cli import main
+
+    from posekit.data.metrics import body_joints
+
+    cfg = ProtoResConfig(len(body_joints(mini.skeleton)), width=32, blocks=1, layers=1)
+    train_protores(mini, steps=4, log_every=2, val_batches=1, progress=False, out=tmp_path / "protores.pt", config=cfg)
+    assert main(["bench", "protores", "--cases", "12", "--no-speed", "--no-classical", "--json"]) == 0
+    table = lambda out: {r["method"]: r for r in json.loads(out) if r["table"] == 1 and r["benchmark"] == "random"}  # noqa: E731
+    shipped = table(capsys.readouterr().out)
+    assert main(["bench", "protores", "--cases", "12", "--no-speed", "--no-classical", "--json",
+                 "--weights", str(tmp_path)]) == 0
+    mine = table(capsys.readouterr().out)
+    assert mine["ProtoRes"]["ikd_l2_e3"] > shipped["ProtoRes"]["ikd_l2_e3"]
+    assert mine["Masked-FCR"]["ikd_l2_e3"] == shipped["Masked-FCR"]["ikd_l2_e3"]  # not in the folder: the shipped one
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert main(["bench", "protores", "--weights", str(empty)]) == 2
+    assert "holds no .pt file" in capsys.readouterr().err

@@ -298,3 +298,27 @@ def test_app_studio_on_another_skeleton_leaves_out_the_learned_solvers(tmp_path,
     assert "left out (made for another skeleton): " in refused_note(refused)
     with pytest.raises(ValueError, match="unknown solver.*'nope'.*registered: fabrik"):
         app_studio("sample", "fabrik,nope", export_dir=tmp_path)
+
+
+def test_a_move_reaches_the_browser_as_every_views_pose_then_the_update_counter(studio, monkeypatch):
+    """The update counter (the summary, which ``posekit bench studio`` and the browser tests read as "every view
+    is drawn") is the last message of a target move, after exactly one position array per view: the first
+    view, whose slider moved, included."""
+    import ipywidgets as w
+
+    ed = studio.editor
+    first = ed.first
+    first.select(ed.rows[0]["joint"])
+    sent = []
+    real = w.Widget._send
+    monkeypatch.setattr(w.Widget, "_send", lambda self, msg, buffers=None: (sent.append((self, msg)),
+                                                                            real(self, msg, buffers))[1])
+    x = first.sliders[0]
+    x._handle_msg({"content": {"data": {"method": "update", "state": {"value": x.value + 0.002}, "buffer_paths": []}},
+                   "buffers": []})
+    widgets = [s for s, _ in sent]
+    arrays = {name: v._figure._shared["position"] for name, v in ed.viewers.items()}
+    assert widgets[-1] is studio.summary and "update" in sent[-1][1]["state"]["value"]
+    for name, a in arrays.items():
+        assert sum(s is a for s in widgets) == 1, f"{name}: expected one position array per move"
+    assert first.status in widgets and widgets.index(first.status) < len(widgets) - 1

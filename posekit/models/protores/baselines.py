@@ -22,7 +22,7 @@ from __future__ import annotations
 import torch
 from torch import nn
 
-from .blocks import FCR, KIND_IDS, ProtoResConfig, Tokens
+from .blocks import FCR, KIND_IDS, ProtoResConfig
 
 __all__ = ["MaskedFCREncoder", "TransformerEncoder"]
 
