@@ -12,7 +12,7 @@ import torch
 from posekit.io.torch_file import read_torch_file
 from posekit.paths import samples_dir
 
-WEIGHTS = sorted((samples_dir() / "weights").glob("*.pt"))
+WEIGHTS = sorted((samples_dir() / "weights").rglob("*.pt"))  # the hour-long networks of weights/hour too
 
 
 def _same(a, b, where="") -> None:
@@ -32,7 +32,7 @@ def _same(a, b, where="") -> None:
         assert a == b, where
 
 
-@pytest.mark.parametrize("path", WEIGHTS, ids=lambda p: p.name)
+@pytest.mark.parametrize("path", WEIGHTS, ids=lambda p: p.relative_to(samples_dir() / "weights").as_posix())
 def test_reader_gives_what_torch_load_gives(path):
     _same(read_torch_file(path), torch.load(path, map_location="cpu", weights_only=True))
 
