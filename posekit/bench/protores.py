@@ -246,6 +246,7 @@ LABELS = {"ikd_l2_e3": "L_ikd-L2", "gpd_l2_e3": "L_gpd-L2", "loc_geo": "L_loc-ge
           "val_mpjpe_mm": "val MPJPE mm", "random_ikd_l2_e3": "random L_ikd", "random_loc_geo": "random L_loc",
           "5point_ikd_l2_e3": "5-pt L_ikd", "5point_loc_geo": "5-pt L_loc"}
 
+
 def _cli_run(args) -> list[dict]:
     import contextlib
 
