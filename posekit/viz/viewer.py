@@ -252,11 +252,15 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
             yield
         finally:
             self._held = False
-            if self._draw_due:
-                self._draw()
-            self._follow()
-            if self._status_due:
-                self._update_status()
+            self._send_due()
+
+    def _send_due(self):
+        """Send the pose, the camera and the readout that a :meth:`drawing_once` block held back."""
+        if self._draw_due:
+            self._draw()
+        self._follow()
+        if self._status_due:
+            self._update_status()
 
     def flush(self):
         """Within :meth:`drawing_once`, send what is due now (the pose, the camera, the readout) rather than at the
@@ -266,11 +270,7 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
             return
         self._held = False
         try:
-            if self._draw_due:
-                self._draw()
-            self._follow()
-            if self._status_due:
-                self._update_status()
+            self._send_due()
         finally:
             self._held = True
 
