@@ -12,7 +12,7 @@ import torch
 from posekit.io.torch_file import read_torch_file
 from posekit.paths import samples_dir
 
-WEIGHTS = sorted((samples_dir() / "weights").rglob("*.pt"))  # the hour-long networks of weights/hour too
+WEIGHTS = sorted((samples_dir() / "weights").rglob("*.pt"))  # every shipped checkpoint, in any subfolder
 
 
 def _same(a, b, where="") -> None:

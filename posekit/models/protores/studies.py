@@ -3,17 +3,17 @@
 Introduced in ``notebooks/05_protores.ipynb``; ``posekit train protores-studies`` runs :func:`run_studies` and
 writes ``data_samples/results/protores_ablation.json`` (read by ``posekit bench protores`` and the lesson).
 
-* **Ablations** (the paper's Table 2) — ProtoRes with the shipped settings, all for :data:`STEPS` steps
-  (a quarter of the shipped run, so that the study fits a session): as shipped, (a) without the global
+* **Ablations** (the paper's Table 2) — ProtoRes of width 128 with the shipped loss and schedule settings, all for
+  :data:`STEPS` steps (a short run, so that the study fits a session): as shipped, (a) without the global
   position decoder (one decoder of twice the blocks predicts the rotations and the pelvis; FK rooted
   there) and (b) with every joint weighted 1 instead of the randomized ``min(W_M, 1/sigma)``; scored on
-  the shipped benchmarks, with the shipped (8,000-step) ProtoRes beside them.
+  the shipped benchmarks, with the shipped ProtoRes (a user's hour of two cores) beside them.
 * **Width** — ProtoRes of widths 64, 128 (the ablations' reference run) and 256, the same :data:`STEPS`
   steps: parameters, seconds per step, one-pose time on one thread, and the benchmarks' errors.
 * **Scaling** (``--scaling``, :func:`run_scaling`) — the widths × step counts of :data:`SCALING_GRID`, each a
-  full run with its own schedule (warm-up, cosine decay over its own steps), plus the shipped 8,000-step
-  network: error against training compute (parameters × poses seen), written to
-  ``data_samples/results/protores_scaling.json`` for lesson 05's scaling curve
+  full run with its own schedule (warm-up, cosine decay over its own steps), plus the shipped network
+  (width 256, 20,000 steps on two processes): error against training compute (parameters × poses seen),
+  written to ``data_samples/results/protores_scaling.json`` for lesson 05's scaling curve
   (:func:`posekit.models.protores.scaling.fit_power_law`).
 
 Every run is seeded and single-threaded; ``workers`` runs train side by side, one per core (under ``torchrun``
@@ -32,15 +32,16 @@ from ...learn.trainers import register_trainer
 from ...plugins import arg
 
 __all__ = ["ABLATIONS", "WIDTHS", "STEPS", "SCALING_GRID", "run_studies", "run_scaling", "studies_path",
-           "scaling_path", "score_net"]
+           "scaling_path", "score_net", "refresh_shipped"]
 
 ABLATIONS = {"no GPD": {"gpd": False}, "fixed weights": {"weighted": False}}
 WIDTHS = (64, 128, 256)
 STEPS = 2000
-SCALING_GRID = tuple((w, s) for w in (64, 128) for s in (500, 1000, 2000, 4000)) + tuple(
+SCALING_GRID = tuple((w, s) for w in (64, 128) for s in (500, 1000, 2000, 4000)) + ((128, 8000),) + tuple(
     (256, s) for s in (500, 1000, 2000))
-"""(width, steps) of the scaling study; width 256 stops at 2,000 steps (4,000 would take about half an hour of
-one core on its own). The shipped network adds width 128 at 8,000 steps."""
+"""(width, steps) of the scaling study, each one process of one thread; width 128 goes on to 8,000 steps (the
+network shipped until 2026-12-03, a quarter hour of one core), width 256 stops at 2,000 steps (4,000 would take
+about half an hour of one core on its own). The shipped network adds width 256 at 20,000 steps of two processes."""
 
 
 def studies_path():
@@ -100,15 +101,43 @@ def _job(job):
 
 
 def _shipped_row(motions) -> dict:
-    """The shipped ProtoRes scored like a study run (its training report gives steps and time)."""
+    """The shipped ProtoRes scored like a study run (its training report gives steps, time and processes:
+    ``train_min`` is each process's training time, ``processes`` how many trained side by side)."""
     from .solver import load_protores
 
     shipped = load_protores("protores")
     rep = shipped.checkpoint["extra"]["report"]
     return {"method": "ProtoRes (shipped)", **score_net(shipped, motions),
-            "parameters": shipped.n_parameters(), "steps": rep["steps"],
-            "train_min": round(rep["train_seconds"] / 60, 1),
+            "parameters": shipped.n_parameters(), "steps": rep["steps"], "width": shipped.config.width,
+            "batch": int(rep["settings"]["batch"]), "processes": int(rep.get("processes", 1)),
+            "train_min": round(rep["train_seconds"] / 60, 1), "command": shipped.checkpoint["command"],
             "ms_per_step": round(rep["seconds_per_step"] * 1000), "val_mpjpe_mm": round(rep["val"]["mpjpe_mm"], 1)}
+
+
+def _with_compute(row: dict, batch: int) -> dict:
+    """``row`` with ``batch`` (poses per step, over every process) and ``compute``: parameters × poses seen."""
+    row.setdefault("batch", batch)
+    row["compute"] = float(row["parameters"]) * row["steps"] * row["batch"]
+    return row
+
+
+def refresh_shipped(motions=None) -> dict:
+    """Score the shipped ProtoRes again and put it in place of the shipped row of both study files (the
+    ablations' and the scaling curve's), keeping every trained run: what ``posekit train protores-studies
+    --shipped`` runs after new shipped weights, in a minute instead of the studies' half hours."""
+    from ...data.bandai_mini import load_bandai_mini
+
+    row = _shipped_row(load_bandai_mini() if motions is None else motions)
+    for path in (studies_path(), scaling_path()):
+        res = json.loads(path.read_text())
+        kept = [r for r in res["rows"] if not r["method"].startswith("ProtoRes (shipped")]
+        if path == scaling_path():
+            rows = kept + [_with_compute(dict(row), res["batch"])]
+            res["rows"] = sorted(rows, key=lambda r: (r["width"], r["steps"]))
+        else:
+            res["rows"] = [dict(row)] + kept
+        path.write_text(json.dumps(res, indent=1) + "\n")
+    return row
 
 
 def _pool_map(jobs, workers: int) -> list:
@@ -136,14 +165,11 @@ def run_scaling(seed: int = 0, out=None, workers: int = 2, grid=SCALING_GRID) ->
     jobs = sorted(((f"width {w}, {s} steps", {"width": w}, {"steps": s}, seed) for w, s in grid),
                   key=lambda j: -j[1]["width"] ** 2 * j[2]["steps"])  # longest first
     rows = _pool_map(jobs, workers)
-    shipped = _shipped_row(load_bandai_mini())
-    shipped["width"] = 128
     for r, (w, s) in zip(rows, [(j[1]["width"], j[2]["steps"]) for j in jobs]):
         r["width"] = w
-    rows.append(shipped)
+    rows.append(_shipped_row(load_bandai_mini()))
     for r in rows:
-        r["batch"] = batch
-        r["compute"] = float(r["parameters"]) * r["steps"] * batch
+        _with_compute(r, batch)
     rows.sort(key=lambda r: (r["width"], r["steps"]))
     res = {"rows": rows, "seed": seed, "batch": batch, "seconds": round(time.perf_counter() - t0),
            "command": f"posekit train protores-studies --scaling --seed {seed}"}
@@ -185,6 +211,11 @@ def _cli(args) -> int:
     import sys
     from pathlib import Path
 
+    if args.shipped:
+        row = refresh_shipped()
+        print(f"the shipped ProtoRes ({row['command']}): random L_ikd-L2 {row['random_ikd_l2_e3']:.3f}e-3 m^2, "
+              f"5-point {row['5point_ikd_l2_e3']:.3f}e-3; wrote {studies_path()} and {scaling_path()}")
+        return 0
     if args.scaling:
         out = Path(args.out) if args.out else scaling_path()
         res = run_scaling(seed=args.seed, out=out, workers=args.workers)
@@ -213,7 +244,9 @@ register_trainer(
     args=[arg("--workers", type=int, default=2, help="runs side by side, one thread each (default: 2)"),
           arg("--seed", type=int, default=0, help="(default: 0)"),
           arg("--scaling", action="store_true",
-              help="the scaling study instead: widths x step counts (about 35 minutes on 2 cores), written to "
+              help="the scaling study instead: widths x step counts (about 48 minutes of one core), written to "
                    "data_samples/results/protores_scaling.json"),
+          arg("--shipped", action="store_true",
+              help="no training: score the shipped ProtoRes again into both files' shipped row (after new weights)"),
           arg("--out", default=None, help="JSON file (default data_samples/results/protores_ablation.json, or "
                                           "protores_scaling.json with --scaling)")])

@@ -22,9 +22,10 @@ the authors' configs use 100 for all three, as here), ``W_M = 1000``, ``sigma_M 
 of ``arccos`` finite when a prediction is exactly right (or exactly opposite).
 
 Schedule: Adam (lr 5e-4 here, 2e-4 in the paper with batches of 2048 on a GPU; 200 warm-up steps, then
-a cosine decay to a tenth, :func:`_lr_factor`), one thread
+a cosine decay to a tenth, :func:`_lr_factor`), one thread per process
 (:func:`posekit.learn.limit_threads`), fixed step counts per encoder (:data:`STEPS`) so that every run
-repeats exactly; each is sized to about 12 minutes of one core.
+repeats exactly. The shipped networks are width 256, each trained for a user's hour of two cores: two
+processes under ``torchrun`` (:mod:`posekit.learn.distributed`), 128 poses each per step of 256.
 """
 
 from __future__ import annotations
@@ -42,16 +43,20 @@ from ...data.bandai_mini import weights_licence
 from .networks import ARCHS, PosingNet, ProtoResConfig, weights_path
 from .data import PoseBank, draw_batch
 
-__all__ = ["DEFAULTS", "STEPS", "LOSSES", "geodesic", "losses", "train_protores", 
+__all__ = ["DEFAULTS", "STEPS", "WIDTH", "LOSSES", "geodesic", "losses", "train_protores",
            "validation_batches", "evaluate_batches", "command"]
 
 DEFAULTS = dict(steps=None, batch=256, lr=5e-4, warmup=200, w_pos=100.0, w_max=1000.0, n_min=3, n_max=16,
                 min_position=3, weighted=True, log_every=250, val_batches=8)
 """Training settings of the shipped weights (``steps=None``: :data:`STEPS` of the encoder)."""
 
-STEPS = {"protores": 8000, "masked-fcr": 8000, "transformer": 1500}
-"""Steps per encoder at the shipped sizes: ProtoRes and Masked-FCR the same number, the Transformer
-(six times slower per step) about the same wall-clock time as ProtoRes, 11-12 minutes of one core."""
+STEPS = {"protores": 20000, "masked-fcr": 42000, "transformer": 10600}
+"""Steps per encoder at the shipped width (256), each sized to about the same wall-clock time, an hour of two
+processes (``torchrun --nproc-per-node 2``; README: a user's hour of two cores): Masked-FCR's step is the
+cheapest, the Transformer's about twice ProtoRes's."""
+
+WIDTH = 256
+"""Units per layer of the shipped networks (the paper: 1024)."""
 
 LOSSES = ("total", "gpd_l2", "ikd_l2", "loc_geo", "glob_geo", "look_at")
 
@@ -59,7 +64,8 @@ LOSSES = ("total", "gpd_l2", "ikd_l2", "loc_geo", "glob_geo", "look_at")
 def command(arch: str = "protores", seed: int = 0, config: dict | None = None, data: str = "bandai-mini",
             **settings) -> str:
     """The command line that makes weights with these settings."""
-    parts = [f"--arch {arch}"] * (arch != "protores") + [f"--data {data}"] * (data != "bandai-mini") + [f"--seed {seed}"]
+    parts = ([f"--arch {arch}"] * (arch != "protores") + [f"--data {data}"] * (data != "bandai-mini")
+             + [f"--seed {seed}"])
     base = ProtoResConfig(1)
     for k in ("width", "gpd"):
         if config and config.get(k) != getattr(base, k):
@@ -165,7 +171,7 @@ def train_protores(motions=None, *, arch: str = "protores", seed: int = 0, out=N
     out : str or Path, optional
         Checkpoint to write (default :func:`weights_path` of ``arch``); ``False``: none.
     config : ProtoResConfig, optional
-        Sizes (default width 256 ... see :class:`ProtoResConfig`; ``arch`` overrides its ``arch``).
+        Sizes (default :class:`ProtoResConfig` at the shipped :data:`WIDTH`; ``arch`` overrides its ``arch``).
     seconds : float, optional
         Stop after this much wall-clock time (the notebook's live demo).
     **settings
@@ -198,7 +204,7 @@ def train_protores(motions=None, *, arch: str = "protores", seed: int = 0, out=N
     draw = dict(n_min=int(st["n_min"]), n_max=int(st["n_max"]), min_position=int(st["min_position"]))
     vb = validation_batches(vbank, int(st["val_batches"]), **draw)
     torch.manual_seed(seed)
-    cfg = config or ProtoResConfig(len(body_joints(motions.skeleton)))
+    cfg = config or ProtoResConfig(len(body_joints(motions.skeleton)), width=WIDTH)
     cfg = ProtoResConfig(**{**cfg.to_dict(), "arch": arch})
     net = PosingNet(motions.skeleton, cfg)
     # on the run's device; with several processes inside DDP (net: the plain network). The last residual block's
@@ -305,7 +311,8 @@ register_trainer(
           "like the Bandai mini set they are trained on); one per --arch",
     what="ProtoRes and its Masked-FCR and Transformer baselines (Oreshkin et al. 2022)",
     used_by="lesson 05 (05_protores.ipynb), the protores solvers, posekit bench protores",
-    takes="about 11-12 minutes each on one core (it trains on one thread)",
+    takes="about an hour each on 2 cores under torchrun --standalone --nproc-per-node 2 (the shipped networks; "
+          "one process: about twice as long)",
     args=[arg("--data", default="bandai-mini", help="training data: bandai-mini (default, its own split), or any "
               "posekit data set name / path (split by clip; e.g. bandai1 for the full Bandai set 1)"),
           arg("--arch", choices=ARCHS, default="protores",
@@ -314,7 +321,7 @@ register_trainer(
               help="training steps (default: " + ", ".join(f"{k} {v}" for k, v in STEPS.items()) + ")")]
          + [arg("--" + key.replace("_", "-"), dest=key, type=type(DEFAULTS[key]), default=DEFAULTS[key],
                 help=f"{what} (default: {DEFAULTS[key]})") for key, what in _WHAT]
-         + [arg("--width", type=int, default=128, help="units per layer (default: 128; the paper: 1024)"),
+         + [arg("--width", type=int, default=WIDTH, help=f"units per layer (default: {WIDTH}; the paper: 1024)"),
             arg("--no-gpd", action="store_true", help="no global position decoder (Table 2's ablation)"),
             arg("--fixed-weights", action="store_true",
                 help="every joint weighted 1 instead of the randomized min(W_M, 1/sigma) (Table 2's ablation)"),
