@@ -351,3 +351,39 @@ def test_the_shipped_protores_beats_fabrik_and_dls_on_the_5_point_benchmark(mini
     for method in ("fabrik", "dls"):
         c = run_classical(method, b, mini, progress=False)
         assert mine < scores(b, c["global_pos"], c["local_rot"], c["global_rot"])["ikd_l2"], method
+
+
+def test_studies_shipped_row_is_scored_again_without_touching_the_trained_runs(tmp_path, monkeypatch, capsys):
+    """``posekit train protores-studies --shipped``: the shipped row of both study files is scored again from the
+    shipped network (a stale row is replaced, not added to), with its width, processes and compute; every trained
+    run is kept as it was."""
+    import shutil
+
+    from posekit.cli import main
+    from posekit.models.protores import studies
+    from posekit.models.protores.train import STEPS, WIDTH
+
+    files = {}
+    for name, fn in (("ablation", studies.studies_path), ("scaling", studies.scaling_path)):
+        files[name] = tmp_path / fn().name
+        shutil.copy(fn(), files[name])
+        monkeypatch.setattr(studies, f"{'studies' if name == 'ablation' else 'scaling'}_path",
+                            lambda p=files[name]: p)
+    before = {k: json.loads(p.read_text()) for k, p in files.items()}
+    for res in before.values():
+        stale = next(r for r in res["rows"] if r["method"].startswith("ProtoRes (shipped"))
+        stale["random_ikd_l2_e3"] = 999.0
+    for k, p in files.items():
+        p.write_text(json.dumps(before[k]))
+    assert main(["train", "protores-studies", "--shipped"]) == 0
+    assert "the shipped ProtoRes (torchrun" in capsys.readouterr().out
+    for k, p in files.items():
+        after = json.loads(p.read_text())
+        shipped = [r for r in after["rows"] if r["method"].startswith("ProtoRes (shipped")]
+        assert len(shipped) == 1 and shipped[0]["random_ikd_l2_e3"] < 10, k
+        row = shipped[0]
+        assert (row["width"], row["processes"], row["steps"]) == (WIDTH, 2, STEPS["protores"])
+        trained = lambda res: [r for r in res["rows"] if not r["method"].startswith("ProtoRes (shipped")]  # noqa: E731
+        assert trained(after) == trained(before[k]), k
+    row = next(r for r in json.loads(files["scaling"].read_text())["rows"] if r["method"].startswith("ProtoRes (sh"))
+    assert row["compute"] == row["parameters"] * row["steps"] * row["batch"]
