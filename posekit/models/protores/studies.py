@@ -128,14 +128,12 @@ def refresh_shipped(motions=None) -> dict:
     from ...data.bandai_mini import load_bandai_mini
 
     row = _shipped_row(load_bandai_mini() if motions is None else motions)
-    for path in (studies_path(), scaling_path()):
-        res = json.loads(path.read_text())
-        kept = [r for r in res["rows"] if not r["method"].startswith("ProtoRes (shipped")]
-        if path == scaling_path():
-            rows = kept + [_with_compute(dict(row), res["batch"])]
-            res["rows"] = sorted(rows, key=lambda r: (r["width"], r["steps"]))
-        else:
-            res["rows"] = [dict(row)] + kept
+    trained = lambda res: [r for r in res["rows"] if r["method"] != row["method"]]  # noqa: E731
+    ablation, scaling = (json.loads(p.read_text()) for p in (studies_path(), scaling_path()))
+    ablation["rows"] = [dict(row)] + trained(ablation)
+    scaling["rows"] = sorted(trained(scaling) + [_with_compute(dict(row), scaling["batch"])],
+                             key=lambda r: (r["width"], r["steps"]))
+    for path, res in ((studies_path(), ablation), (scaling_path(), scaling)):
         path.write_text(json.dumps(res, indent=1) + "\n")
     return row
 
