@@ -273,15 +273,28 @@ def choose_solvers(page, names, timeout_s: float = 120.0):
 
 
 _RECORD = f"""() => {{
-  window.__posekit = {{keys: [], updates: []}};
+  const rec = window.__posekit = {{keys: [], updates: [], waiting: []}};
   const handle = document.querySelector('.posekit-target-x .noUi-handle');
-  handle.addEventListener('keydown', () => window.__posekit.keys.push(performance.now()), true);
+  handle.addEventListener('keydown', () => rec.keys.push(performance.now()), true);
   const summary = document.querySelector('{SUMMARY}');
+  const shown = () => {{ const m = summary.textContent.match(/update (\\d+)/); return m ? parseInt(m[1]) : -1; }};
   new MutationObserver(() => {{
-    const m = summary.textContent.match(/update (\\d+)/);
-    if (m) window.__posekit.updates.push([parseInt(m[1]), performance.now()]);
+    const n = shown();
+    if (n < 0) return;
+    rec.updates.push([n, performance.now()]);
+    rec.waiting = rec.waiting.filter(([after, resolve]) => n > after ? (resolve(n), false) : true);
   }}).observe(summary, {{subtree: true, childList: true, characterData: true}});
+  // a promise of the first update number above `after` (-1 after `ms` milliseconds): one round trip per update
+  rec.next = (after, ms) => new Promise(resolve => {{
+    if (shown() > after) return resolve(shown());
+    rec.waiting.push([after, resolve]);
+    setTimeout(() => resolve(-1), ms);
+  }});
 }}"""
+"""Installed in the page by :func:`rapid_updates`: key-press and update times (``performance.now()``), and
+``next(after, ms)``, which resolves with the next update number as soon as the summary shows it."""
+
+_NEXT = "([after, ms]) => window.__posekit.next(after, ms)"
 
 
 def _settle(page, quiet_s: float = 1.5, timeout_s: float = 60.0) -> None:
@@ -328,17 +341,16 @@ def rapid_updates(page, n: int, kernel=None, timeout_s: float = 30.0, progress: 
         from tqdm.auto import tqdm
 
         it = tqdm(it, desc="updates", unit="update")
-    arrived = 0
+    arrived, shown = 0, update_number(page)
     for i in it:
-        before = update_number(page)
         page.keyboard.press("ArrowRight" if i % 2 == 0 else "ArrowLeft")  # 1 mm right, then back
-        try:
-            page.wait_for_function(f"() => ({_UPDATE})() > {before}", timeout=timeout_s * 1000, polling=5)
-        except Exception as err:  # noqa: BLE001 - playwright's TimeoutError: the update never came
+        now = page.evaluate(_NEXT, [shown, timeout_s * 1000])
+        if now < 0:  # the update never came
             on_slider = page.evaluate("() => !!document.activeElement && "
                                       "document.activeElement.classList.contains('noUi-handle')")
             raise RuntimeError(f"update {i + 1} of {n} did not arrive within {timeout_s:.0f} s (the key press "
-                               f"{'reached' if on_slider else 'did not reach'} the slider)") from err
+                               f"{'reached' if on_slider else 'did not reach'} the slider)")
+        shown = now
         arrived += 1
         if kernel is not None and i == max(n // 10 - 1, 0):
             rss_early = kernel.memory_info().rss / 2 ** 20
@@ -404,15 +416,16 @@ def class_sessions(sessions: int, updates: int = 100, solvers=None, cull_idle_s:
                 from tqdm.auto import tqdm
 
                 it = tqdm(it, desc=f"{sessions} sessions", unit="round")
+            shown = [update_number(page) for page in pages]
             for i in it:
-                before = [update_number(page) for page in pages]
                 for page in pages:  # every student moves at once: the kernels solve side by side
                     page.keyboard.press("ArrowRight" if i % 2 == 0 else "ArrowLeft")
-                for k, (page, b) in enumerate(zip(pages, before)):
-                    try:
-                        page.wait_for_function(f"() => ({_UPDATE})() > {b}", timeout=timeout_s * 1000, polling=5)
-                    except Exception:  # noqa: BLE001 - playwright's TimeoutError: this update was lost
+                for k, page in enumerate(pages):
+                    now = page.evaluate(_NEXT, [shown[k], timeout_s * 1000])
+                    if now < 0:  # this update was lost (a late one must not count for the next round)
                         lost[k] += 1
+                        now = update_number(page)
+                    shown[k] = now
             rss = {}
             for k in kernels:
                 try:
