@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from posekit.bench.studio import QUIET_CONSOLE
 from tests.viz.browser_helpers import foreground as _foreground, pixels as _pixels, wait_for as _wait_for
 
 pytestmark = pytest.mark.browser
@@ -165,6 +166,7 @@ def _lab_page(chromium, viewport):
     Dismissing them once before Run All lost a race: one opened after the check, before the click, and the
     click waited 30 s behind it."""
     page = chromium.new_page(viewport=viewport)
+    page.add_init_script(QUIET_CONSOLE)  # pythreejs's debug log, serialised to Playwright: time no user spends
     page.dialogs = []
     dialog = page.locator(".jp-Dialog")
 
