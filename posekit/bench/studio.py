@@ -4,7 +4,10 @@ Introduced in ``notebooks/06_posing_studio.ipynb``. One run:
 
 1. serves a copy of the notebook with **Voila** (in a temporary folder, so exports never touch the
    repository; idle kernels are culled) and opens it in headless **Chromium** through Playwright
-   (Debian's ``/usr/bin/chromium``, or ``$POSEKIT_CHROMIUM``; Playwright cannot download a browser here);
+   (Debian's ``/usr/bin/chromium``, or ``$POSEKIT_CHROMIUM``; Playwright cannot download a browser here), which
+   draws WebGL in software: the views are served without antialiasing unless ``--antialias``
+   (:func:`posekit.viz.viewer.antialias_default`), and each page silences ``console.debug``
+   (:data:`QUIET_CONSOLE`);
 2. for each configuration (``--configs``, e.g. ``fabrik,dls`` and ``protores,neural``) chooses those solvers
    with the studio's own list and *compare* button;
 3. moves the first view's *target x* slider by one 1 mm step per key press, ``--updates`` times, each press
@@ -138,13 +141,15 @@ class VoilaServer:
 
 @contextlib.contextmanager
 def serve_voila(notebook=NOTEBOOK, folder=None, cull_idle_s: int = 600, startup_s: float = 120.0,
-                preheat: int = 0, cull_interval_s: int = 30, extra=()):
+                preheat: int = 0, cull_interval_s: int = 30, extra=(), env=None):
     """Serve a copy of ``notebook`` with Voila on a free local port; yields a :class:`VoilaServer`.
 
     The copy lives in ``folder`` (default a new temporary folder); kernels idle for ``cull_idle_s`` seconds
     are culled (looked for every ``cull_interval_s``), and leaving the block stops the server and its kernels.
-    ``extra``: more notebooks served by the same server (``server.url_of(name)``; e.g. :func:`floor_notebook`). ``preheat``: that many kernels kept
-    with the notebook already run (Voila's kernel pool, what ``make studio`` does), 0 none.
+    ``extra``: more notebooks served by the same server (``server.url_of(name)``; e.g. :func:`floor_notebook`).
+    ``preheat``: that many kernels kept with the notebook already run (Voila's kernel pool, what ``make studio``
+    does), 0 none. ``env``: environment variables for the server and its kernels over this process's (e.g.
+    ``{"POSEKIT_ANTIALIAS": "0"}``).
     """
     own = folder is None
     folder = Path(tempfile.mkdtemp(prefix="posekit-studio-") if own else folder)
@@ -161,7 +166,7 @@ def serve_voila(notebook=NOTEBOOK, folder=None, cull_idle_s: int = 600, startup_
     if preheat > 0:
         cmd += ["--preheat_kernel=True", f"--pool_size={int(preheat)}"]
     log = open(log_path, "w")
-    proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, cwd=folder)
+    proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, cwd=folder, env={**os.environ, **(env or {})})
     base = f"http://127.0.0.1:{port}/"
     server = VoilaServer(proc, base + (f"voila/render/{Path(notebook).name}" if extra else ""), folder, log_path)
     server.base = base
@@ -387,7 +392,7 @@ def _latencies(page) -> np.ndarray:
 
 
 def class_sessions(sessions: int, updates: int = 100, solvers=None, cull_idle_s: int = 20, cull_interval_s: int = 5,
-                   timeout_s: float = 30.0, progress: bool = True) -> list[dict]:
+                   timeout_s: float = 30.0, progress: bool = True, antialias: bool = False) -> list[dict]:
     """``sessions`` students at once: one Voila server, that many browser sessions (each its own kernel), every
     session moving its target slider at the same time, ``updates`` times; then every page closes and the idle
     kernels must be culled.
@@ -409,7 +414,8 @@ def class_sessions(sessions: int, updates: int = 100, solvers=None, cull_idle_s:
     if sessions < 1 or updates < 1:
         raise ValueError(f"--sessions and --updates must be at least 1, got {sessions} and {updates}")
     rows = []
-    with serve_voila(cull_idle_s=cull_idle_s, cull_interval_s=cull_interval_s) as server, sync_playwright() as p:
+    with serve_voila(cull_idle_s=cull_idle_s, cull_interval_s=cull_interval_s, env=_views(antialias)) as server, \
+            sync_playwright() as p:
         browser = launch_chromium(p)
         try:
             pages = []
@@ -474,8 +480,19 @@ def class_sessions(sessions: int, updates: int = 100, solvers=None, cull_idle_s:
     return rows
 
 
-def run(updates: int = 1000, configs=("fabrik,dls", "protores,neural"), progress: bool = True) -> list[dict]:
-    """Serve the studio, measure every configuration (see the module docstring); one row per configuration."""
+def _views(antialias: bool) -> dict:
+    """The server environment that draws the views with or without antialiasing
+    (:func:`posekit.viz.viewer.antialias_default`)."""
+    return {"POSEKIT_ANTIALIAS": "1" if antialias else "0"}
+
+
+def run(updates: int = 1000, configs=("fabrik,dls", "protores,neural"), progress: bool = True,
+        antialias: bool = False) -> list[dict]:
+    """Serve the studio, measure every configuration (see the module docstring); one row per configuration.
+
+    ``antialias``: draw the views with antialiasing. Off by default: this bench's Chromium draws WebGL in software
+    (no GPU), where multisampling costs the most, and a class on such machines serves the studio without it
+    (``make studio STUDIO_ANTIALIAS=0``)."""
     from playwright.sync_api import sync_playwright
 
     configs = [tuple(n.strip() for n in c.split(",") if n.strip()) if isinstance(c, str) else tuple(c) for c in configs]
@@ -490,7 +507,7 @@ def run(updates: int = 1000, configs=("fabrik,dls", "protores,neural"), progress
     rows = []
     floor_dir = Path(tempfile.mkdtemp(prefix="posekit-floor-"))
     try:
-        with serve_voila(extra=[floor_notebook(floor_dir)]) as server, sync_playwright() as p:
+        with serve_voila(extra=[floor_notebook(floor_dir)], env=_views(antialias)) as server, sync_playwright() as p:
             browser = launch_chromium(p)
             try:
                 tab = blank_tab(browser)
@@ -520,24 +537,25 @@ def run(updates: int = 1000, configs=("fabrik,dls", "protores,neural"), progress
                         "p95_ms": round(p95, 1), "max_ms": round(float(lat.max()), 1),
                         "x_floor": round(p95 / floor_p95, 2), "goal_x_floor": times,
                         "goal_p95_ms": goal, "met": bool(p95 <= goal and p95 <= times * floor_p95),
+                        "antialias": antialias,
                         "rss_mb_early": None if r["rss_mb_early"] is None else round(r["rss_mb_early"], 1),
                         "rss_mb_end": None if r["rss_mb_end"] is None else round(r["rss_mb_end"], 1),
                         "kernel_alive": r["kernel_alive"]})
                 page.close()
             finally:
                 browser.close()
-        rows.append({"first_view": "a preheated kernel (make studio)", "seconds": _preheated_first_view()})
+        rows.append({"first_view": "a preheated kernel (make studio)", "seconds": _preheated_first_view(antialias)})
     finally:
         shutil.rmtree(floor_dir, ignore_errors=True)
     return rows
 
 
-def _preheated_first_view(ready_s: float = 180.0) -> float:
+def _preheated_first_view(antialias: bool = False, ready_s: float = 180.0) -> float:
     """Seconds from the request to an interactive studio when Voila has a kernel preheated (``make studio``):
     a fresh server, its pool given time to run the page (its kernel's CPU quiet for 3 s), then one page."""
     from playwright.sync_api import sync_playwright
 
-    with serve_voila(preheat=1) as server, sync_playwright() as p:
+    with serve_voila(preheat=1, env=_views(antialias)) as server, sync_playwright() as p:
         t0, quiet = time.time(), 0
         while time.time() - t0 < ready_s and quiet < 3:
             time.sleep(1)
@@ -569,9 +587,10 @@ def _run(args) -> list[dict]:
             raise ValueError(f"--sessions: every count must be at least 1, got {args.sessions!r}")
         rows = []
         for k in counts:
-            rows += class_sessions(k, args.updates or 100, progress=not args.json)
+            rows += class_sessions(k, args.updates or 100, progress=not args.json, antialias=args.antialias)
         return rows
-    return run(updates=args.updates or 1000, configs=args.configs.split(";"), progress=not args.json)
+    return run(updates=args.updates or 1000, configs=args.configs.split(";"), progress=not args.json,
+               antialias=args.antialias)
 
 
 register_benchmark(
@@ -584,11 +603,15 @@ register_benchmark(
           arg("--sessions", default=None,
               help="a class at once instead: comma-separated session counts (e.g. 1,2,4,8), each that many browser "
                    "sessions against one server moving their targets together (--updates each, default 100 here); "
-                   "latency per session, lost updates, kernel memory, and the cull after they leave")],
+                   "latency per session, lost updates, kernel memory, and the cull after they leave"),
+          arg("--antialias", action="store_true",
+              help="draw the views with antialiasing (default off: this bench's browser draws WebGL in software, "
+                   "where multisampling costs the most; make studio STUDIO_ANTIALIAS=0 serves a class so)")],
     tables=[("First view: from the request to an interactive studio", ["first_view", "seconds"],
              lambda r: "first_view" in r),
             ("End-to-end update latency in the browser (key press -> every view solved and drawn), the floor first",
-             ["solvers", "updates", "p50_ms", "p95_ms", "max_ms", "x_floor", "goal_x_floor", "goal_p95_ms", "met"],
+             ["solvers", "updates", "p50_ms", "p95_ms", "max_ms", "x_floor", "goal_x_floor", "goal_p95_ms", "met",
+              "antialias"],
              lambda r: "solvers" in r),
             ("Kernel", ["solvers", "rss_mb_early", "rss_mb_end", "kernel_alive"], lambda r: r.get("kernel_alive") is not None),
             ("Each session of a class (every session moving its target at once)",

@@ -33,6 +33,7 @@ The viewer knows no solver: lessons connect one through :meth:`SkeletonViewer.on
 from __future__ import annotations
 
 import html
+import os
 from contextlib import contextmanager
 
 import numpy as np
@@ -44,7 +45,7 @@ from .drag import DragTargets
 from .meshes import Bones, Figure, Spheres, icosphere
 from .sliders import TargetSliders
 
-__all__ = ["SkeletonViewer", "icosphere", "show_widget", "TARGET_COLOUR", "LOOK_COLOUR"]
+__all__ = ["SkeletonViewer", "antialias_default", "icosphere", "show_widget", "TARGET_COLOUR", "LOOK_COLOUR"]
 
 TARGET_COLOUR = "#d81b9c"
 """Position targets: magenta, apart from the right side's red bones and the look-at orange."""
@@ -64,6 +65,17 @@ def show_widget(widget, text: str) -> None:
     bundle = widget._repr_mimebundle_()
     bundle["text/plain"] = text
     display(bundle, raw=True)
+
+
+def antialias_default() -> bool:
+    """Whether viewers smooth their edges: yes, unless ``POSEKIT_ANTIALIAS=0`` (``make studio STUDIO_ANTIALIAS=0``).
+
+    For a browser without a GPU (software WebGL, e.g. Chromium's SwiftShader on a server or a virtual desktop):
+    multisampling makes every redraw rasterise four samples per pixel, and a compositor without a GPU then reads
+    each canvas back. Measured on a 2-core machine with headless Chromium, two 560 x 360 views of the studio: the
+    browser's WebGL time per update 20 ms with antialiasing, 8 ms without (``posekit bench studio`` serves the
+    studio without it; ``--antialias`` keeps it)."""
+    return os.environ.get("POSEKIT_ANTIALIAS", "1").strip() != "0"
 
 
 class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
@@ -86,6 +98,10 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         Show the joint selector, the drag toggle, the X/Y/Z target sliders and the status table.
     follow : bool
         Re-centre the view when a pose leaves the framed region.
+    antialias : bool, optional
+        Smooth the edges (multisampling). Default: on, unless the environment variable ``POSEKIT_ANTIALIAS`` is
+        ``0`` (:func:`antialias_default`) — for browsers that draw WebGL in software (no GPU), where it costs the
+        most.
 
     Attributes
     ----------
@@ -102,7 +118,7 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
 
     def __init__(self, skeleton: Skeleton, pose=None, ghost=None, targets=None, width: int = 560,
                  height: int = 420, joint_radius: float = 0.025, controls: bool = True,
-                 background: str = "#f7f7f2", floor: bool = True, follow: bool = True):
+                 background: str = "#f7f7f2", floor: bool = True, follow: bool = True, antialias: bool | None = None):
         import ipywidgets as w
         import pythreejs as three
 
@@ -152,7 +168,8 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         self.picker.observe(self._on_pick, names=["point"])
         self.renderer = three.Renderer(camera=self.camera, scene=self.scene,
                                        controls=[self.orbit, self.picker, *self._drag_pickers()],
-                                       width=width, height=height, antialias=True)
+                                       width=width, height=height,
+                                       antialias=antialias_default() if antialias is None else bool(antialias))
 
         self.status = w.HTML(value="double-click a joint to select it")
         # "" stands for no selection: a Dropdown whose value is None shows a blank box

@@ -441,3 +441,23 @@ def test_a_solver_that_ignores_a_kind_says_so_and_names_the_worst_joint():
     assert "ignored" not in dls and "°" in dls
     assert panel.results["fabrik"].kinds == ("position",)  # FABRIK was given the position effector only
     assert set(panel.viewers["dls"].look_targets) == {"Head"} and set(panel.viewers["dls"].targets) == {"Hand_L"}
+
+
+def test_antialiasing_is_on_unless_posekit_antialias_is_0(sample, monkeypatch):
+    """Browsers without a GPU draw smoother views at a price: POSEKIT_ANTIALIAS=0 (make studio STUDIO_ANTIALIAS=0)
+    turns multisampling off for every viewer; an explicit argument wins over the environment."""
+    import subprocess
+    from pathlib import Path
+
+    monkeypatch.delenv("POSEKIT_ANTIALIAS", raising=False)
+    assert SkeletonViewer(sample.skeleton, controls=False).renderer._antialias is True
+    monkeypatch.setenv("POSEKIT_ANTIALIAS", "0")
+    assert SkeletonViewer(sample.skeleton, controls=False).renderer._antialias is False
+    assert SkeletonViewer(sample.skeleton, controls=False, antialias=True).renderer._antialias is True
+    monkeypatch.setenv("POSEKIT_ANTIALIAS", "1")
+    assert SkeletonViewer(sample.skeleton, controls=False).renderer._antialias is True
+    root = Path(__file__).resolve().parents[2]
+    dry = subprocess.run(["make", "-n", "-C", str(root), "studio", "STUDIO_ANTIALIAS=0"], capture_output=True, text=True)
+    assert dry.returncode == 0 and 'POSEKIT_ANTIALIAS="0"' in dry.stdout, dry.stdout + dry.stderr
+    dry = subprocess.run(["make", "-n", "-C", str(root), "studio"], capture_output=True, text=True)
+    assert "POSEKIT_ANTIALIAS" not in dry.stdout
