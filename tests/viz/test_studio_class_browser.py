@@ -33,7 +33,14 @@ def test_the_floor_page_answers_every_key_press(tmp_path):
         assert server.url.endswith("voila/render/studio.ipynb")
         browser = launch_chromium(p)
         try:
-            r = rapid_updates(open_floor(browser, server.url_of("floor.ipynb")), 20)
+            page = open_floor(browser, server.url_of("floor.ipynb"))
+            r = rapid_updates(page, 20)
+            # the bench's pages drop console.debug (pythreejs's log, serialised to Playwright), nothing else
+            logs = []
+            page.on("console", lambda m: logs.append(m.type))
+            page.evaluate("() => { console.debug('posekit'); console.log('posekit'); }")
+            page.wait_for_timeout(200)
         finally:
             browser.close()
     assert r["updates"] == 20 and len(r["latency_ms"]) == 20 and (r["latency_ms"] > 0).all()
+    assert "debug" not in logs and "log" in logs, logs
