@@ -237,10 +237,10 @@ def floor_notebook(folder) -> Path:
 
 QUIET_CONSOLE = "console.debug = () => {};"
 """Run in every page the bench opens, before the page's own scripts: pythreejs logs each change of a scene's objects
-with ``console.debug`` (a dozen calls per studio update), and with Playwright attached every console call is
-serialised and sent to the driving process — about 20 ms of the browser's time per update here (measured with the
-renderer's profiler: key press to update p50 90 ms with the calls, 61 ms without), a cost a student's browser
-without a debugger attached does not pay. Other console levels stay as they are."""
+with ``console.debug`` (several calls per studio update), and with Playwright attached every console call is
+serialised and sent to the driving process — about 20 ms of the browser's time per update here (150 updates of
+FABRIK + DLS with the renderer's profiler running: key press to update p50 90 ms with the calls, 61 ms without), a
+cost a student's browser without a debugger attached does not pay. Other console levels stay as they are."""
 
 
 def new_tab(browser, viewport=(1400, 1600)):

@@ -71,7 +71,7 @@ def antialias_default() -> bool:
     """Whether viewers smooth their edges: yes, unless ``POSEKIT_ANTIALIAS=0`` (``make studio STUDIO_ANTIALIAS=0``).
 
     For a browser without a GPU (software WebGL, e.g. Chromium's SwiftShader on a server or a virtual desktop):
-    multisampling makes every redraw rasterise four samples per pixel, and a compositor without a GPU then reads
+    multisampling makes every redraw rasterise several samples per pixel, and a compositor without a GPU then reads
     each canvas back. Measured on a 2-core machine with headless Chromium, two 560 x 360 views of the studio: the
     browser's WebGL time per update 20 ms with antialiasing, 8 ms without (``posekit bench studio`` serves the
     studio without it; ``--antialias`` keeps it)."""
