@@ -73,8 +73,9 @@ class DragTargets:
             three.BufferGeometry(attributes={
                 "position": three.BufferAttribute((SURFACE_RADIUS * unit).astype(np.float32), normalized=False),
                 "index": three.BufferAttribute(faces.reshape(-1).astype(np.uint32), normalized=False)}),
-            three.MeshBasicMaterial(color="#ffffff", transparent=True, opacity=0.0, depthWrite=False,
-                                    side="BackSide"))
+            # never drawn (a material that is not visible) but still hit by the pickers' rays: three.js tests only
+            # the object's own visibility when it casts a ray, the material's when it draws
+            three.MeshBasicMaterial(color="#ffffff", side="BackSide", visible=False))
         return self._drag_sphere
 
     def _drag_pickers(self):

@@ -102,12 +102,15 @@ class Spheres:
         V = len(self.unit)
         index = (faces[None] + (np.arange(n) * V)[:, None, None]).reshape(-1).astype(np.uint32)
         normals = np.concatenate([np.tile(self.unit, (n, 1)), np.zeros((2, 3))]).astype(np.float32)
+        colours = np.repeat(_hex(color)[None], n * V + 2, axis=0)
         self.geometry = three.BufferGeometry(attributes={
             "position": attribute(self._positions(np.zeros((n, 3)))),
             "normal": three.BufferAttribute(normals, normalized=False),
+            "color": three.BufferAttribute(colours, normalized=False),
             "index": three.BufferAttribute(index, normalized=False),
         })
-        material = three.MeshLambertMaterial(color=color, transparent=opacity < 1, opacity=opacity)
+        # vertex colours, as the figure's joints and markers: one shader program for every sphere of a view
+        material = three.MeshLambertMaterial(vertexColors="VertexColors", transparent=opacity < 1, opacity=opacity)
         self.mesh = three.Mesh(self.geometry, material)
 
     def _positions(self, centres):
@@ -206,9 +209,10 @@ class Figure:
     (spheres; one at a time can be highlighted: larger, in ``highlight``), the position targets and the look-at
     targets (spheres of ``marker_radius``), the look-at rays (joint -> point), the rotation triads (three axes of
     ``triad_length`` per target: x red, y green, z blue), then the two :data:`PICK_BOUND` corners. Each part is
-    a mesh (or line segments) of its own, with its own index into the shared rows and its own material, so
-    picking, colours and visibility stay per part; the normal and colour arrays are shared as well and sent
-    again only when the number of targets of a kind changes (:meth:`layout`) or the highlight moves.
+    a mesh (or line segments) of its own, with its own index into the shared rows, so picking and visibility stay
+    per part; the normal and colour arrays are shared as well (every part is coloured by its rows of the colour
+    array, so the spheres share one material and the lines another) and sent again only when the number of
+    targets of a kind changes (:meth:`layout`) or the highlight moves.
     :meth:`draw` writes every part and sends the positions once.
 
     Attributes
@@ -232,10 +236,12 @@ class Figure:
         self.unit, self._sphere_faces = icosphere(1)
         self._joint_rgb, self._highlight_rgb = _hex(joint_colour), _hex(highlight)
         self.highlighted = None
-        self._materials = [_bone_material(), three.MeshLambertMaterial(vertexColors="VertexColors"),
-                           three.MeshLambertMaterial(color=target_colour), three.MeshLambertMaterial(color=look_colour),
-                           three.LineBasicMaterial(color=look_colour, linewidth=1),
-                           three.LineBasicMaterial(vertexColors="VertexColors", linewidth=2)]
+        self._marker_rgb = {"targets": _hex(target_colour), "looks": _hex(look_colour), "rays": _hex(look_colour)}
+        # every part takes its colours from the shared colour array: the view's meshes and lines need only three
+        # shader programs (flat-shaded bones, lit spheres, lines), each compiled once per view when it first draws
+        spheres = three.MeshLambertMaterial(vertexColors="VertexColors")
+        lines = three.LineBasicMaterial(vertexColors="VertexColors", linewidth=2)
+        self._materials = [_bone_material(), spheres, spheres, spheres, lines, lines]
         self.bones = self.joints = self.targets = self.looks = self.rays = self.triads = None
         self.counts = None
         self._shared = {}
@@ -276,6 +282,8 @@ class Figure:
         self._colours[rows["bones"]] = self._tubes.colours
         axes = np.eye(3, dtype=np.float32)  # each triad: x red, y green, z blue, both ends of each axis
         self._colours[rows["triads"]] = np.repeat(np.tile(axes, (R, 1)), 2, axis=0)
+        for part, rgb in self._marker_rgb.items():
+            self._colours[rows[part]] = rgb
         self._colour_joints()
         old = list(self._shared.values())
         self._shared = {"position": attribute(self._positions.astype(np.float32)),
