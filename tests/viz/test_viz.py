@@ -35,6 +35,48 @@ def test_viewer_updates_buffers_not_scene(sample):
     assert f.joints is mesh and f._shared["position"] is not attr and np.array_equal(f.part("joints"), joints)
 
 
+def _drawn_meshes(obj):
+    """Every mesh or line object under ``obj`` whose object and material are both visible (what three.js draws)."""
+    import pythreejs as three
+
+    out = []
+    if getattr(obj, "visible", True) is False:
+        return out
+    if isinstance(obj, (three.Mesh, three.LineSegments)) and obj.material.visible:
+        out.append(obj)
+    for child in getattr(obj, "children", ()):
+        out += _drawn_meshes(child)
+    return out
+
+
+def test_a_view_needs_three_shader_programs_and_never_draws_the_drag_sphere(sample):
+    """A software-rendered browser compiles each shader program once per view and draws every visible mesh in every
+    frame: the view's meshes and lines use three programs (flat-shaded bones, lit vertex-coloured spheres,
+    vertex-coloured lines) whatever is shown, and the sphere the drag pickers hit is never drawn."""
+    from posekit.viz.viewer import LOOK_COLOUR, TARGET_COLOUR
+
+    s = sample.skeleton
+    v = SkeletonViewer(s, sample.global_pos[0], ghost=sample.global_pos[10])
+    pose = sample.global_pos[0]
+    head, hand = s.names[s.index("head")], s.names[s.index("left_hand")]
+    v.set_targets({hand: pose[s.index(hand)] + 0.1}, look_at={head: pose[s.index(head)] + [0, 0, 1]},
+                  rotations={hand: np.eye(3)})
+    drawn = _drawn_meshes(v.scene)
+    programs = {(type(m.material).__name__, m.material.vertexColors, getattr(m.material, "flatShading", False))
+                for m in drawn}
+    assert programs == {("MeshPhongMaterial", "VertexColors", True), ("MeshLambertMaterial", "VertexColors", False),
+                        ("LineBasicMaterial", "VertexColors", False)}, programs
+    f = v._figure
+    assert {f.bones, f.joints, f.targets, f.looks, f.rays, f.triads} <= set(drawn)
+    sphere = v._drag_sphere
+    assert sphere.visible and not sphere.material.visible and sphere not in drawn  # hit by rays, never drawn
+    colours = np.asarray(f._shared["color"].array)
+    hexrgb = lambda c: np.array([int(c[k:k + 2], 16) / 255 for k in (1, 3, 5)])
+    assert np.allclose(colours[f._rows["targets"]], hexrgb(TARGET_COLOUR), atol=1e-6)
+    assert np.allclose(colours[f._rows["looks"]], hexrgb(LOOK_COLOUR), atol=1e-6)
+    assert np.allclose(colours[f._rows["rays"]], hexrgb(LOOK_COLOUR), atol=1e-6)
+
+
 def test_selected_joint_is_drawn_larger_and_yellow_in_the_joints_mesh(sample):
     s = sample.skeleton
     v = SkeletonViewer(s, sample.global_pos[0])
