@@ -508,6 +508,8 @@ def run(updates: int = 1000, configs=("fabrik,dls", "protores,neural"), progress
         if bad or not 2 <= len(c) <= 4:
             raise ValueError(f"configuration {','.join(c)!r}: give 2-4 registered solvers"
                              + (f" (unknown: {', '.join(bad)})" if bad else ""))
+    if first_views < 1:
+        raise ValueError(f"--first-views: expected at least 1 page, got {first_views}")
     rows = []
     floor_dir = Path(tempfile.mkdtemp(prefix="posekit-floor-"))
     try:
@@ -661,8 +663,6 @@ def _run(args) -> list[dict]:
         for k in counts:
             rows += class_sessions(k, args.updates or 100, progress=not args.json, antialias=args.antialias)
         return rows
-    if args.first_views < 1:
-        raise ValueError(f"--first-views: expected at least 1 page, got {args.first_views}")
     return run(updates=args.updates or 1000, configs=args.configs.split(";"), progress=not args.json,
                antialias=args.antialias, first_views=args.first_views)
 

@@ -264,6 +264,9 @@ def test_bench_studio_refuses_bad_configurations_before_starting_anything():
     with pytest.raises(ValueError, match="--sessions and --updates must be at least 1"):
         class_sessions(0)
     assert main(["bench", "studio", "--sessions", "two"]) == 2
+    with pytest.raises(ValueError, match="--first-views: expected at least 1 page, got 0"):
+        run(updates=10, first_views=0)
+    assert main(["bench", "studio", "--first-views", "0"]) == 2
 
 
 def test_skeleton_sides_from_names():

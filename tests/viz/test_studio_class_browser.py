@@ -44,3 +44,15 @@ def test_the_floor_page_answers_every_key_press(tmp_path):
             browser.close()
     assert r["updates"] == 20 and len(r["latency_ms"]) == 20 and (r["latency_ms"] > 0).all()
     assert "debug" not in logs and "log" in logs, logs
+
+
+def test_the_first_view_is_timed_in_the_page_from_a_preheated_kernel():
+    """posekit bench studio's preheated first view (here of the floor page, the cheapest to serve): the page's own
+    clock sees the first frame drawn with the page's elements, no later than Playwright sees them; two pages, the
+    second served from the kernel the pool preheated after the first was taken."""
+    from posekit.bench.studio import preheated_first_views
+
+    views = preheated_first_views(2, floor=True)
+    assert len(views["page_s"]) == len(views["wall_s"]) == 2
+    for page_s, wall_s in zip(views["page_s"], views["wall_s"]):
+        assert 0 < page_s <= wall_s + 0.05 and wall_s < 60, views
