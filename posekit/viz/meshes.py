@@ -4,9 +4,10 @@ figure (bones, joints, target markers, rays, triads) drawn from one shared posit
 Introduced in ``notebooks/00_skeletons_and_poses.ipynb`` (through :class:`~posekit.viz.SkeletonViewer`).
 Every shape of a kind lives in one buffer, so moving a pose rewrites position arrays instead of rebuilding the
 scene: playback and live solving stay smooth. :class:`Figure` goes further: its parts are separate meshes (each
-its own material, picking and visibility) indexing **one** position array, so a solved pose with its targets
-costs one message to the browser (and one acknowledgement back), not one per part. Bones are flat-shaded
-(three.js derives each face's normal on the graphics card), so a moved pose sends no normals. Units: metres;
+its own picking and visibility) indexing **one** position array, so a solved pose with its targets costs one
+message to the browser (and one acknowledgement back), not one per part. Bones are flat-shaded (three.js derives
+each face's normal on the graphics card), so a moved pose sends no normals; every other part is coloured by vertex
+colours, so a view compiles three shader programs (bones, spheres, lines) whatever it shows. Units: metres;
 axes: :mod:`posekit.conventions`.
 """
 
