@@ -71,14 +71,15 @@ lab: setup warm
 	  --LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate $(LAB_ARGS)
 
 # the posing studio alone as a browser app (Voila, notebooks/studio.ipynb; lesson 06 teaches it), one kernel kept
-# preheated for the next visitor; Ctrl-C stops it and its kernels. STUDIO_DATA (a data set or BVH folder),
-# STUDIO_WEIGHTS (your trained models), STUDIO_SOLVERS (2-4 names) choose what it poses; STUDIO_ANTIALIAS=0 draws
-# the views without antialiasing, for browsers without a GPU (software WebGL)
+# preheated for the next visitor (STUDIO_POOL=N keeps N, for a class arriving at once: about 0.26 GB each); Ctrl-C
+# stops it and its kernels. STUDIO_DATA (a data set or BVH folder), STUDIO_WEIGHTS (your trained models),
+# STUDIO_SOLVERS (2-4 names) choose what it poses; STUDIO_ANTIALIAS=0 draws the views without antialiasing, for
+# browsers without a GPU (software WebGL)
 studio: setup warm
 	cd notebooks && POSEKIT_STUDIO_DATA="$(if $(wildcard $(STUDIO_DATA)),$(abspath $(STUDIO_DATA)),$(STUDIO_DATA))" POSEKIT_STUDIO_SOLVERS="$(STUDIO_SOLVERS)" \
 	  $(if $(STUDIO_WEIGHTS),POSEKIT_WEIGHTS_DIR="$(abspath $(STUDIO_WEIGHTS))") \
 	  $(if $(STUDIO_ANTIALIAS),POSEKIT_ANTIALIAS="$(STUDIO_ANTIALIAS)") \
-	  ../$(VENV)/bin/voila studio.ipynb --port=$(or $(STUDIO_PORT),8866) --preheat_kernel=True --pool_size=1 \
+	  ../$(VENV)/bin/voila studio.ipynb --port=$(or $(STUDIO_PORT),8866) --preheat_kernel=True --pool_size=$(or $(STUDIO_POOL),1) \
 	  --MappingKernelManager.cull_idle_timeout=600 --MappingKernelManager.cull_interval=60 $(STUDIO_ARGS)
 
 # both cores: tests grouped by module, each notebook on one worker, the browser tests together
