@@ -79,7 +79,8 @@ studio: setup warm
 	cd notebooks && POSEKIT_STUDIO_DATA="$(if $(wildcard $(STUDIO_DATA)),$(abspath $(STUDIO_DATA)),$(STUDIO_DATA))" POSEKIT_STUDIO_SOLVERS="$(STUDIO_SOLVERS)" \
 	  $(if $(STUDIO_WEIGHTS),POSEKIT_WEIGHTS_DIR="$(abspath $(STUDIO_WEIGHTS))") \
 	  $(if $(STUDIO_ANTIALIAS),POSEKIT_ANTIALIAS="$(STUDIO_ANTIALIAS)") \
-	  ../$(VENV)/bin/voila studio.ipynb --port=$(or $(STUDIO_PORT),8866) --preheat_kernel=True --pool_size=$(or $(STUDIO_POOL),1) \
+	  ../$(VENV)/bin/voila studio.ipynb --port=$(or $(STUDIO_PORT),8866) \
+	  --preheat_kernel=True --pool_size=$(or $(STUDIO_POOL),1) \
 	  --MappingKernelManager.cull_idle_timeout=600 --MappingKernelManager.cull_interval=60 $(STUDIO_ARGS)
 
 # both cores: tests grouped by module, each notebook on one worker, the browser tests together
