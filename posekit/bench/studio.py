@@ -592,8 +592,8 @@ def _drawn_seconds(page, timeout_s: float = 30.0) -> float:
     return page.evaluate("() => window.__posekit_drawn.at") / 1000
 
 
-STUDIO_DRAWN = (f"{SUMMARY}", ".posekit-views canvas")
-FLOOR_DRAWN = (f"{SUMMARY}", ".posekit-target-x .noUi-handle")
+STUDIO_DRAWN = (SUMMARY, ".posekit-views canvas")
+FLOOR_DRAWN = (SUMMARY, ".posekit-target-x .noUi-handle")
 
 
 def preheated_first_views(pages: int = 3, antialias: bool = False, floor: bool = False,
@@ -611,7 +611,7 @@ def preheated_first_views(pages: int = 3, antialias: bool = False, floor: bool =
 
     folder = Path(tempfile.mkdtemp(prefix="posekit-first-view-"))
     notebook = floor_notebook(folder) if floor else NOTEBOOK
-    probe = FLOOR_DRAWN if floor else STUDIO_DRAWN
+    probe, open_page = (FLOOR_DRAWN, open_floor) if floor else (STUDIO_DRAWN, open_studio)
     out = {"page_s": [], "wall_s": []}
     try:
         with serve_voila(notebook, folder=folder / "served", preheat=1, env=_views(antialias)) as server, \
@@ -631,8 +631,7 @@ def preheated_first_views(pages: int = 3, antialias: bool = False, floor: bool =
                     tab = blank_tab(browser)
                     _drawn_probe(tab, probe)
                     t0 = time.perf_counter()
-                    page = open_floor(browser, server.url, page=tab) if floor else open_studio(browser, server.url,
-                                                                                               page=tab)
+                    page = open_page(browser, server.url, page=tab)
                     out["wall_s"].append(time.perf_counter() - t0)
                     out["page_s"].append(_drawn_seconds(page))
                     page.close()
