@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .meshes import icosphere
+from .meshes import attribute, icosphere
 
 __all__ = ["drag_point", "DragTargets"]
 
@@ -71,8 +71,8 @@ class DragTargets:
         unit, faces = icosphere(2)
         self._drag_sphere = three.Mesh(
             three.BufferGeometry(attributes={
-                "position": three.BufferAttribute((SURFACE_RADIUS * unit).astype(np.float32), normalized=False),
-                "index": three.BufferAttribute(faces.reshape(-1).astype(np.uint32), normalized=False)}),
+                "position": attribute((SURFACE_RADIUS * unit).astype(np.float32)),
+                "index": attribute(faces.reshape(-1).astype(np.uint32))}),
             # never drawn (a material that is not visible) but still hit by the pickers' rays: three.js tests only
             # the object's own visibility when it casts a ray, the material's when it draws
             three.MeshBasicMaterial(color="#ffffff", side="BackSide", visible=False))

@@ -59,14 +59,21 @@ def icosphere(subdivisions: int = 1):
 
 _ATTRIBUTE = None
 
+FIRST_VERSION = 1
+"""The ``version`` the browser's copy of a new pythreejs ``BufferAttribute`` starts at: three.js counts 1 when it
+first takes the array. pythreejs's own default is -1, so the browser reported the 1 back as a page opened, one
+message for every attribute of every view (about 130 for the studio's four views, each handled by the kernel,
+each answered with a busy/idle pair). An attribute made with the browser's number has nothing to report."""
+
 
 def attribute(array):
-    """A pythreejs ``BufferAttribute`` of ``array`` whose ``version`` is not echoed back to the browser.
+    """A pythreejs ``BufferAttribute`` of ``array`` that costs no messages the kernel does not need.
 
     Every time the kernel sends a new array, the browser's copy of the attribute counts its ``version`` up and
     reports it to the kernel, and ipywidgets 8 answers each report with an echo of the same number: two
     messages and a busy/idle pair per array per update, for a number the kernel never reads or sets. This
-    attribute (the same model in the browser) is not echoed, so a live update costs fewer messages."""
+    attribute (the same model in the browser) is not echoed, so a live update costs fewer messages; and it
+    starts at :data:`FIRST_VERSION`, so a page that opens sends nothing back for it."""
     global _ATTRIBUTE
     if _ATTRIBUTE is None:
         import pythreejs as three
@@ -76,7 +83,7 @@ def attribute(array):
             version = CInt(-1, allow_none=False).tag(sync=True, echo_update=False)
 
         _ATTRIBUTE = Attribute
-    return _ATTRIBUTE(array, normalized=False)
+    return _ATTRIBUTE(array, normalized=False, version=FIRST_VERSION)
 
 
 def _hex(colour: str) -> np.ndarray:
@@ -106,9 +113,9 @@ class Spheres:
         colours = np.repeat(_hex(color)[None], n * V + 2, axis=0)
         self.geometry = three.BufferGeometry(attributes={
             "position": attribute(self._positions(np.zeros((n, 3)))),
-            "normal": three.BufferAttribute(normals, normalized=False),
-            "color": three.BufferAttribute(colours, normalized=False),
-            "index": three.BufferAttribute(index, normalized=False),
+            "normal": attribute(normals),
+            "color": attribute(colours),
+            "index": attribute(index),
         })
         # vertex colours, as the figure's joints and markers: one shader program for every sphere of a view
         material = three.MeshLambertMaterial(vertexColors="VertexColors", transparent=opacity < 1, opacity=opacity)
@@ -190,8 +197,8 @@ class Bones:
         self.pairs, self.radius, self.sides = self._tubes.pairs, self._tubes.radius, self._tubes.sides
         self.geometry = three.BufferGeometry(attributes={
             "position": attribute(self._buffers(np.zeros((skeleton.n_joints, 3)))),
-            "color": three.BufferAttribute(self._tubes.colours, normalized=False),
-            "index": three.BufferAttribute(self._tubes.faces.reshape(-1).astype(np.uint32), normalized=False),
+            "color": attribute(self._tubes.colours),
+            "index": attribute(self._tubes.faces.reshape(-1).astype(np.uint32)),
         })
         self.mesh = three.Mesh(self.geometry, _bone_material(opacity))
 
@@ -288,8 +295,8 @@ class Figure:
         self._colour_joints()
         old = list(self._shared.values())
         self._shared = {"position": attribute(self._positions.astype(np.float32)),
-                        "normal": three.BufferAttribute(normals, normalized=False),
-                        "color": three.BufferAttribute(self._colours, normalized=False)}
+                        "normal": attribute(normals),
+                        "color": attribute(self._colours)}
         corner = rows["corners"].start  # an empty part draws one degenerate triangle (or line) on a corner
         first = {p: rows[p].start for p in rows}
         indices = {"bones": self._tubes.faces + first["bones"],
@@ -300,7 +307,7 @@ class Figure:
                    "triads": np.arange(6 * R) + first["triads"] if R else np.full(2, corner)}
         kinds = [three.Mesh] * 4 + [three.LineSegments] * 2
         for name, kind, material in zip(indices, kinds, self._materials):
-            index = three.BufferAttribute(np.asarray(indices[name], np.uint32).reshape(-1), normalized=False)
+            index = attribute(np.asarray(indices[name], np.uint32).reshape(-1))
             geometry = three.BufferGeometry(attributes={**self._shared, "index": index})
             mesh = getattr(self, name)
             if mesh is None:
