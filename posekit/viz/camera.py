@@ -9,9 +9,32 @@ view. Units: metres (:mod:`posekit.conventions`).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-__all__ = ["FramedCamera"]
+__all__ = ["FramedCamera", "perspective_matrix", "translation_matrix"]
+
+
+def perspective_matrix(fov: float, aspect: float, near: float, far: float) -> list:
+    """The projection matrix three.js gives a perspective camera (``PerspectiveCamera.updateProjectionMatrix``, zoom
+    1, no view offset), 16 floats in its column-major order, with its arithmetic step for step: a camera model that
+    holds it has nothing to report back when a page opens. ``fov``: vertical field of view, degrees."""
+    top = near * math.tan(math.pi / 180 * 0.5 * fov)
+    height = 2 * top
+    width = aspect * height
+    left = -0.5 * width
+    right, bottom = left + width, top - height
+    x, y = 2 * near / (right - left), 2 * near / (top - bottom)
+    a, b = (right + left) / (right - left), (top + bottom) / (top - bottom)
+    c, d = -(far + near) / (far - near), -2 * far * near / (far - near)
+    return [x, 0, 0, 0, 0, y, 0, 0, a, b, c, -1, 0, 0, d, 0]
+
+
+def translation_matrix(position) -> list:
+    """The matrix three.js composes for an object at ``position`` (3,) that is neither turned nor scaled
+    (column-major)."""
+    return [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, *(float(c) for c in position), 1]
 
 
 class FramedCamera:
@@ -57,7 +80,9 @@ class FramedCamera:
         ``keep_distance``, only further back, never closer)."""
         centre, radius = self._frame(self.pose if poses is None else poses)
         self._offset = centre.copy()
-        self._world.position = [float(-c) for c in centre]
+        with self._world.hold_sync():  # one message, with the matrix the browser computes (it reports none back)
+            self._world.position = [float(-c) for c in centre]
+            self._world.matrix = translation_matrix(self._world.position)
         current = np.asarray(self.camera.position, float) - np.asarray(self.orbit.target, float)
         dist = float(np.linalg.norm(self._camera_position(radius)))
         if keep_distance:

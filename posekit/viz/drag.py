@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .meshes import attribute, icosphere
+from .meshes import attribute, geometry, icosphere
 
 __all__ = ["drag_point", "DragTargets"]
 
@@ -70,7 +70,7 @@ class DragTargets:
 
         unit, faces = icosphere(2)
         self._drag_sphere = three.Mesh(
-            three.BufferGeometry(attributes={
+            geometry(attributes={
                 "position": attribute((SURFACE_RADIUS * unit).astype(np.float32)),
                 "index": attribute(faces.reshape(-1).astype(np.uint32))}),
             # never drawn (a material that is not visible) but still hit by the pickers' rays: three.js tests only

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["icosphere", "Spheres", "Bones", "Figure", "SIDE_COLOURS", "PICK_BOUND", "attribute"]
+__all__ = ["icosphere", "Spheres", "Bones", "Figure", "SIDE_COLOURS", "PICK_BOUND", "attribute", "geometry"]
 
 PICK_BOUND = 100.0
 """Half-size (metres) of a box two unused vertices of every pickable mesh span. three.js tests a mouse ray
@@ -86,6 +86,16 @@ def attribute(array):
     return _ATTRIBUTE(array, normalized=False, version=FIRST_VERSION)
 
 
+def geometry(attributes: dict):
+    """A pythreejs ``BufferGeometry`` of ``attributes`` (name -> :func:`attribute`) with an empty list of morph
+    targets: a three.js mesh made on a geometry without one has no morph weights, where its pythreejs model holds
+    an empty list, so every mesh reported an empty list back to the kernel as a page opened (28 messages for the
+    studio's four views). Nothing is morphed: the list stays empty."""
+    import pythreejs as three
+
+    return three.BufferGeometry(attributes=attributes, morphAttributes={"position": []})
+
+
 def _hex(colour: str) -> np.ndarray:
     colour = colour.lstrip("#")
     return np.array([int(colour[k:k + 2], 16) / 255 for k in (0, 2, 4)], dtype=np.float32)
@@ -111,7 +121,7 @@ class Spheres:
         index = (faces[None] + (np.arange(n) * V)[:, None, None]).reshape(-1).astype(np.uint32)
         normals = np.concatenate([np.tile(self.unit, (n, 1)), np.zeros((2, 3))]).astype(np.float32)
         colours = np.repeat(_hex(color)[None], n * V + 2, axis=0)
-        self.geometry = three.BufferGeometry(attributes={
+        self.geometry = geometry(attributes={
             "position": attribute(self._positions(np.zeros((n, 3)))),
             "normal": attribute(normals),
             "color": attribute(colours),
@@ -195,7 +205,7 @@ class Bones:
 
         self._tubes = _Tubes(skeleton, radius, colour, sides)
         self.pairs, self.radius, self.sides = self._tubes.pairs, self._tubes.radius, self._tubes.sides
-        self.geometry = three.BufferGeometry(attributes={
+        self.geometry = geometry(attributes={
             "position": attribute(self._buffers(np.zeros((skeleton.n_joints, 3)))),
             "color": attribute(self._tubes.colours),
             "index": attribute(self._tubes.faces.reshape(-1).astype(np.uint32)),
@@ -308,12 +318,12 @@ class Figure:
         kinds = [three.Mesh] * 4 + [three.LineSegments] * 2
         for name, kind, material in zip(indices, kinds, self._materials):
             index = attribute(np.asarray(indices[name], np.uint32).reshape(-1))
-            geometry = three.BufferGeometry(attributes={**self._shared, "index": index})
+            shape = geometry(attributes={**self._shared, "index": index})
             mesh = getattr(self, name)
             if mesh is None:
-                setattr(self, name, kind(geometry, material))
+                setattr(self, name, kind(shape, material))
             else:  # the same mesh (what pickers and groups hold), a new geometry; the old one closed
-                previous, mesh.geometry = mesh.geometry, geometry
+                previous, mesh.geometry = mesh.geometry, shape
                 previous.attributes["index"].close()
                 previous.close()
         for a in old:

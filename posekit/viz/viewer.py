@@ -40,7 +40,7 @@ import numpy as np
 
 from ..data.metrics import body_joints
 from ..skeleton import Skeleton
-from .camera import FramedCamera
+from .camera import FramedCamera, perspective_matrix, translation_matrix
 from .drag import DragTargets
 from .meshes import Bones, Figure, Spheres, icosphere
 from .sliders import TargetSliders
@@ -65,6 +65,24 @@ def show_widget(widget, text: str) -> None:
     bundle = widget._repr_mimebundle_()
     bundle["text/plain"] = text
     display(bundle, raw=True)
+
+
+def _sun(target):
+    """The view's directional light (white, 0.75, from above, right and in front, towards ``target``: the group of
+    the scene content, at the world origin), with its shadow camera made here. Without a target and a
+    shadow camera the browser makes both (three.js lights carry them) and opens three new models in the kernel for
+    every view as a page opens; the shadow camera's projection is given as three.js computes it
+    (``Matrix4.makeOrthographic`` of its default box), so the browser has nothing to report. No shadow is drawn."""
+    import pythreejs as three
+
+    left, right, top, bottom, near, far = -5.0, 5.0, 5.0, -5.0, 0.5, 500.0  # three.js' DirectionalLightShadow
+    w, h, p = 1.0 / (right - left), 1.0 / (top - bottom), 1.0 / (far - near)  # the same arithmetic, bit for bit
+    x, y, z = (right + left) * w, (top + bottom) * h, (far + near) * p
+    projection = [2 * w, 0, 0, 0, 0, 2 * h, 0, 0, 0, 0, -2 * p, 0, -x, -y, -z, 1]
+    camera = three.OrthographicCamera(left, right, top, bottom, near, far, projectionMatrix=projection)
+    # matrixWorldNeedsUpdate as three.js leaves it for a light it has placed: nothing to report back either
+    return three.DirectionalLight(color="#ffffff", position=[3, 5, 4], intensity=0.75, target=target,
+                                  shadow=three.DirectionalLightShadow(camera=camera), matrixWorldNeedsUpdate=True)
 
 
 def antialias_default() -> bool:
@@ -153,15 +171,20 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         # where OrbitControls starts) is the middle of the pose.
         centre, radius = self._frame(self.pose)
         self._offset, self._radius = centre.copy(), radius
-        self.camera = three.PerspectiveCamera(position=self._camera_position(radius), fov=self.FOV,
-                                              aspect=self.aspect, near=0.01, far=200)
+        # each matrix as the browser computes it (and the grid's three.js type), so an opening page reports none back
+        at = self._camera_position(radius)
+        self.camera = three.PerspectiveCamera(position=at, fov=self.FOV, aspect=self.aspect, near=0.01, far=200,
+                                              matrix=translation_matrix(at),
+                                              projectionMatrix=perspective_matrix(self.FOV, self.aspect, 0.01, 200))
         content = [f.bones, self._grabbable, f.rays, f.triads, self._ghost_group]
         if floor:
-            content.append(three.GridHelper(size=6, divisions=24, colorCenterLine="#888888", colorGrid="#cccccc"))
-        self._world = three.Group(children=content, position=[float(-c) for c in centre])
+            content.append(three.GridHelper(size=6, divisions=24, colorCenterLine="#888888", colorGrid="#cccccc",
+                                            type="LineSegments"))
+        shift = [float(-c) for c in centre]
+        self._world = three.Group(children=content, position=shift, matrix=translation_matrix(shift))
         self.scene = three.Scene(children=[self._world, self._drag_surface(), self.camera,
                                            three.AmbientLight(color="#ffffff", intensity=0.55),
-                                           three.DirectionalLight(color="#ffffff", position=[3, 5, 4], intensity=0.75)],
+                                           _sun(self._world)],
                                  background=background)
         self.orbit = three.OrbitControls(controlling=self.camera)
         self.picker = three.Picker(controlling=f.joints, event="dblclick")

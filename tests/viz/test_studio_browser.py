@@ -15,8 +15,8 @@ import time
 import numpy as np
 import pytest
 
-from tests.viz.browser_helpers import BACKGROUND, pixels as _pixels, wait_for
-from posekit.bench.studio import (CHROMIUM, choose_solvers, launch_chromium, open_studio, rapid_updates,
+from tests.viz.browser_helpers import BACKGROUND, SENT_LOG, pixels as _pixels, wait_for
+from posekit.bench.studio import (CHROMIUM, blank_tab, choose_solvers, launch_chromium, open_studio, rapid_updates,
                                   serve_voila, update_number)
 
 pytestmark = pytest.mark.browser
@@ -39,7 +39,9 @@ def page(server):
     with sync_playwright() as p:
         browser = launch_chromium(p)
         try:
-            pg = open_studio(browser, server.url)
+            tab = blank_tab(browser)
+            tab.add_init_script(SENT_LOG)
+            pg = open_studio(browser, server.url, page=tab)
             server.note_kernels()
             yield pg
         finally:
@@ -81,6 +83,18 @@ def test_studio_loads_and_every_view_shows_a_skeleton(page):
     assert len(texts) == 4 and all("worst effector" in t and "ms" in t for t in texts), texts
     summary = page.locator(".posekit-summary").inner_text()
     assert all(n in summary for n in ("fabrik", "dls", "protores+dls", "latent-opt+dls")), summary
+
+
+def test_an_opening_page_reports_almost_nothing_back(page):
+    # the views' models hold what the browser computes (buffer versions, matrices, projections, lights' parts), so
+    # the page does not send them back: about 200 updates and 12 new models, each handled by the kernel, before
+    wait_for(lambda: update_number(page) >= 0, 60, "the summary")
+    time.sleep(2)  # what the page sends once the views are drawn
+    sent = page.evaluate("() => window.__posekit_sent")
+    assert not [s for s in sent if s[0] == "open"], sent
+    three = {"version", "matrix", "projectionMatrix", "matrixWorldNeedsUpdate", "morphTargetInfluences", "type"}
+    assert not [s for s in sent if three & set(s)], sent
+    assert len(sent) <= 6, sent  # the three target sliders' values, snapped to their steps by the browser
 
 
 def _joint_list(page):
