@@ -288,6 +288,29 @@ def test_app_studio_is_lesson_06s_studio(tmp_path):
     assert all(r.converged for r in studio.editor.results.values())
 
 
+def test_app_studio_lets_its_data_set_go(tmp_path, monkeypatch):
+    """The app keeps the skeleton and its held-out case, not the data set it read them from (about 50 MB of
+    arrays a studio kernel would otherwise hold for as long as it lives)."""
+    import gc
+    import weakref
+
+    import posekit.data.sources as sources
+    from posekit.viz.studio_app import app_studio
+
+    opened, open_dataset = [], sources.open_dataset
+
+    def tracked(*args, **kwargs):
+        motions = open_dataset(*args, **kwargs)
+        opened.append(weakref.ref(motions))
+        return motions
+
+    monkeypatch.setattr(sources, "open_dataset", tracked)
+    studio, _ = app_studio(solvers="fabrik,dls", export_dir=tmp_path)
+    gc.collect()
+    assert len(opened) == 1 and opened[0]() is None
+    assert studio.editor.first.selected == "Hand_L"
+
+
 def test_app_studio_on_another_skeleton_leaves_out_the_learned_solvers(tmp_path, monkeypatch):
     """Another data set (STUDIO_DATA): the shipped learned models, made for the Bandai skeleton, are left out by
     name with the reason; FABRIK and DLS pose it; unknown names are refused with the registered ones."""
