@@ -71,15 +71,17 @@ lab: setup warm
 	  --LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate $(LAB_ARGS)
 
 # the posing studio alone as a browser app (Voila, notebooks/studio.ipynb; lesson 06 teaches it), one kernel kept
-# preheated for the next visitor (STUDIO_POOL=N keeps N, for a class arriving at once: about 0.26 GB each); Ctrl-C
+# preheated for the next visitor (STUDIO_POOL=N keeps N, for a class arriving at once: about 0.25 GB each); Ctrl-C
 # stops it and its kernels. STUDIO_DATA (a data set or BVH folder), STUDIO_WEIGHTS (your trained models),
 # STUDIO_SOLVERS (2-4 names) choose what it poses; STUDIO_ANTIALIAS=0 draws the views without antialiasing, for
-# browsers without a GPU (software WebGL)
+# browsers without a GPU (software WebGL). The page is Voila's lab page less its CDN stylesheets
+# (posekit/viz/voila): it asks nothing of the internet
 studio: setup warm
 	cd notebooks && POSEKIT_STUDIO_DATA="$(if $(wildcard $(STUDIO_DATA)),$(abspath $(STUDIO_DATA)),$(STUDIO_DATA))" POSEKIT_STUDIO_SOLVERS="$(STUDIO_SOLVERS)" \
 	  $(if $(STUDIO_WEIGHTS),POSEKIT_WEIGHTS_DIR="$(abspath $(STUDIO_WEIGHTS))") \
 	  $(if $(STUDIO_ANTIALIAS),POSEKIT_ANTIALIAS="$(STUDIO_ANTIALIAS)") \
-	  ../$(VENV)/bin/voila studio.ipynb --port=$(or $(STUDIO_PORT),8866) \
+	  JUPYTER_PATH="../posekit/viz/voila$(if $(JUPYTER_PATH),:$(JUPYTER_PATH))" \
+	  ../$(VENV)/bin/voila studio.ipynb --port=$(or $(STUDIO_PORT),8866) --template=posekit \
 	  --preheat_kernel=True --pool_size=$(or $(STUDIO_POOL),1) \
 	  --MappingKernelManager.cull_idle_timeout=600 --MappingKernelManager.cull_interval=60 $(STUDIO_ARGS)
 

@@ -56,6 +56,7 @@ import numpy as np
 
 from ..ik.registry import solver_info
 from ..paths import notebooks_dir
+from ..viz.studio_app import VOILA_PATH, VOILA_TEMPLATE
 from .plugin import arg, register_benchmark
 
 __all__ = ["serve_voila", "launch_chromium", "update_number", "new_tab", "QUIET_CONSOLE", "blank_tab", "open_studio",
@@ -162,13 +163,15 @@ def serve_voila(notebook=NOTEBOOK, folder=None, cull_idle_s: int = 600, startup_
     port = _free_port()
     log_path = folder / "voila.log"
     served = [] if extra else [Path(notebook).name]  # several notebooks: Voila serves the folder
-    cmd = [sys.executable, "-m", "voila", *served, "--no-browser", f"--port={port}",
+    cmd = [sys.executable, "-m", "voila", *served, "--no-browser", f"--port={port}", f"--template={VOILA_TEMPLATE}",
            "--Voila.ip=127.0.0.1", f"--MappingKernelManager.cull_idle_timeout={cull_idle_s}",
            f"--MappingKernelManager.cull_interval={cull_interval_s}", "--VoilaConfiguration.show_tracebacks=True"]
     if preheat > 0:
         cmd += ["--preheat_kernel=True", f"--pool_size={int(preheat)}"]
     log = open(log_path, "w")
-    proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, cwd=folder, env={**os.environ, **(env or {})})
+    paths = os.pathsep.join([str(VOILA_PATH)] + [p for p in [os.environ.get("JUPYTER_PATH")] if p])
+    proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, cwd=folder,
+                            env={**os.environ, "JUPYTER_PATH": paths, **(env or {})})
     base = f"http://127.0.0.1:{port}/"
     server = VoilaServer(proc, base + (f"voila/render/{Path(notebook).name}" if extra else ""), folder, log_path)
     server.base = base

@@ -16,8 +16,16 @@ A learned solver whose weights were made for another skeleton is left out of the
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
-__all__ = ["SOLVERS", "studio_case", "usable_solvers", "app_studio", "refused_note"]
+__all__ = ["SOLVERS", "VOILA_PATH", "VOILA_TEMPLATE", "studio_case", "usable_solvers", "app_studio", "refused_note"]
+
+VOILA_PATH = Path(__file__).parent / "voila"
+"""A Jupyter data folder (for ``JUPYTER_PATH``) holding the studio's Voila page template, :data:`VOILA_TEMPLATE`."""
+VOILA_TEMPLATE = "posekit"
+"""Voila's lab page without the two stylesheets it fetches from a CDN (Font Awesome's, which Voila's own scripts
+already carry): the page asks nothing of the internet, so a room whose network drops such requests does not wait
+for them (a stylesheet in the page's head holds the page back until its request gives up)."""
 
 SOLVERS = ("fabrik", "dls", "protores+dls", "latent-opt+dls")
 """Lesson 06's first four: two classical solvers and the two learned ones with an exact finish."""

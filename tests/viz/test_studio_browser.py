@@ -22,6 +22,8 @@ from posekit.bench.studio import (CHROMIUM, blank_tab, choose_solvers, launch_ch
 pytestmark = pytest.mark.browser
 
 VIEWS = ".posekit-views"
+ASKED_OUTSIDE = []
+"""What the studio's page asked of any server but its own (the page fixture's tab)."""
 
 
 @pytest.fixture(scope="module")
@@ -41,6 +43,7 @@ def page(server):
         try:
             tab = blank_tab(browser)
             tab.add_init_script(SENT_LOG)
+            tab.on("request", lambda r: r.url.startswith((server.base, "data:", "blob:")) or ASKED_OUTSIDE.append(r.url))
             pg = open_studio(browser, server.url, page=tab)
             server.note_kernels()
             yield pg
@@ -85,7 +88,7 @@ def test_studio_loads_and_every_view_shows_a_skeleton(page):
     assert all(n in summary for n in ("fabrik", "dls", "protores+dls", "latent-opt+dls")), summary
 
 
-def test_an_opening_page_reports_almost_nothing_back(page):
+def test_an_opening_page_reports_almost_nothing_back_and_asks_nothing_outside(page):
     # the views' models hold what the browser computes (buffer versions, matrices, projections, lights' parts), so
     # the page does not send them back: about 200 updates and 12 new models, each handled by the kernel, before
     wait_for(lambda: update_number(page) >= 0, 60, "the summary")
@@ -95,6 +98,8 @@ def test_an_opening_page_reports_almost_nothing_back(page):
     three = {"version", "matrix", "projectionMatrix", "matrixWorldNeedsUpdate", "morphTargetInfluences", "type"}
     assert not [s for s in sent if three & set(s)], sent
     assert len(sent) <= 6, sent  # the three target sliders' values, snapped to their steps by the browser
+    # and it asks nothing of the internet (Voila's own page fetched two stylesheets from a CDN)
+    assert ASKED_OUTSIDE == []
 
 
 def _joint_list(page):
