@@ -10,7 +10,9 @@ poses a user's own skeleton with the models they trained (README, "Your own moca
 * ``POSEKIT_STUDIO_SOLVERS`` — 2-4 registered solver names shown first (default :data:`SOLVERS`);
 * ``POSEKIT_WEIGHTS_DIR`` — a folder of the user's checkpoints (:func:`posekit.paths.weights_path`).
 
-A learned solver whose weights were made for another skeleton is left out of the choice, with its reason.
+A learned solver whose weights were made for another skeleton is left out of the choice, with its reason. The
+data set is let go once the app's case is built and its memory handed back, so a kernel of the app holds the
+studio, not the data; the page Voila serves is :data:`VOILA_TEMPLATE`, which asks nothing of the internet.
 """
 
 from __future__ import annotations
