@@ -56,6 +56,7 @@ import numpy as np
 
 from ..ik.registry import solver_info
 from ..paths import notebooks_dir
+from ..warm import warm
 from ..viz.studio_app import VOILA_PATH, VOILA_TEMPLATE
 from .plugin import arg, register_benchmark
 
@@ -420,6 +421,7 @@ def class_sessions(sessions: int, updates: int = 100, solvers=None, cull_idle_s:
     if sessions < 1 or updates < 1:
         raise ValueError(f"--sessions and --updates must be at least 1, got {sessions} and {updates}")
     rows = []
+    warm()  # as in run(): no kernel of the class compiles
     with serve_voila(cull_idle_s=cull_idle_s, cull_interval_s=cull_interval_s, env=_views(antialias)) as server, \
             sync_playwright() as p:
         browser = launch_chromium(p)
@@ -513,6 +515,7 @@ def run(updates: int = 1000, configs=("fabrik,dls", "protores,neural"), progress
                              + (f" (unknown: {', '.join(bad)})" if bad else ""))
     if first_views < 1:
         raise ValueError(f"--first-views: expected at least 1 page, got {first_views}")
+    warm()  # every solver's kernels in the cache before a page is timed (at once when they are there already)
     rows = []
     floor_dir = Path(tempfile.mkdtemp(prefix="posekit-floor-"))
     try:
