@@ -56,8 +56,8 @@ import numpy as np
 
 from ..ik.registry import solver_info
 from ..paths import notebooks_dir
-from ..warm import warm
 from ..viz.studio_app import VOILA_PATH, VOILA_TEMPLATE
+from ..warm import warm
 from .plugin import arg, register_benchmark
 
 __all__ = ["serve_voila", "launch_chromium", "update_number", "new_tab", "QUIET_CONSOLE", "blank_tab", "open_studio",

@@ -7,8 +7,9 @@ scene: playback and live solving stay smooth. :class:`Figure` goes further: its 
 its own picking and visibility) indexing **one** position array, so a solved pose with its targets costs one
 message to the browser (and one acknowledgement back), not one per part. Bones are flat-shaded (three.js derives
 each face's normal on the graphics card), so a moved pose sends no normals; every other part is coloured by vertex
-colours, so a view compiles three shader programs (bones, spheres, lines) whatever it shows. Units: metres;
-axes: :mod:`posekit.conventions`.
+colours, so a view compiles three shader programs (bones, spheres, lines) whatever it shows. Every attribute and
+geometry is made as the browser's three.js would make it (:func:`attribute`, :func:`geometry`), so a page that opens
+reports nothing back to the kernel for them. Units: metres; axes: :mod:`posekit.conventions`.
 """
 
 from __future__ import annotations

@@ -1,9 +1,10 @@
 """The posing studio as a browser app: notebook 06 served by Voila, driven in a real headless Chromium.
 
-It loads and every view draws a skeleton; dragging a target in 3D re-solves every view; a rotation and a
-look-at effector change the pose; the BVH export downloads a file posekit's reader parses; 1,000 rapid
-target updates all arrive, the kernel survives and its memory does not grow (the latency is printed, not
-asserted: ``posekit bench studio`` measures it); and Voila's kernel is gone when the test ends.
+It loads and every view draws a skeleton; as it opens the page sends its kernel next to nothing and asks nothing of
+any other server; dragging a target in 3D re-solves every view; a rotation and a look-at effector change the pose;
+the BVH export downloads a file posekit's reader parses; 1,000 rapid target updates all arrive, the kernel survives
+and its memory does not grow (the latency is printed, not asserted: ``posekit bench studio`` measures it); and
+Voila's kernel is gone when the test ends.
 
 Needs Debian's ``chromium`` (``make test`` installs it) and Playwright's Python package.
 """
