@@ -43,7 +43,8 @@ SENT_LOG = r"""(() => {
     // the kernel websocket protocol v1: a count, offsets, then channel, header, parent, metadata, content
     const view = new DataView(data), n = Number(view.getBigUint64(0, true)), offsets = [];
     for (let i = 1; i <= n; i++) offsets.push(Number(view.getBigUint64(8 * i, true)));
-    const part = (i) => new TextDecoder().decode(new Uint8Array(data, offsets[i], (offsets[i + 1] || data.byteLength) - offsets[i]));
+    const part = (i) => new TextDecoder().decode(
+      new Uint8Array(data, offsets[i], (offsets[i + 1] || data.byteLength) - offsets[i]));
     return {header: JSON.parse(part(1)), content: JSON.parse(part(4))};
   };
   const Socket = window.WebSocket;

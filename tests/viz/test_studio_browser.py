@@ -44,7 +44,8 @@ def page(server):
         try:
             tab = blank_tab(browser)
             tab.add_init_script(SENT_LOG)
-            tab.on("request", lambda r: r.url.startswith((server.base, "data:", "blob:")) or ASKED_OUTSIDE.append(r.url))
+            own = (server.base, "data:", "blob:")
+            tab.on("request", lambda r: r.url.startswith(own) or ASKED_OUTSIDE.append(r.url))
             pg = open_studio(browser, server.url, page=tab)
             server.note_kernels()
             yield pg
