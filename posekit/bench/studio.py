@@ -170,7 +170,7 @@ def serve_voila(notebook=NOTEBOOK, folder=None, cull_idle_s: int = 600, startup_
     if preheat > 0:
         cmd += ["--preheat_kernel=True", f"--pool_size={int(preheat)}"]
     log = open(log_path, "w")
-    paths = os.pathsep.join([str(VOILA_PATH)] + [p for p in [os.environ.get("JUPYTER_PATH")] if p])
+    paths = os.pathsep.join(filter(None, [str(VOILA_PATH), os.environ.get("JUPYTER_PATH")]))
     proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, cwd=folder,
                             env={**os.environ, "JUPYTER_PATH": paths, **(env or {})})
     base = f"http://127.0.0.1:{port}/"

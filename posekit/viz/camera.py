@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-__all__ = ["FramedCamera", "perspective_matrix", "translation_matrix"]
+__all__ = ["FramedCamera", "orthographic_matrix", "perspective_matrix", "translation_matrix"]
 
 
 def perspective_matrix(fov: float, aspect: float, near: float, far: float) -> list:
@@ -29,6 +29,14 @@ def perspective_matrix(fov: float, aspect: float, near: float, far: float) -> li
     a, b = (right + left) / (right - left), (top + bottom) / (top - bottom)
     c, d = -(far + near) / (far - near), -2 * far * near / (far - near)
     return [x, 0, 0, 0, 0, y, 0, 0, a, b, c, -1, 0, 0, d, 0]
+
+
+def orthographic_matrix(left: float, right: float, top: float, bottom: float, near: float, far: float) -> list:
+    """The projection matrix three.js gives an orthographic camera of this box (``Matrix4.makeOrthographic``, zoom
+    1), 16 floats in its column-major order, with its arithmetic step for step (as :func:`perspective_matrix`)."""
+    w, h, p = 1.0 / (right - left), 1.0 / (top - bottom), 1.0 / (far - near)
+    x, y, z = (right + left) * w, (top + bottom) * h, (far + near) * p
+    return [2 * w, 0, 0, 0, 0, 2 * h, 0, 0, 0, 0, -2 * p, 0, -x, -y, -z, 1]
 
 
 def translation_matrix(position) -> list:

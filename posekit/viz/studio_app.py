@@ -114,12 +114,11 @@ def _return_freed_memory() -> None:
     none). glibc keeps freed heap pages for later allocations, so a kernel that has read a data set and let it go
     still counts it in its resident memory: about 35 MB of the studio's, measured here."""
     import ctypes
-    import ctypes.util
     import gc
 
     gc.collect()
     try:
-        ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6").malloc_trim(0)
+        ctypes.CDLL(None).malloc_trim(0)  # the process's own symbols: glibc's, where there is glibc
     except (OSError, AttributeError):  # not glibc: its allocator decides
         pass
 

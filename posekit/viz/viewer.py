@@ -40,7 +40,7 @@ import numpy as np
 
 from ..data.metrics import body_joints
 from ..skeleton import Skeleton
-from .camera import FramedCamera, perspective_matrix, translation_matrix
+from .camera import FramedCamera, orthographic_matrix, perspective_matrix, translation_matrix
 from .drag import DragTargets
 from .meshes import Bones, Figure, Spheres, icosphere
 from .sliders import TargetSliders
@@ -69,17 +69,15 @@ def show_widget(widget, text: str) -> None:
 
 def _sun(target):
     """The view's directional light (white, 0.75, from above, right and in front, towards ``target``: the group of
-    the scene content, at the world origin), with its shadow camera made here. Without a target and a
-    shadow camera the browser makes both (three.js lights carry them) and opens three new models in the kernel for
-    every view as a page opens; the shadow camera's projection is given as three.js computes it
-    (``Matrix4.makeOrthographic`` of its default box), so the browser has nothing to report. No shadow is drawn."""
+    the scene content, at the world origin), with its shadow camera made here. Without a target and a shadow camera
+    the browser makes both (three.js lights carry them) and opens three new models in the kernel for every view as a
+    page opens; the shadow camera's projection is given as three.js computes it
+    (:func:`~posekit.viz.camera.orthographic_matrix` of its default box), so the browser has nothing to report. No
+    shadow is drawn."""
     import pythreejs as three
 
-    left, right, top, bottom, near, far = -5.0, 5.0, 5.0, -5.0, 0.5, 500.0  # three.js' DirectionalLightShadow
-    w, h, p = 1.0 / (right - left), 1.0 / (top - bottom), 1.0 / (far - near)  # the same arithmetic, bit for bit
-    x, y, z = (right + left) * w, (top + bottom) * h, (far + near) * p
-    projection = [2 * w, 0, 0, 0, 0, 2 * h, 0, 0, 0, 0, -2 * p, 0, -x, -y, -z, 1]
-    camera = three.OrthographicCamera(left, right, top, bottom, near, far, projectionMatrix=projection)
+    box = (-5.0, 5.0, 5.0, -5.0, 0.5, 500.0)  # three.js' DirectionalLightShadow: left, right, top, bottom, near, far
+    camera = three.OrthographicCamera(*box, projectionMatrix=orthographic_matrix(*box))
     # matrixWorldNeedsUpdate as three.js leaves it for a light it has placed: nothing to report back either
     return three.DirectionalLight(color="#ffffff", position=[3, 5, 4], intensity=0.75, target=target,
                                   shadow=three.DirectionalLightShadow(camera=camera), matrixWorldNeedsUpdate=True)
