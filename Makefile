@@ -66,9 +66,13 @@ course: setup course-assets
 solutions: setup course-assets
 	$(VENV)/bin/posekit exercises solutions $(or $(LESSON),all) --html --out build/instructor
 
+# the kernel's websocket sends each message at once, not after Nagle's wait (posekit/viz/websocket.py): a widget
+# update reaches the browser about 30 ms sooner
+NODELAY := kernel_websocket_connection_class=posekit.viz.websocket.NoDelayConnection
+
 lab: setup warm
 	$(VENV)/bin/jupyter lab notebooks/ $(ROOT_FLAG) --LabApp.news_url= \
-	  --LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate $(LAB_ARGS)
+	  --LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate $(NODELAY:%=--ServerApp.%) $(LAB_ARGS)
 
 # the posing studio alone as a browser app (Voila, notebooks/studio.ipynb; lesson 06 teaches it), one kernel kept
 # preheated for the next visitor (STUDIO_POOL=N keeps N, for a class arriving at once: about 0.25 GB each); Ctrl-C
@@ -83,7 +87,8 @@ studio: setup warm
 	  JUPYTER_PATH="../posekit/viz/voila$(if $(JUPYTER_PATH),:$(JUPYTER_PATH))" \
 	  ../$(VENV)/bin/voila studio.ipynb --port=$(or $(STUDIO_PORT),8866) --template=posekit \
 	  --preheat_kernel=True --pool_size=$(or $(STUDIO_POOL),1) \
-	  --MappingKernelManager.cull_idle_timeout=600 --MappingKernelManager.cull_interval=60 $(STUDIO_ARGS)
+	  --MappingKernelManager.cull_idle_timeout=600 --MappingKernelManager.cull_interval=60 $(NODELAY:%=--Voila.%) \
+	  $(STUDIO_ARGS)
 
 # both cores: tests grouped by module, each notebook on one worker, the browser tests together
 # (tests/conftest.py); PYTEST_WORKERS=0 runs everything in one process

@@ -57,6 +57,7 @@ import numpy as np
 from ..ik.registry import solver_info
 from ..paths import notebooks_dir
 from ..viz.studio_app import VOILA_PATH, VOILA_TEMPLATE
+from ..viz.websocket import server_flags
 from ..warm import warm
 from .plugin import arg, register_benchmark
 
@@ -167,6 +168,7 @@ def serve_voila(notebook=NOTEBOOK, folder=None, cull_idle_s: int = 600, startup_
     cmd = [sys.executable, "-m", "voila", *served, "--no-browser", f"--port={port}", f"--template={VOILA_TEMPLATE}",
            "--Voila.ip=127.0.0.1", f"--MappingKernelManager.cull_idle_timeout={cull_idle_s}",
            f"--MappingKernelManager.cull_interval={cull_interval_s}", "--VoilaConfiguration.show_tracebacks=True"]
+    cmd += server_flags("voila")  # each message to the page leaves at once (posekit.viz.websocket), as make studio
     if preheat > 0:
         cmd += ["--preheat_kernel=True", f"--pool_size={int(preheat)}"]
     log = open(log_path, "w")

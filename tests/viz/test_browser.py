@@ -23,6 +23,7 @@ import numpy as np
 import pytest
 
 from posekit.bench.studio import QUIET_CONSOLE
+from posekit.viz.websocket import server_flags
 from tests.viz.browser_helpers import foreground as _foreground, pixels as _pixels, wait_for as _wait_for
 
 pytestmark = pytest.mark.browser
@@ -93,7 +94,7 @@ def lab(tmp_path_factory):
     cmd = [sys.executable, "-m", "jupyter", "lab", "--no-browser", f"--port={port}", "--ip=127.0.0.1",
            f"--ServerApp.token={token}", f"--ServerApp.root_dir={work}", "--ServerApp.open_browser=False",
            "--LabApp.news_url=", "--LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate",
-           f"--LabApp.workspaces_dir={work / 'workspaces'}"]
+           f"--LabApp.workspaces_dir={work / 'workspaces'}", *server_flags("lab")]  # as make lab
     if hasattr(os, "geteuid") and os.geteuid() == 0:
         cmd.append("--allow-root")
     log = open(work / "lab.log", "w")
@@ -233,6 +234,28 @@ def _drag(page, handle, dx):
     page.mouse.down()
     page.mouse.move(box["x"] + box["width"] / 2 + dx, box["y"] + box["height"] / 2, steps=10)
     page.mouse.up()
+
+
+def test_lab_sends_a_kernels_messages_without_nagles_delay(lab):
+    # make lab's setting (posekit.viz.websocket): the socket of a kernel's websocket has TCP_NODELAY, read back from
+    # the socket by the server as the websocket connects
+    from tornado.ioloop import IOLoop
+    from tornado.websocket import websocket_connect
+
+    url, token, work = lab
+    ask = urllib.request.Request(f"{url}/api/kernels?token={token}", data=b"{}", method="POST")
+    kernel = json.loads(urllib.request.urlopen(ask, timeout=60).read())["id"]
+    try:
+        async def connect():
+            ws = await websocket_connect(f"{url.replace('http', 'ws')}/api/kernels/{kernel}/channels?token={token}")
+            ws.close()
+
+        IOLoop().run_sync(connect, timeout=60)
+        _wait_for(lambda: f"kernel {kernel}: websocket TCP_NODELAY=1" in (work / "lab.log").read_text(), 30,
+                  "the server's note that the websocket sends without delay")
+    finally:
+        urllib.request.urlopen(urllib.request.Request(f"{url}/api/kernels/{kernel}?token={token}", method="DELETE"),
+                               timeout=60)
 
 
 def test_viewer_renders_and_slider_moves_joint(lab, chromium):
