@@ -2,8 +2,9 @@
 
 Introduced in ``notebooks/06_posing_studio.ipynb``. One run:
 
-1. serves a copy of the notebook with **Voila** (in a temporary folder, so exports never touch the
-   repository; idle kernels are culled) and opens it in headless **Chromium** through Playwright
+1. serves a copy of the notebook with **Voila** as ``make studio`` does (its page template, and the kernel's
+   websocket without Nagle's delay: :mod:`posekit.viz.websocket`), in a temporary folder so exports never touch
+   the repository, idle kernels culled; and opens it in headless **Chromium** through Playwright
    (Debian's ``/usr/bin/chromium``, or ``$POSEKIT_CHROMIUM``; Playwright cannot download a browser here), which
    draws WebGL in software: the views are served without antialiasing unless ``--antialias``
    (:func:`posekit.viz.viewer.antialias_default`), and each page silences ``console.debug``

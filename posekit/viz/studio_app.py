@@ -27,7 +27,9 @@ VOILA_PATH = Path(__file__).parent / "voila"
 VOILA_TEMPLATE = "posekit"
 """Voila's lab page without the two stylesheets it fetches from a CDN (Font Awesome's, which Voila's own scripts
 already carry): the page asks nothing of the internet, so a room whose network drops such requests does not wait
-for them (a stylesheet in the page's head holds the page back until its request gives up)."""
+for them (a stylesheet in the page's head holds the page back until its request gives up). Nor does it forward
+every console call to ``window.top`` (for JupyterLab's Voila preview): on its own page that posted each of
+pythreejs's debug lines, about 50 per view per update, to the page itself."""
 
 SOLVERS = ("fabrik", "dls", "protores+dls", "latent-opt+dls")
 """Lesson 06's first four: two classical solvers and the two learned ones with an exact finish."""
