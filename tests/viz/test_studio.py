@@ -353,3 +353,23 @@ def test_a_move_reaches_the_browser_as_every_views_pose_then_the_update_counter(
     for name, a in arrays.items():
         assert sum(s is a for s in widgets) == 1, f"{name}: expected one position array per move"
     assert first.status in widgets and widgets.index(first.status) < len(widgets) - 1
+
+
+def test_make_lab_and_make_studio_pass_the_websocket_setting():
+    # the Makefile names the connection class itself (make cannot import it): the commands it would run must carry
+    # exactly the flags posekit.viz.websocket gives, for JupyterLab and for Voila
+    import shutil
+    import subprocess
+    from pathlib import Path
+
+    from posekit.viz.websocket import server_flags
+
+    if shutil.which("make") is None:
+        pytest.skip("make is not installed")
+    root = Path(__file__).resolve().parents[2]
+    lines = subprocess.run(["make", "-n", "lab", "studio"], cwd=root, capture_output=True, text=True,
+                           check=True).stdout.replace("\\\n", " ").splitlines()
+    lab = [line for line in lines if "jupyter lab notebooks/" in line]
+    studio = [line for line in lines if "voila studio.ipynb" in line]
+    assert len(lab) == 1 and server_flags("lab")[0] in lab[0].split(), lab
+    assert len(studio) == 1 and server_flags("voila")[0] in studio[0].split(), studio
