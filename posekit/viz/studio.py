@@ -109,7 +109,7 @@ class PosingStudio(StudioExport, StudioTimeline):
         self.undo_button.on_click(lambda _: self.undo())
         self.redo_button.on_click(lambda _: self.redo())
         self.setup_path = w.Text(value=str(self.export_dir / "setup.json"), description="setup file",
-                                 layout=w.Layout(width="380px"))
+                                 layout=w.Layout(width="520px"))  # a session folder and its file name
         save = w.Button(description="save setup")
         save.on_click(lambda _: self._safely(lambda: self.save(self.setup_path.value)))
         load = w.Button(description="load setup")

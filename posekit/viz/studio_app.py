@@ -10,7 +10,9 @@ poses a user's own skeleton with the models they trained (README, "Your own moca
 * ``POSEKIT_STUDIO_SOLVERS`` — 2-4 registered solver names shown first (default :data:`SOLVERS`);
 * ``POSEKIT_WEIGHTS_DIR`` — a folder of the user's checkpoints (:func:`posekit.paths.weights_path`).
 
-A learned solver whose weights were made for another skeleton is left out of the choice, with its reason. The
+A learned solver whose weights were made for another skeleton is left out of the choice, with its reason. Each
+page writes its files (setups, uploads, exports) into a folder of its own (:func:`session_folder`), so the students
+of a class served by one ``make studio`` never read or overwrite each other's. The
 data set is let go once the app's case is built and its memory handed back, so a kernel of the app holds the
 studio, not the data; the page Voila serves is :data:`VOILA_TEMPLATE`, which asks nothing of the internet.
 """
@@ -18,9 +20,12 @@ studio, not the data; the page Voila serves is :data:`VOILA_TEMPLATE`, which ask
 from __future__ import annotations
 
 import os
+import secrets
+import time
 from pathlib import Path
 
-__all__ = ["SOLVERS", "VOILA_PATH", "VOILA_TEMPLATE", "studio_case", "usable_solvers", "app_studio", "refused_note"]
+__all__ = ["SOLVERS", "VOILA_PATH", "VOILA_TEMPLATE", "EXPORTS", "studio_case", "usable_solvers", "session_folder",
+           "app_studio", "refused_note"]
 
 VOILA_PATH = Path(__file__).parent / "voila"
 """A Jupyter data folder (for ``JUPYTER_PATH``) holding the studio's Voila page template, :data:`VOILA_TEMPLATE`."""
@@ -33,6 +38,19 @@ pythreejs's debug lines, about 50 per view per update, to the page itself."""
 
 SOLVERS = ("fabrik", "dls", "protores+dls", "latent-opt+dls")
 """Lesson 06's first four: two classical solvers and the two learned ones with an exact finish."""
+
+EXPORTS = "studio_exports"
+"""Where the app's pages write, relative to the notebook's folder: one folder per page, :func:`session_folder`."""
+
+
+def session_folder(root=EXPORTS) -> Path:
+    """The folder one page of the app writes into: ``root/session-<date>-<time>-<6 hex digits>``, named by the
+    moment its kernel built the studio and a random part (two pages built in the same second never share one).
+
+    Every page Voila serves runs its own kernel in the same working folder. With one folder for all, a student's
+    *save* overwrote another's ``setup.json`` and *load* read whoever saved last, and an upload replaced any file
+    of the same name, a broken one included. Nothing is created until the page writes a file."""
+    return Path(root) / f"session-{time.strftime('%Y%m%d-%H%M%S')}-{secrets.token_hex(3)}"
 
 
 def studio_case(motions, case: int = 3, cases: int = 20, seed: int = 0):
@@ -72,11 +90,12 @@ def usable_solvers(skeleton, data: str, names=None):
     return usable, refused
 
 
-def app_studio(data: str | None = None, solvers=None, export_dir="studio_exports"):
+def app_studio(data: str | None = None, solvers=None, export_dir=None):
     """The studio ``make studio`` shows: :func:`studio_case` of ``data`` (default ``$POSEKIT_STUDIO_DATA`` or the
     Bandai mini set), the first 2-4 usable of ``solvers`` (default ``$POSEKIT_STUDIO_SOLVERS`` or
     :data:`SOLVERS`; FABRIK and DLS when fewer than two are usable), the target pose as a ghost, the left hand
-    selected. Returns the :class:`~posekit.viz.studio.PosingStudio` and the solvers left out, {name: reason}."""
+    selected; its files go to ``export_dir`` (default a new :func:`session_folder`). Returns the
+    :class:`~posekit.viz.studio.PosingStudio` and the solvers left out, {name: reason}."""
     from .studio import PosingStudio
 
     data = data or os.environ.get("POSEKIT_STUDIO_DATA") or "bandai-mini"
@@ -94,7 +113,7 @@ def app_studio(data: str | None = None, solvers=None, export_dir="studio_exports
     if len(first) < 2:
         first = ["fabrik", "dls"]
     studio = PosingStudio(skeleton, start, first, effectors, available=available,
-                          tolerance_of=tolerance_of, export_dir=export_dir)
+                          tolerance_of=tolerance_of, export_dir=session_folder() if export_dir is None else export_dir)
     for v in studio.editor.viewers.values():
         v.set_ghost(goal)
     studio.editor.first.select(skeleton.names[skeleton.index(effectors[0].joint)])

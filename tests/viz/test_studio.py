@@ -4,6 +4,7 @@ and in-betweens, BVH export of every kind of pose, setup files, undo/redo and ba
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -288,6 +289,33 @@ def test_app_studio_is_lesson_06s_studio(tmp_path):
     assert all(r.converged for r in studio.editor.results.values())
 
 
+def test_each_page_of_the_app_writes_into_a_folder_of_its_own(tmp_path, monkeypatch):
+    """make studio gives every student a kernel of their own in one working folder: each page's setups, uploads
+    and exports go to a folder of its own, so one student's save, or broken upload of a file of the same name,
+    never changes what another loads or wrote."""
+    from posekit.viz.studio_app import EXPORTS, app_studio
+
+    monkeypatch.chdir(tmp_path)
+    a, _ = app_studio(solvers="fabrik,dls")
+    b, _ = app_studio(solvers="fabrik,dls")
+    assert a.export_dir != b.export_dir and a.export_dir.parent == b.export_dir.parent == Path(EXPORTS)
+    assert not (tmp_path / EXPORTS).exists()  # nothing is made before a page writes
+    rows = len(a.editor.rows)
+    a.save(a.setup_path.value)  # each saves to the setup file its page offers
+    b.editor.remove(rows - 1)
+    b.save(b.setup_path.value)
+    a.load(a.setup_path.value)
+    assert len(a.editor.rows) == rows and len(b.editor.rows) == rows - 1
+    # a uploads a start pose; b uploads a broken file of the same name
+    write_poses_bvh(tmp_path / "start.bvh", a.skeleton, [a.start], a.start)
+    good = (tmp_path / "start.bvh").read_bytes()
+    a._on_upload({"new": ({"name": "start.bvh", "content": memoryview(good)},)})
+    b._on_upload({"new": ({"name": "start.bvh", "content": memoryview(b"HIERARCHY\nROOT Hips\n{\n")},)})
+    assert "start.bvh:" in b.message.value and "start.bvh:" not in a.message.value
+    assert (a.export_dir / "start.bvh").read_bytes() == good
+    assert sorted(p.name for p in (tmp_path / EXPORTS).iterdir()) == sorted([a.export_dir.name, b.export_dir.name])
+
+
 def test_app_studio_lets_its_data_set_go_before_it_hands_memory_back(tmp_path, monkeypatch):
     """The app keeps the skeleton and its held-out case, not the data set it read them from, and the data set is
     gone by the time the app hands freed memory back to the system (else a studio kernel counts it, about 35 MB,
@@ -360,7 +388,6 @@ def test_make_lab_and_make_studio_pass_the_websocket_setting():
     # exactly the flags posekit.viz.websocket gives, for JupyterLab and for Voila
     import shutil
     import subprocess
-    from pathlib import Path
 
     from posekit.viz.websocket import server_flags
 
