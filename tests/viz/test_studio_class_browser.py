@@ -1,5 +1,5 @@
-"""posekit bench studio's own servers in a real browser: a class of sessions against one server, and the floor
-page served beside the studio. Each test starts its own Voila server and Playwright (a module of its own: two
+"""posekit bench studio's own servers in a real browser: a class of sessions against one server, a page closed in
+the middle of a drag, and the floor page served beside the studio. Each test starts its own Voila server and Playwright (a module of its own: two
 sync Playwright instances cannot run in one thread at once, so these never overlap test_studio_browser's)."""
 
 from __future__ import annotations
@@ -56,3 +56,58 @@ def test_the_first_view_is_timed_in_the_page_from_a_preheated_kernel():
     assert len(views["page_s"]) == len(views["wall_s"]) == 2
     for page_s, wall_s in zip(views["page_s"], views["wall_s"]):
         assert 0 < page_s <= wall_s + 0.05 and wall_s < 60, views
+
+
+def test_a_page_closed_mid_drag_leaves_no_kernel_and_another_session_goes_on(tmp_path):
+    """Bad input: a student closes the tab in the middle of a 3D drag (the mouse still pressed, the drag's updates
+    in flight). The cull frees that page's kernel; another student's session on the same server goes on answering."""
+    import numpy as np
+    import psutil
+    from playwright.sync_api import sync_playwright
+
+    from posekit.bench.studio import launch_chromium, open_studio, rapid_updates, serve_voila, update_number
+    from tests.viz.browser_helpers import pixels, wait_for
+
+    def gone(kernel):
+        try:
+            return not kernel.is_running() or kernel.status() == psutil.STATUS_ZOMBIE
+        except psutil.NoSuchProcess:
+            return True
+
+    with serve_voila(folder=tmp_path / "served", cull_idle_s=5, cull_interval_s=1) as server, sync_playwright() as p:
+        browser = launch_chromium(p)
+        try:
+            a = open_studio(browser, server.url)
+            kernel_a = server.note_kernels()[0]
+            b = open_studio(browser, server.url)
+            kernels = server.note_kernels()
+            assert len(kernels) == 2
+            canvas = a.locator(".posekit-views canvas").first
+            canvas.scroll_into_view_if_needed()
+            img = pixels(canvas)
+            ys, xs = np.nonzero((img[..., 0] > 180) & (img[..., 1] > 120) & (img[..., 1] < 215) & (img[..., 2] < 90))
+            assert len(xs) > 3, "the selected joint's yellow marker is not on the canvas"
+            toggle = a.locator(".posekit-views").get_by_role("button", name="drag in 3D")
+            toggle.click()
+            wait_for(lambda: "mod-active" in (toggle.get_attribute("class") or ""), 10, "the drag-in-3D switch")
+            a.wait_for_timeout(2000)  # the kernel turns orbiting off in the page in reply to the switch
+            box = canvas.bounding_box()
+            x, y = box["x"] + float(np.median(xs)), box["y"] + float(np.median(ys))
+            n0 = update_number(a)
+            a.mouse.move(x, y)
+            a.mouse.down()
+            for k in range(1, 11):
+                a.mouse.move(x, y - 4 * k)
+            wait_for(lambda: update_number(a) > n0, 30, "a solve from the drag", every=0.2)
+            for k in range(11, 31):  # more of the drag in flight as the tab goes
+                a.mouse.move(x, y - 4 * k)
+            a.close()
+            assert rapid_updates(b, 20)["updates"] == 20  # the other student goes on meanwhile
+            wait_for(lambda: gone(kernel_a), 60, "the closed page's kernel to be culled")
+            other = next(k for k in kernels if k.pid != kernel_a.pid)
+            assert not gone(other)  # a connected page's kernel is never culled
+            n1 = update_number(b)
+            b.keyboard.press("ArrowRight")
+            wait_for(lambda: update_number(b) > n1, 30, "an update after the other page's kernel went", every=0.2)
+        finally:
+            browser.close()
