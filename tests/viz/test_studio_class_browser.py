@@ -1,6 +1,7 @@
 """posekit bench studio's own servers in a real browser: a class of sessions against one server, a page closed in
-the middle of a drag, and the floor page served beside the studio. Each test starts its own Voila server and Playwright (a module of its own: two
-sync Playwright instances cannot run in one thread at once, so these never overlap test_studio_browser's)."""
+the middle of a drag, and the floor page served beside the studio. Each test starts its own Voila server and
+Playwright (a module of its own: two sync Playwright instances cannot run in one thread at once, so these never
+overlap test_studio_browser's)."""
 
 from __future__ import annotations
 
