@@ -65,6 +65,11 @@ class PosingStudio(StudioExport, StudioTimeline):
     tolerance_of : callable, optional
         Passed to :class:`EffectorEditor` (slider value -> tolerance).
     export_dir : str or Path
+    own_folder : bool
+        The page's files stay in ``export_dir`` (the app a class shares, :func:`~posekit.viz.studio_app.app_studio`):
+        the *setup file* box takes a file name there, and a path that leaves the folder is refused with a message, so
+        a page neither reads nor writes any other file of the server. Default ``False``: any path (a notebook's own
+        kernel).
     width, height : int
         Each view's canvas, pixels (default width: the views share about 1,250 px, 300-560 px each).
 
@@ -82,14 +87,15 @@ class PosingStudio(StudioExport, StudioTimeline):
     """
 
     def __init__(self, skeleton, start: Pose, solvers=("fabrik", "dls"), effectors=(), available=None,
-                 tolerance_of=None, export_dir="studio_exports", width: int | None = None, height: int = 360):
+                 tolerance_of=None, export_dir="studio_exports", own_folder: bool = False, width: int | None = None,
+                 height: int = 360):
         import ipywidgets as w
 
         if start.local_rot is None:
             raise ValueError("the studio's start pose needs rotations (Pose.from_rotations)")
         self.skeleton, self.start, self.tolerance_of = skeleton, start, tolerance_of
         self.available = list(available or solver_names())
-        self.export_dir = Path(export_dir)
+        self.export_dir, self.own_folder = Path(export_dir), bool(own_folder)
         self.size = (width, height)
         self.keys, self.frames, self.timeline_viewer = [], [], None
         self._restoring, self._last_move = False, (None, -1e9)
@@ -108,12 +114,12 @@ class PosingStudio(StudioExport, StudioTimeline):
         self.redo_button = w.Button(description="redo", icon="repeat", disabled=True, layout=w.Layout(width="90px"))
         self.undo_button.on_click(lambda _: self.undo())
         self.redo_button.on_click(lambda _: self.redo())
-        self.setup_path = w.Text(value=str(self.export_dir / "setup.json"), description="setup file",
-                                 layout=w.Layout(width="520px"))  # a session folder and its file name
-        save = w.Button(description="save setup")
-        save.on_click(lambda _: self._safely(lambda: self.save(self.setup_path.value)))
-        load = w.Button(description="load setup")
-        load.on_click(lambda _: self._safely(lambda: self.load(self.setup_path.value)))
+        self.setup_path = w.Text(value="setup.json" if self.own_folder else str(self.export_dir / "setup.json"),
+                                 description="setup file", layout=w.Layout(width="380px"))
+        self.save_button = w.Button(description="save setup")
+        self.save_button.on_click(lambda _: self._safely(lambda: self.save(self.setup_file())))
+        self.load_button = w.Button(description="load setup")
+        self.load_button.on_click(lambda _: self._safely(lambda: self.load(self.setup_file())))
         self.upload = w.FileUpload(accept=".json,.bvh", multiple=False, description="upload setup / BVH")
         self.upload.observe(self._on_upload, names="value")
         self.export_solver = w.Dropdown(description="export", layout=w.Layout(width="260px"))
@@ -141,7 +147,8 @@ class PosingStudio(StudioExport, StudioTimeline):
             w.HBox([self.choose, w.VBox([self.compare_button, self.busy])]),
             self.views_box,
             w.HTML("<b>All solvers</b>"), self.summary,
-            w.HBox([self.undo_button, self.redo_button, self.setup_path, save, load, self.upload]),
+            w.HBox([self.undo_button, self.redo_button, self.setup_path, self.save_button, self.load_button,
+                    self.upload]),
             w.HBox([self.export_solver, bvh, png]),
             w.HTML("<b>Timeline</b> — key setups; in-betweens posed by the export solver"),
             w.HBox([add_key, clear, self.inbetweens, self.ease, build, anim]), self.keys_label, self.timeline_box,
@@ -296,6 +303,18 @@ class PosingStudio(StudioExport, StudioTimeline):
             self._restore(self.history[self.position])
 
     # ------------------------------------------------------------------ setups
+    def setup_file(self) -> Path:
+        """The file the *setup file* box names: the path as typed, or with :attr:`own_folder` a file name inside
+        ``export_dir`` (a path that leaves it, absolute or through ``..``, raises ValueError)."""
+        text = self.setup_path.value.strip()
+        if not self.own_folder:
+            return Path(text)
+        name = Path(text)
+        if not name.parts or name.is_absolute() or ".." in name.parts:
+            raise ValueError(f"setup file {text!r}: give a file name in this page's folder, {self.export_dir} "
+                             "(e.g. setup.json)")
+        return self.export_dir / name
+
     def save(self, path) -> Path:
         """Write the effectors and the solvers as a setup JSON file; the message links a download."""
         path = save_setup(path, self.skeleton, self.editor.setup(), self.solvers)

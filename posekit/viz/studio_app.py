@@ -11,8 +11,9 @@ poses a user's own skeleton with the models they trained (README, "Your own moca
 * ``POSEKIT_WEIGHTS_DIR`` — a folder of the user's checkpoints (:func:`posekit.paths.weights_path`).
 
 A learned solver whose weights were made for another skeleton is left out of the choice, with its reason. Each
-page writes its files (setups, uploads, exports) into a folder of its own (:func:`session_folder`), so the students
-of a class served by one ``make studio`` never read or overwrite each other's. The
+page keeps its files (setups, uploads, exports) in a folder of its own (:func:`session_folder`; its *setup file* box
+takes a file name there and nothing outside), so the students of a class served by one ``make studio`` never read
+or overwrite each other's files, nor any other file of the server. The
 data set is let go once the app's case is built and its memory handed back, so a kernel of the app holds the
 studio, not the data; the page Voila serves is :data:`VOILA_TEMPLATE`, which asks nothing of the internet.
 """
@@ -113,7 +114,8 @@ def app_studio(data: str | None = None, solvers=None, export_dir=None):
     if len(first) < 2:
         first = ["fabrik", "dls"]
     studio = PosingStudio(skeleton, start, first, effectors, available=available,
-                          tolerance_of=tolerance_of, export_dir=session_folder() if export_dir is None else export_dir)
+                          tolerance_of=tolerance_of, own_folder=True,
+                          export_dir=session_folder() if export_dir is None else export_dir)
     for v in studio.editor.viewers.values():
         v.set_ghost(goal)
     studio.editor.first.select(skeleton.names[skeleton.index(effectors[0].joint)])

@@ -301,11 +301,20 @@ def test_each_page_of_the_app_writes_into_a_folder_of_its_own(tmp_path, monkeypa
     assert a.export_dir != b.export_dir and a.export_dir.parent == b.export_dir.parent == Path(EXPORTS)
     assert not (tmp_path / EXPORTS).exists()  # nothing is made before a page writes
     rows = len(a.editor.rows)
-    a.save(a.setup_path.value)  # each saves to the setup file its page offers
+    a.save_button.click()  # each saves to the setup file its page offers
     b.editor.remove(rows - 1)
-    b.save(b.setup_path.value)
-    a.load(a.setup_path.value)
+    b.save_button.click()
+    assert a.setup_path.value == b.setup_path.value == "setup.json" and str(b.export_dir) in b.message.value
+    a.load_button.click()
     assert len(a.editor.rows) == rows and len(b.editor.rows) == rows - 1
+    # and nothing outside a page's folder: not another page's folder, nor any path of the server
+    for path in (f"../{b.export_dir.name}/setup.json", str(tmp_path / "elsewhere.json"), "", "."):
+        a.setup_path.value = path
+        a.save_button.click()
+        assert "give a file name in this page" in a.message.value, (path, a.message.value)
+    assert not (tmp_path / "elsewhere.json").exists()
+    b.load_button.click()  # b's file untouched
+    assert len(b.editor.rows) == rows - 1 and "loaded" in b.message.value
     # a uploads a start pose; b uploads a broken file of the same name
     write_poses_bvh(tmp_path / "start.bvh", a.skeleton, [a.start], a.start)
     good = (tmp_path / "start.bvh").read_bytes()
