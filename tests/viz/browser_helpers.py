@@ -1,4 +1,5 @@
-"""What the headless-Chromium tests share: canvas pixels, the viewer's background, waiting for a condition."""
+"""What the headless-Chromium tests share: canvas pixels, the viewer's background, waiting for a condition, the
+selected joint's marker and a press in a view with *drag in 3D* on."""
 
 from __future__ import annotations
 
@@ -22,6 +23,33 @@ def pixels(locator):
 def foreground(img):
     """Pixels that are not the viewer's background."""
     return np.abs(img - BACKGROUND).sum(-1) > 60
+
+
+def selected_joint(img):
+    """Pixel (x, y) in the middle of the selected joint's yellow marker (drawn larger) in a canvas image; the test
+    fails when the marker is not there."""
+    r, g, b = img[..., 0], img[..., 1], img[..., 2]
+    ys, xs = np.nonzero((r > 180) & (g > 120) & (g < 215) & (b < 90))
+    assert len(xs) > 3, "the selected joint's yellow marker is not on the canvas"
+    return float(np.median(xs)), float(np.median(ys))
+
+
+def press_in_3d(page, canvas, at, views=".posekit-views"):
+    """Switch *drag in 3D* on and press the mouse at pixel ``at`` (x, y) of ``canvas``; returns that point in the
+    page's coordinates (the mouse stays down).
+
+    Between the switch and the press it pauses as a person does: the kernel turns orbiting off in the page in
+    reply to the switch, and a press before that reply orbits the camera instead (a full CI run, the other core
+    busy with notebooks, lost that race twice in one run)."""
+    toggle = page.locator(views).get_by_role("button", name="drag in 3D")
+    toggle.click()
+    wait_for(lambda: "mod-active" in (toggle.get_attribute("class") or ""), 10, "the drag-in-3D switch to show on")
+    page.wait_for_timeout(2000)
+    box = canvas.bounding_box()
+    x, y = box["x"] + at[0], box["y"] + at[1]
+    page.mouse.move(x, y)
+    page.mouse.down()
+    return x, y
 
 
 def wait_for(pred, timeout, what, every: float = 0.5):

@@ -17,7 +17,7 @@ import time
 import numpy as np
 import pytest
 
-from tests.viz.browser_helpers import BACKGROUND, SENT_LOG, pixels as _pixels, wait_for
+from tests.viz.browser_helpers import BACKGROUND, SENT_LOG, pixels as _pixels, press_in_3d, selected_joint, wait_for
 from posekit.bench.studio import (CHROMIUM, blank_tab, choose_solvers, launch_chromium, open_studio, rapid_updates,
                                   serve_voila, update_number)
 
@@ -149,19 +149,10 @@ def test_a_fresh_studio_has_no_history_and_selecting_moves_nothing(page):
 
 
 def _drag_in_3d(page, canvas, at, by):
-    """Switch *drag in 3D* on, press at pixel ``at`` (x, y) of ``canvas`` and move the mouse ``by`` (dx, dy) pixels.
-
-    Between the switch and the press it pauses as a person does: the kernel turns orbiting off in the page in
-    reply to the switch, and a press before that reply orbits the camera instead (a full CI run, the other core
-    busy with notebooks, lost that race twice in one run)."""
-    toggle = page.locator(VIEWS).get_by_role("button", name="drag in 3D")
-    toggle.click()
-    wait_for(lambda: "mod-active" in (toggle.get_attribute("class") or ""), 10, "the drag-in-3D switch to show on")
-    page.wait_for_timeout(2000)
-    box = canvas.bounding_box()
-    page.mouse.move(box["x"] + at[0], box["y"] + at[1])
-    page.mouse.down()
-    page.mouse.move(box["x"] + at[0] + by[0], box["y"] + at[1] + by[1], steps=8)
+    """Switch *drag in 3D* on, press at pixel ``at`` (x, y) of ``canvas`` (:func:`press_in_3d`) and move the mouse
+    ``by`` (dx, dy) pixels."""
+    x, y = press_in_3d(page, canvas, at, VIEWS)
+    page.mouse.move(x + by[0], y + by[1], steps=8)
     page.mouse.up()
 
 
@@ -170,11 +161,7 @@ def test_dragging_a_target_in_3d_resolves_every_view(page, server):
     first.scroll_into_view_if_needed()
     before, texts, n0 = _images(page), _texts(page), update_number(page)
     # the selected joint (the left hand, on its target) is drawn larger and yellow
-    img = _pixels(first)
-    r, g, b = img[..., 0], img[..., 1], img[..., 2]
-    ys, xs = np.nonzero((r > 180) & (g > 120) & (g < 215) & (b < 90))
-    assert len(xs) > 3, "the selected joint's yellow marker is not on the canvas"
-    _drag_in_3d(page, first, (float(np.median(xs)), float(np.median(ys))), (15, -45))
+    _drag_in_3d(page, first, selected_joint(_pixels(first)), (15, -45))
     _wait_update(page, n0, "a solve after the drag")
     # every view re-solved (the summary's update) and re-posed, each still on the moved target; a status line may
     # read as before (FABRIK: 0.0 mm, 2 iterations, the same time to the hundredth of a ms)

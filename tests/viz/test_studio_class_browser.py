@@ -62,12 +62,11 @@ def test_the_first_view_is_timed_in_the_page_from_a_preheated_kernel():
 def test_a_page_closed_mid_drag_leaves_no_kernel_and_another_session_goes_on(tmp_path):
     """Bad input: a student closes the tab in the middle of a 3D drag (the mouse still pressed, the drag's updates
     in flight). The cull frees that page's kernel; another student's session on the same server goes on answering."""
-    import numpy as np
     import psutil
     from playwright.sync_api import sync_playwright
 
     from posekit.bench.studio import launch_chromium, open_studio, rapid_updates, serve_voila, update_number
-    from tests.viz.browser_helpers import pixels, wait_for
+    from tests.viz.browser_helpers import pixels, press_in_3d, selected_joint, wait_for
 
     def gone(kernel):
         try:
@@ -85,18 +84,8 @@ def test_a_page_closed_mid_drag_leaves_no_kernel_and_another_session_goes_on(tmp
             assert len(kernels) == 2
             canvas = a.locator(".posekit-views canvas").first
             canvas.scroll_into_view_if_needed()
-            img = pixels(canvas)
-            ys, xs = np.nonzero((img[..., 0] > 180) & (img[..., 1] > 120) & (img[..., 1] < 215) & (img[..., 2] < 90))
-            assert len(xs) > 3, "the selected joint's yellow marker is not on the canvas"
-            toggle = a.locator(".posekit-views").get_by_role("button", name="drag in 3D")
-            toggle.click()
-            wait_for(lambda: "mod-active" in (toggle.get_attribute("class") or ""), 10, "the drag-in-3D switch")
-            a.wait_for_timeout(2000)  # the kernel turns orbiting off in the page in reply to the switch
-            box = canvas.bounding_box()
-            x, y = box["x"] + float(np.median(xs)), box["y"] + float(np.median(ys))
             n0 = update_number(a)
-            a.mouse.move(x, y)
-            a.mouse.down()
+            x, y = press_in_3d(a, canvas, selected_joint(pixels(canvas)))  # on the selected joint; the mouse stays down
             for k in range(1, 11):
                 a.mouse.move(x, y - 4 * k)
             wait_for(lambda: update_number(a) > n0, 30, "a solve from the drag", every=0.2)
