@@ -5,6 +5,8 @@
 #               every notebook under nbval, the headless-browser check of the 3D widget (both cores)
 #   make test-unit        the inner loop: the unit tests only (no notebook, no browser)
 #   make test-portable    every notebook under nbval as other CPUs would run it (tools/test_portable.py)
+#   make test-latest      the lessons and widget tests against the newest notebook stack, ignoring pyproject's
+#                         upper bounds, in .venv-latest (tools/test_latest.py; LATEST_ARGS=--pre for pre-releases)
 #   instructors: make slides (reveal.js slides of every lesson), make solutions (the lessons with
 #               their exercise solutions, executed), make course (one static page: lessons, slides,
 #               benchmark report) -- all under build/, openable from disk
@@ -16,7 +18,7 @@ STAMP := $(VENV)/.posekit-installed
 export POSEKIT_DATA_DIR ?= $(if $(wildcard ../shared/data),$(abspath ../shared/data),)
 ROOT_FLAG := $(if $(filter 0,$(shell id -u)),--allow-root,)
 
-.PHONY: setup warm lab studio test test-unit test-portable browser-deps bench clean course-assets slides course solutions
+.PHONY: setup warm lab studio test test-unit test-portable test-latest browser-deps bench clean course-assets slides course solutions
 
 # JupyterLab settings for this environment: no news pop-up, no update check (nothing is fetched)
 LAB_OVERRIDES := $(VENV)/share/jupyter/lab/settings/overrides.json
@@ -103,6 +105,10 @@ test-unit: setup warm
 # PORTABLE_VARIANTS: a subset of `python tools/test_portable.py --list`
 test-portable: setup
 	$(PY) tools/test_portable.py $(PORTABLE_VARIANTS)
+
+# the newest releases of jupyterlab, ipywidgets, pythreejs, voila, nbval, playwright, numpy ... (torch: the CPU wheel)
+test-latest: browser-deps
+	$(PYTHON) tools/test_latest.py $(LATEST_ARGS)
 
 bench: setup
 	$(VENV)/bin/posekit bench fk
