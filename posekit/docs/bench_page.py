@@ -94,7 +94,7 @@ def _provenance(name: str, d: dict) -> str:
     if took:
         rows.append(("the run took", took))
     rows.append(("file", f"[`{name}`](../data_samples/results/{name})"))
-    out = "| | |\n|:--|:--|\n" + "\n".join(f"| {k} | {v} |" for k, v in rows)
+    out = "| | this run |\n|:--|:--|\n" + "\n".join(f"| {k} | {v} |" for k, v in rows)
     if d.get("provenance_note"):
         out += f"\n\n*Provenance: {d['provenance_note']}.*"
     return out
