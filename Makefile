@@ -10,6 +10,8 @@
 #   instructors: make slides (reveal.js slides of every lesson), make solutions (the lessons with
 #               their exercise solutions, executed), make course (one static page: lessons, slides,
 #               benchmark report) -- all under build/, openable from disk
+#   make docs   rewrite the generated documentation pages: docs/cli.md (the argument parser) and docs/benchmarks.md
+#               (the results files under data_samples/results)
 PYTHON ?= python3
 VENV ?= .venv
 PY := $(VENV)/bin/python
@@ -18,7 +20,7 @@ STAMP := $(VENV)/.posekit-installed
 export POSEKIT_DATA_DIR ?= $(if $(wildcard ../shared/data),$(abspath ../shared/data),)
 ROOT_FLAG := $(if $(filter 0,$(shell id -u)),--allow-root,)
 
-.PHONY: setup warm lab studio test test-unit test-portable test-latest browser-deps bench clean course-assets slides course solutions
+.PHONY: setup warm lab studio test test-unit test-portable test-latest browser-deps bench clean course-assets slides course solutions docs
 
 # JupyterLab settings for this environment: no news pop-up, no update check (nothing is fetched)
 LAB_OVERRIDES := $(VENV)/share/jupyter/lab/settings/overrides.json
@@ -112,6 +114,10 @@ test-latest: browser-deps
 
 bench: setup
 	$(VENV)/bin/posekit bench fk
+
+# the documentation pages the code writes (tests/test_docs.py fails when the committed ones differ)
+docs: setup
+	$(VENV)/bin/posekit docs build
 
 clean:
 	rm -rf $(VENV) .pytest_cache build tools/course/node_modules

@@ -1,7 +1,7 @@
 """posekit — the library behind a numbered series of notebooks on data-driven character posing.
 
 Layers point down — a module imports only from its own layer or the ones above it in this list
-(the README's "The library" section draws the same table):
+(``docs/library.md`` draws the same table):
 
 1. core: :mod:`posekit.conventions`, :mod:`posekit.rotations`, :mod:`posekit.skeleton`,
    :mod:`posekit.kinematics`, :mod:`posekit.transforms`, :mod:`posekit.records` (``Pose``, ``NormStats``),

@@ -298,7 +298,7 @@ def build_parser() -> argparse.ArgumentParser:
         p = tsub.add_parser(name, help=t.help)
         add_arguments(p, t.args, default_in_help=False)
         p.add_argument("--device", default="cpu", help="where to train: cpu (default), cuda or cuda:N; under torchrun "
-                       "every process trains its share of each batch (data-parallel, README: training at scale)")
+                       "every process trains its share of each batch (data-parallel, docs/training.md)")
         p.set_defaults(fn=_train, trainer=name)
     p = sub.add_parser("warm", help="compile every solver's kernels into the cache (make lab, studio and test run it "
                        "first; about 2 s once done)")
@@ -308,6 +308,9 @@ def build_parser() -> argparse.ArgumentParser:
     from .course.commands import add_commands
 
     add_commands(sub)
+    from .docs import add_commands as add_docs_commands
+
+    add_docs_commands(sub)
     return parser
 
 

@@ -78,6 +78,7 @@ from ..data.bandai_full import CROSS_VAL_FRACTION, PROTOCOLS, describe_motions, 
 from ..data.cases import START_CONDITIONS, build_cases
 from ..ik.api import EFFECTOR_SETS
 from ..paths import samples_dir
+from ..provenance import machine, today
 from .ik import TABLE_LABELS
 from .ik import run as ik_run
 from .plugin import arg, register_benchmark
@@ -268,6 +269,7 @@ def run_scale(protocol: str = "full", n_cases: int = 1000, seed: int = 0, out=No
         "rows": kept,
         "licence": "results of networks trained on the Bandai Namco Research Motion Datasets 1 and 2 "
                    "(c) Bandai Namco Research Inc., CC BY-NC 4.0",
+        "date": today(), "machine": machine(),
     }
     result = _jsonable(result)
     global _LAST

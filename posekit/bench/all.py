@@ -14,8 +14,8 @@ refuses a set (a lesson 03 network exists for its trained joint sets only) is li
 
 What it writes (``out``, a folder; by default ``data_samples/results``):
 
-* ``bench_all.json`` — the rows and how they were made (command, cases, seed, data, machine); no
-  date, so two runs differ only in their timings;
+* ``bench_all.json`` — the rows and how they were made (command, cases, seed, data, and the machine and date
+  of the run: :func:`posekit.provenance.stamp`);
 * ``bench_all.md`` — what was measured, one Markdown table per effector set and start condition sorted by
   MPJPE, the best solver of each (:func:`winners`), and how to read the scatter;
 * ``bench_all.png`` — median time per solve (ms) against median MPJPE (mm), both log, one panel per effector
@@ -28,8 +28,6 @@ Units: times in milliseconds on one thread; distances in millimetres (the librar
 from __future__ import annotations
 
 import json
-import os
-import platform
 import re
 import time
 import warnings
@@ -42,6 +40,7 @@ from .ik import RANDOM, TABLE_LABELS, _group_title, default_data, effector_set_n
 from .ik import run as run_ik
 from .all_plot import plot
 from .plugin import arg, register_benchmark
+from ..provenance import machine, today
 
 __all__ = ["run", "write_report", "markdown", "plot", "pareto", "winners", "default_out", "FILES", "KEYS"]
 
@@ -164,14 +163,10 @@ def run(n_cases: int = 200, starts=("rest", "other-clip"), effectors=("2", "5", 
                 "seed": int(seed), "data": data, "threads": 1,
                 "solvers": list(names), "skipped": [n for n in names if n not in {r["method"] for r in rows}],
                 "refused": {f"{n} / {e}": why for (n, e), why in refused.items()},
-                "natural_floor_mm_median": floors, "seconds": round(seconds, 1), "machine": _machine()}
+                "natural_floor_mm_median": floors, "seconds": round(seconds, 1), "machine": machine(),
+                "date": today()}
         write_report(rows, meta, out)
     return rows
-
-
-def _machine() -> dict:
-    return {"platform": platform.platform(), "processor": platform.processor() or platform.machine(),
-            "cpu_count": os.cpu_count(), "python": platform.python_version()}
 
 
 def write_report(rows: list[dict], meta: dict, out) -> list[Path]:
@@ -311,8 +306,9 @@ def markdown(rows: list[dict], meta: dict) -> str:
            + (f" (the true poses' own: {floor:.1f} mm)" if floor is not None else "")
            + "; *converged*, the share of cases with every effector within its tolerance (1 mm, 1 degree). "
            "*lesson*: the notebook that introduces the solver.", "",
-           f"Machine: {m['platform']}, {m['processor']}, {m['cpu_count']} CPUs; the run took "
-           f"{meta.get('seconds', float('nan')) / 60:.1f} min. Times depend on the machine and its load; "
+           f"Machine: {m['platform']}, {m['processor']}, {m['cpu_count']} CPUs"
+           + (f"; made on {meta['date']}" if meta.get("date") else "") + "; the run took "
+           + f"{meta.get('seconds', float('nan')) / 60:.1f} min. Times depend on the machine and its load; "
            "the errors do not (same seed, same numbers)."]
     if meta.get("skipped"):
         out += ["", "Not measured (the solver refused this data): "

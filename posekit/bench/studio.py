@@ -659,7 +659,34 @@ def _first_view_row(what: str, views: dict, goal: float | None) -> dict:
             "goal_s": goal, "met": None if goal is None else bool(page_s <= goal)}
 
 
+def _command(args) -> str:
+    """The ``posekit bench studio`` command line that makes ``args``' run (recorded in ``--out``'s file)."""
+    parts = ["posekit bench studio"]
+    if args.sessions:
+        parts.append(f"--sessions {args.sessions}")
+    else:
+        parts.append(f"--configs '{args.configs}' --first-views {args.first_views}")
+    if args.updates:
+        parts.append(f"--updates {args.updates}")
+    if args.antialias:
+        parts.append("--antialias")
+    return " ".join(parts)
+
+
 def _run(args) -> list[dict]:
+    rows = _measure(args)
+    if getattr(args, "out", None):  # the rows with their command, machine and date (docs/benchmarks.md shows them)
+        import json
+
+        from ..provenance import stamp
+
+        path = Path(args.out)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps({"benchmark": "studio", **stamp(_command(args)), "rows": rows}, indent=1) + "\n")
+    return rows
+
+
+def _measure(args) -> list[dict]:
     if args.sessions:
         try:
             counts = [int(v) for v in args.sessions.split(",")]
@@ -688,6 +715,9 @@ register_benchmark(
                    "latency per session, lost updates, kernel memory, and the cull after they leave"),
           arg("--first-views", type=int, default=3,
               help="pages timed from a preheated kernel, of the studio and of the floor (default 3; the median)"),
+          arg("--out", default=None,
+              help="also write the rows, with the command, machine and date, to this JSON file (the class-sizing "
+                   "table of docs/benchmarks.md: data_samples/results/bench_studio_sessions.json; default: none)"),
           arg("--antialias", action="store_true",
               help="draw the views with antialiasing (default off: this bench's browser draws WebGL in software, "
                    "where multisampling costs the most; make studio STUDIO_ANTIALIAS=0 serves a class so)")],

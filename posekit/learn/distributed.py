@@ -1,6 +1,6 @@
 """Training past one CPU: the device to train on and data-parallel runs under ``torchrun``.
 
-Introduced with ``posekit train ... --device`` (README, "Training at scale"); every trainer of lessons 02-05
+Introduced with ``posekit train ... --device`` (``docs/training.md``); every trainer of lessons 02-05
 runs through it. torch's own engine does the work: ``torchrun`` starts the processes and sets ``RANK``,
 ``WORLD_SIZE`` and ``LOCAL_RANK``; :func:`start` joins them into a process group (``gloo`` on CPU, ``nccl``
 on CUDA) and each trainer wraps its network in ``DistributedDataParallel`` (:meth:`Run.wrap`), which

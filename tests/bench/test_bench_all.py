@@ -97,7 +97,8 @@ def test_the_json_parses_and_agrees_with_the_rows(report):
     assert d["skipped"] == [] and d["solvers"] == list(resolve_solvers("all"))
     assert sorted(d["refused"]) == sorted(f"{n} / random" for n in NEURAL)
     assert all("has solvers for these joint sets" in why for why in d["refused"].values())
-    assert not re.search(r"\b20\d\d-\d\d-\d\d", text)  # no date: reruns differ only in their timings
+    assert re.fullmatch(r"20\d\d-\d\d-\d\d", d["date"])  # the run's provenance: command, machine, date
+    assert not re.search(r"\d+\.\d+\.\d+-", json.dumps(d["machine"]))  # no kernel build string
 
 
 def test_the_markdown_has_a_sorted_table_per_set_and_start_with_every_solver(report):

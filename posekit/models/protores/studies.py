@@ -30,6 +30,7 @@ import numpy as np
 
 from ...learn.trainers import register_trainer
 from ...plugins import arg
+from ...provenance import machine, today
 
 __all__ = ["ABLATIONS", "WIDTHS", "STEPS", "SCALING_GRID", "run_studies", "run_scaling", "studies_path",
            "scaling_path", "score_net", "refresh_shipped"]
@@ -170,7 +171,7 @@ def run_scaling(seed: int = 0, out=None, workers: int = 2, grid=SCALING_GRID) ->
         _with_compute(r, batch)
     rows.sort(key=lambda r: (r["width"], r["steps"]))
     res = {"rows": rows, "seed": seed, "batch": batch, "seconds": round(time.perf_counter() - t0),
-           "command": f"posekit train protores-studies --scaling --seed {seed}"}
+           "command": f"posekit train protores-studies --scaling --seed {seed}", "date": today(), "machine": machine()}
     if out is not False and current().main:
         path = scaling_path() if out is None else out
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -196,7 +197,7 @@ def run_studies(seed: int = 0, out=None, workers: int = 2, progress: bool = True
     res = {"rows": [full, ref] + [r for r in done if r["method"].startswith("ProtoRes")],
            "width": [r for r in done if r["method"].startswith("width")], "seed": seed,
            "steps": STEPS, "seconds": round(time.perf_counter() - t0),
-           "command": f"posekit train protores-studies --seed {seed}"}
+           "command": f"posekit train protores-studies --seed {seed}", "date": today(), "machine": machine()}
     if out is not False and run.main:
         path = studies_path() if out is None else out
         path.parent.mkdir(parents=True, exist_ok=True)

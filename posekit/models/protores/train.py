@@ -52,7 +52,7 @@ DEFAULTS = dict(steps=None, batch=256, lr=5e-4, warmup=200, w_pos=100.0, w_max=1
 
 STEPS = {"protores": 20000, "masked-fcr": 42000, "transformer": 10600}
 """Steps per encoder at the shipped width (256), each sized to about the same wall-clock time, an hour of two
-processes (``torchrun --nproc-per-node 2``; README: a user's hour of two cores): Masked-FCR's step is the
+processes (``torchrun --nproc-per-node 2``; ``docs/training.md``): Masked-FCR's step is the
 cheapest, the Transformer's about twice ProtoRes's."""
 
 WIDTH = 256
