@@ -1,12 +1,14 @@
 """The documentation pages the code writes: ``posekit docs build``.
 
-Two pages under ``docs/`` are reference, not prose, so they are generated and never typed:
+Three pages under ``docs/`` are reference, not prose, so they are generated and never typed:
 
 * ``docs/cli.md`` — every ``posekit`` subcommand and option, from the argument parser
   (:mod:`posekit.docs.cli_page`);
 * ``docs/benchmarks.md`` — every measured figure the documentation shows, from the results files under
   ``data_samples/results``, each with the command, machine and date inside the file
-  (:mod:`posekit.docs.bench_page`).
+  (:mod:`posekit.docs.bench_page`);
+* ``docs/tested-versions.md`` — the newest notebook stack ``make test-latest`` last passed with, from the record
+  that run wrote (:mod:`posekit.docs.versions_page`).
 
 ``posekit docs build`` rewrites them; ``posekit docs build --check`` writes nothing and exits 1 naming every page
 that differs from what the code writes now (``tests/test_docs.py`` runs the same comparison). The other pages of
@@ -20,7 +22,7 @@ from pathlib import Path
 
 __all__ = ["GENERATED", "docs_dir", "pages", "build", "stale", "add_commands"]
 
-GENERATED = ("cli.md", "benchmarks.md")
+GENERATED = ("cli.md", "benchmarks.md", "tested-versions.md")
 """The pages ``posekit docs build`` writes into ``docs/``."""
 
 
@@ -39,9 +41,10 @@ def pages(results=None) -> dict:
     results : str or Path, optional
         The results folder the benchmarks page is rendered from (default ``data_samples/results``).
     """
-    from . import bench_page, cli_page
+    from . import bench_page, cli_page, versions_page
 
-    return {"cli.md": cli_page.markdown(), "benchmarks.md": bench_page.markdown(results)}
+    return {"cli.md": cli_page.markdown(), "benchmarks.md": bench_page.markdown(results),
+            "tested-versions.md": versions_page.markdown(docs_dir() / versions_page.RECORD)}
 
 
 def build(out=None, results=None) -> list[Path]:
@@ -84,10 +87,12 @@ def _build(args) -> int:
 
 def add_commands(sub) -> None:
     """``posekit docs build [--out DIR] [--check]`` on the CLI's subcommand parsers."""
-    docs = sub.add_parser("docs", help="write the generated documentation pages (docs/cli.md, docs/benchmarks.md)")
+    docs = sub.add_parser("docs", help="write the generated documentation pages (docs/cli.md, docs/benchmarks.md, "
+                          "docs/tested-versions.md)")
     dsub = docs.add_subparsers(dest="cmd", required=True)
-    p = dsub.add_parser("build", help="write docs/cli.md from the argument parser and docs/benchmarks.md from the "
-                        "results files under data_samples/results")
+    p = dsub.add_parser("build", help="write docs/cli.md from the argument parser, docs/benchmarks.md from the "
+                        "results files under data_samples/results and docs/tested-versions.md from make test-latest's "
+                        "record")
     p.add_argument("--out", default=None, help="folder to write into (default: docs/ of the checkout)")
     p.add_argument("--check", action="store_true",
                    help="write nothing; exit 1 naming every page that differs from what the code writes now")
