@@ -184,5 +184,7 @@ def test_the_cli(report, capsys, monkeypatch):
     out = capsys.readouterr().out
     assert "report: not written" in out and f"Start: {START}" in out
     assert max(map(len, out.splitlines())) <= 100
-    table = out.split("Speed and quality")[1].splitlines()[3:]
+    table = out.split("Speed and quality")[1].split("\n\n")[0].splitlines()[3:]
     assert sorted(ln.split()[0] for ln in table if ln.strip()) == sorted(resolve_solvers("all"))
+    finish = out.split("the exact finish")[1].split("\n\n")[0].splitlines()[3:]  # learned kept: the +dls rows
+    assert sorted(ln.split()[0] for ln in finish) == sorted(n for n in resolve_solvers("all") if n.endswith("+dls"))
