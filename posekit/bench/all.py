@@ -38,7 +38,7 @@ from pathlib import Path
 from ..data.cases import START_CONDITIONS, start_condition
 from ..ik.api import EFFECTOR_SETS
 from ..ik.registry import solver_info
-from .ik import RANDOM, TABLE_LABELS, TABLES as IK_TABLES, _group_title, default_data, effector_set_names, resolve_solvers
+from .ik import RANDOM, TABLE_LABELS, TABLES as IK_TABLES, WEIGHTS_HELP, _group_title, default_data, effector_set_names, resolve_solvers
 from .ik import run as run_ik
 from .all_plot import plot
 from .plugin import arg, register_benchmark
@@ -451,9 +451,7 @@ register_benchmark(
         arg("--data", default=None,
             help="sample, bandai-mini, bandai1, bandai2, or a BVH file/folder (default: the data the shipped learned "
                  "solvers were trained on, bandai-mini); learned solvers made for another skeleton are skipped"),
-        arg("--weights", default=None,
-            help="a folder of checkpoints you trained (posekit train ... --data FOLDER --out DIR/FILE.pt): every "
-                 "learned solver loads its file from it (a file it lacks: the shipped one); give --data too"),
+        arg("--weights", default=None, help=WEIGHTS_HELP),
         arg("--out", default=None,
             help="folder for bench_all.json, .md and .png (default: data_samples/results; none or '': "
                  "do not write)"),

@@ -379,18 +379,24 @@ def run(motions, solvers=("fabrik", "ccd", "dls"), effector_sets=("2", "5"), n_c
     if natural:
         nat = NaturalnessIndex(s, motions.global_pos[first.train_frames], seed=seed)
         floor = nat.distance(first.target_pos)  # the targets are the same under every start condition
+    from ..paths import held_checkpoints, use_skeleton
+
     built, skipped = {}, {}
-    for name in solvers:
-        try:
-            built[name] = make_solver(name, s)
-        except ValueError as err:
-            if not every:  # asked for by name: its refusal (e.g. weights made for another skeleton) is the answer
-                raise
-            skipped[name] = str(err)
+    with use_skeleton(s.names):  # among several checkpoints of one model in --weights DIR: the one for this data
+        for name in solvers:
+            try:
+                built[name] = make_solver(name, s)
+            except ValueError as err:
+                if not every:  # asked for by name: its refusal (e.g. weights made for another skeleton) is the answer
+                    raise
+                skipped[name] = str(err)
     if skipped:
         first_reason = next(iter(skipped.values()))
+        held = held_checkpoints()
         warnings.warn(f"bench ik: skipping solver(s) {', '.join(map(repr, skipped))} on {first.source!r} "
-                      f"({first_reason[:200]}{'...' if len(first_reason) > 200 else ''})", UserWarning, stacklevel=2)
+                      f"({first_reason[:200]}{'...' if len(first_reason) > 200 else ''})"
+                      + (f"; a learned solver takes a checkpoint from your weights folder when the checkpoint says it "
+                         f"is that model, and {held}" if held else ""), UserWarning, stacklevel=2)
     solvers = tuple(built)
     jobs = [(st, name, e) for st in starts for name in solvers for e in effector_sets]
     bar = None
@@ -478,6 +484,17 @@ TABLE_COLUMNS = ["method"] + list(dict.fromkeys(c for t in TABLES for c in t[1] 
 """Every column in one table (``posekit bench ik --wide``)."""
 
 
+WEIGHTS_HELP = ("a folder of checkpoints you trained (posekit train NAME --data DATA --out DIR/ANY_NAME.pt): each learned "
+                "solver loads the checkpoint in DIR that says it is its model, whatever the file is called: neural* "
+                "(kind ae_solvers: train ae-solvers), latent-opt* (kind aegan, structured: train aegan without "
+                "--dense), protores, protores-masked-fcr, protores-transformer (kind protores, arch protores, "
+                "masked-fcr or transformer: train protores --arch ...); of several checkpoints of one model, the one "
+                "trained for --data's skeleton, else the one with the shipped file's name (ae_solvers.pt, aegan.pt, "
+                "protores.pt, protores_masked_fcr.pt, protores_transformer.pt); a model DIR lacks is the shipped one "
+                "(made for the Bandai skeleton: skipped on other data); give --data too")
+"""``--weights DIR`` of ``posekit bench ik`` and ``bench all``: how a checkpoint is found (:func:`posekit.paths.find_checkpoint`)."""
+
+
 def weights_and_data(args, solvers) -> tuple:
     """``--weights DIR`` and ``--data`` of a benchmark's command line: the weights context
     (:func:`posekit.paths.use_weights`, or a null context) and the data to open. With ``--weights`` the data must
@@ -549,9 +566,7 @@ register_benchmark(
         arg("--data", default=None,
             help="sample, bandai-mini, bandai1, bandai2, or a BVH file/folder or .npz (default: the data the learned "
                  "solvers of the run were trained on, e.g. bandai-mini for neural; else sample)"),
-        arg("--weights", default=None,
-            help="a folder of checkpoints you trained (posekit train ... --data FOLDER --out DIR/FILE.pt): the learned "
-                 "solvers load their file from it (a file it lacks: the shipped one); give --data too"),
+        arg("--weights", default=None, help=WEIGHTS_HELP),
         arg("--scale", type=float, default=None,
             help="file units to metres for a BVH path (default: detected from the skeleton's height)"),
         arg("--seed", type=int, default=0, help="seed of the held-out split and of the case draw"),
