@@ -52,7 +52,7 @@ def _inspect(args) -> int:
     from .io.rigs import rig_report, standing_height
     from .data.sources import open_dataset
 
-    ms = open_dataset(args.path, scale=args.scale, progress=not args.json and sys.stderr.isatty())
+    ms = open_dataset(args.path, scale=args.scale, progress=True)
     skel = ms.skeleton
     rig = getattr(ms, "rig", None) or rig_report(skel.names, skel.roles)
     units = getattr(ms, "units", None)  # set when read from BVH
@@ -132,7 +132,7 @@ def _build_sample(args) -> int:
         from .data.bandai_mini_build import build_bandai_mini
 
         try:
-            r = build_bandai_mini(args.data_dir, out=args.out, workers=args.workers, progress=sys.stderr.isatty())
+            r = build_bandai_mini(args.data_dir, out=args.out, workers=args.workers, progress=True)
         except (FileNotFoundError, ValueError) as e:
             print(f"posekit: {e}", file=sys.stderr)
             return 2

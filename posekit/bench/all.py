@@ -410,7 +410,6 @@ def _out(value):
 
 
 def _cli_run(args) -> list[dict]:
-    import sys
 
     from .ik import weights_and_data
 
@@ -418,7 +417,7 @@ def _cli_run(args) -> list[dict]:
     weights, data = weights_and_data(args, resolve_solvers("all"))
     with weights:
         return run(n_cases=args.cases, starts=args.start, effectors=args.effectors, seed=args.seed,
-                   out=_out(args.out), progress=not args.json and sys.stderr.isatty(), data=data)
+                   out=_out(args.out), progress=True, data=data)
 
 
 def _header(rows, args) -> str:

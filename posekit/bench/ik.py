@@ -512,14 +512,13 @@ def weights_and_data(args, solvers) -> tuple:
 
 
 def _cli_run(args) -> list[dict]:
-    import sys
 
     from ..data.sources import open_dataset
 
     solvers = resolve_solvers(args.solvers)  # refuse bad names before loading data
     _starts(args.start)
     weights, data = weights_and_data(args, solvers)
-    show = not args.json and sys.stderr.isatty()
+    show = True  # on stderr: a bar in a terminal, a line every few seconds in a log (posekit.progress)
     with weights:
         motions = open_dataset(data, scale=args.scale, progress=show)
         return run(motions, solvers=solvers, effector_sets=args.effectors.split(","), n_cases=args.cases,

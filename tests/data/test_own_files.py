@@ -60,6 +60,8 @@ def test_train_reads_a_converted_file(converted, tmp_path, capsys):
     assert main(["train", "ae-solvers", "--data", str(npz), "--ae-epochs", "1", "--solver-epochs", "1",
                  "--chain-epochs", "1", "--pairs", "300", "--latent", "8", "--out", str(out)]) == 0
     assert out.is_file()
+    err = capsys.readouterr().err  # not a terminal: progress as whole lines, never silent
+    assert "autoencoder: 100%" in err and "\r" not in err
 
 
 def _positions_only(path):
