@@ -83,3 +83,14 @@ def test_a_solver_that_refuses_some_cases_is_counted_not_fatal(cmu, tmp_path):
     assert meta["refused_cases"]["test-picky / 2 / rest"]["cases"] == row["refused_cases"]
     md = (tmp_path / "bench_all.md").read_text()
     assert f"{row['refused_cases']} of 12" in md and "even ones only" in md and "| refused |" in md
+
+
+def test_a_model_made_for_another_skeleton_is_refused_in_one_short_line(cmu, capsys):
+    """Issue 45, item 6: the counts and the first differences, never both whole joint lists."""
+    capsys.readouterr()
+    with pytest.warns(UserWarning, match="cmu"):
+        assert main(["bench", "ik", "--solvers", "neural", "--data", str(cmu), "--cases", "2"]) == 2
+    err = capsys.readouterr().err
+    line = next(ln for ln in err.splitlines() if ln.startswith("posekit: error:"))
+    assert "trained for skeleton joints" in line and "22 joints there, 31 here" in line
+    assert "LHipJoint" in line and "'joint_Root', 'Hips', 'Spine'" not in line and len(line) < 400
