@@ -31,7 +31,7 @@ import time
 from pathlib import Path
 
 __all__ = ["SOLVERS", "VOILA_PATH", "VOILA_TEMPLATE", "EXPORTS", "studio_case", "usable_solvers", "session_folder",
-           "app_studio", "refused_note", "app_page", "data_line"]
+           "app_studio", "refused_note", "app_page", "data_line", "kept_label"]
 
 VOILA_PATH = Path(__file__).parent / "voila"
 """A Jupyter data folder (for ``JUPYTER_PATH``) holding the studio's Voila page template, :data:`VOILA_TEMPLATE`."""
@@ -205,4 +205,33 @@ def app_page():
     if note:
         display(HTML(f"<small>{html.escape(note)}</small>"))
     display(studio)
+    display(kept_label(studio.editor))
     return studio
+
+
+def kept_label(editor):
+    """A line under the studio that counts, per learned solver with an exact finish (``+dls``), how often its finish
+    kept the learned pose since the page opened — the rest were finished by DLS from the start pose, the learned pose
+    discarded (:mod:`posekit.ik.finish`, ``info["kept"] == "start"``). Updated after every solve; an
+    ``ipywidgets.HTML`` (``.counts``: {solver: [kept, solves]})."""
+    import html
+
+    from ipywidgets import HTML
+
+    label = HTML()
+    label.counts = {}
+
+    def count(*_):
+        for name, res in editor.results.items():
+            info = getattr(res, "info", None) or {}
+            if "learned_ms" not in info:  # not an exact finish (or the solver refused)
+                continue
+            kept, total = label.counts.setdefault(name, [0, 0])
+            label.counts[name] = [kept + (info.get("kept") != "start"), total + 1]
+        parts = [f"{n} kept the learned pose in {k} of {t} solves" for n, (k, t) in label.counts.items()]
+        label.value = ("<small>Exact finish: " + html.escape("; ".join(parts)) + " (the others were finished by "
+                       "DLS from the start pose: the learned pose was discarded)</small>") if parts else ""
+
+    count()
+    editor.on_change(count)
+    return label

@@ -64,7 +64,7 @@ def test_a_good_page_shows_the_data_line_then_the_studio(shown, monkeypatch, tmp
     monkeypatch.chdir(tmp_path)  # the session folder is created only when a page writes, but never in the checkout
     studio = studio_app.app_page()
     assert studio is not None and list(studio.editor.solvers) == ["fabrik", "dls"]
-    assert "DeepMimic humanoid sample" in str(shown[0]) and shown[-1] is studio
+    assert "DeepMimic humanoid sample" in str(shown[0]) and shown[-2] is studio and shown[-1].value == ""
 
 
 def test_make_studio_reads_relative_paths_from_the_folder_they_were_typed_in(tmp_path):
@@ -80,3 +80,19 @@ def test_make_studio_reads_relative_paths_from_the_folder_they_were_typed_in(tmp
     assert 'POSEKIT_STUDIO_LICENCE="CC BY 4.0"' in out
     assert 'POSEKIT_STUDIO_DATA="bandai-mini"' in run("STUDIO_DATA=bandai-mini")  # a data set name stays a name
     assert 'POSEKIT_STUDIO_DATA=""' in run()
+
+
+def test_the_page_counts_how_often_the_exact_finish_kept_the_learned_pose(shown, monkeypatch, tmp_path):
+    """Issue 45, item 3: a +dls solver that finished from the start pose discarded its learned pose; the page says
+    how often that happened."""
+    monkeypatch.setenv("POSEKIT_STUDIO_SOLVERS", "fabrik,protores+dls")
+    monkeypatch.chdir(tmp_path)
+    studio = studio_app.app_page()
+    label = shown[-1]
+    ed = studio.editor
+    first = label.counts["protores+dls"]
+    assert list(label.counts) == ["protores+dls"] and first[1] == 1 and "kept the learned pose in" in label.value
+    ed.move_target(0, np.asarray(ed.rows[0]["target"]) + [0.05, 0, 0])
+    kept, total = label.counts["protores+dls"]
+    assert total == 2 and 0 <= kept <= 2
+    assert f"protores+dls kept the learned pose in {kept} of 2 solves" in label.value
