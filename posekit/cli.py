@@ -105,9 +105,13 @@ def _convert(args) -> int:
     out = Path(args.output)
     if out.suffix.lower() != ".npz":
         raise ValueError(f"{out}: the output must end in .npz (posekit's commands read .npz motion files)")
-    ms.save(out, names=np.array(ms.skeleton.names, dtype=str), parents=ms.skeleton.parents, positions=ms.global_pos)
+    arrays = ms.arrays()
+    if ms.n_clips == 1:  # one file: frame_time a number, as before (MotionSet.load reads either)
+        arrays["frame_time"] = np.array(float(ms.frame_time[0]))
+    np.savez_compressed(out, **arrays, names=np.array(ms.skeleton.names, dtype=str), parents=ms.skeleton.parents,
+                        positions=ms.global_pos)
     units = getattr(ms, "units", None)
-    print(f"wrote {out}: {ms.n_frames} frames, {ms.n_clips} clip(s), {ms.skeleton.n_joints} joints, in metres "
+    print(f"wrote {out}: {ms.n_frames} frames, {ms.n_clips} clip(s), {ms.skeleton.n_joints} joints, positions in metres "
           f"({units.describe() if units else 'as stored'}); every posekit command that takes --data or a path "
           "reads it")
     return 0
