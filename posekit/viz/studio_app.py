@@ -165,7 +165,9 @@ def refused_note(refused: dict) -> str:
     if not refused:
         return ""
     name, why = next(iter(refused.items()))
-    return (f"left out (made for another skeleton): {', '.join(refused)} — e.g. {name}: {why}")
+    other = all("trained for skeleton" in r or "trained for other skeleton" in r for r in refused.values())
+    what = "made for another skeleton" if other else "they refused this data or their weights"
+    return f"left out ({what}): {', '.join(refused)} — e.g. {name}: {why}"
 
 
 def data_line(data: str | None = None) -> str:

@@ -96,3 +96,11 @@ def test_the_page_counts_how_often_the_exact_finish_kept_the_learned_pose(shown,
     kept, total = label.counts["protores+dls"]
     assert total == 2 and 0 <= kept <= 2
     assert f"protores+dls kept the learned pose in {kept} of 2 solves" in label.value
+
+
+def test_a_solver_left_out_for_another_reason_is_not_called_made_for_another_skeleton():
+    assert studio_app.refused_note({"neural": "checkpoint a.pt was trained for skeleton joints other than this "
+                                              "skeleton's: 22 joints there, 31 here"}).startswith(
+        "left out (made for another skeleton): neural")
+    note = studio_app.refused_note({"neural": "/w/ae.pt: a broken checkpoint (truncated)"})
+    assert "another skeleton" not in note and "broken checkpoint" in note
