@@ -81,12 +81,17 @@ lab: setup warm
 # the posing studio alone as a browser app (Voila, notebooks/studio.ipynb; lesson 06 teaches it), one kernel kept
 # preheated for the next visitor (STUDIO_POOL=N keeps N, for a class arriving at once: about 0.25 GB each); Ctrl-C
 # stops it and its kernels. STUDIO_DATA (a data set or BVH folder), STUDIO_WEIGHTS (your trained models),
-# STUDIO_SOLVERS (2-4 names) choose what it poses; STUDIO_ANTIALIAS=0 draws the views without antialiasing, for
+# STUDIO_SOLVERS (2-4 names) choose what it poses, STUDIO_LICENCE (your data's licence) is shown with it; STUDIO_ANTIALIAS=0 draws the views without antialiasing, for
 # browsers without a GPU (software WebGL). The page is Voila's lab page less its CDN stylesheets
 # (posekit/viz/voila): it asks nothing of the internet
+# A relative STUDIO_DATA / STUDIO_WEIGHTS is read from the folder you typed it in: the shell's $PWD, which make -C
+# leaves as it was (make's own $(CURDIR) is this checkout); a data set name (bandai-mini) stays a name.
+USER_DIR := $(or $(PWD),$(CURDIR))
+user_path = $(if $(1),$(if $(filter /%,$(1)),$(1),$(if $(or $(wildcard $(USER_DIR)/$(1)),$(findstring /,$(1)),$(findstring .,$(1))),$(abspath $(USER_DIR)/$(1)),$(1))))
 studio: setup warm
-	cd notebooks && POSEKIT_STUDIO_DATA="$(if $(wildcard $(STUDIO_DATA)),$(abspath $(STUDIO_DATA)),$(STUDIO_DATA))" POSEKIT_STUDIO_SOLVERS="$(STUDIO_SOLVERS)" \
-	  $(if $(STUDIO_WEIGHTS),POSEKIT_WEIGHTS_DIR="$(abspath $(STUDIO_WEIGHTS))") \
+	cd notebooks && POSEKIT_STUDIO_DATA="$(call user_path,$(STUDIO_DATA))" POSEKIT_STUDIO_SOLVERS="$(STUDIO_SOLVERS)" \
+	  $(if $(STUDIO_WEIGHTS),POSEKIT_WEIGHTS_DIR="$(if $(filter /%,$(STUDIO_WEIGHTS)),$(STUDIO_WEIGHTS),$(abspath $(USER_DIR)/$(STUDIO_WEIGHTS)))") \
+	  $(if $(STUDIO_LICENCE),POSEKIT_STUDIO_LICENCE="$(STUDIO_LICENCE)") \
 	  $(if $(STUDIO_ANTIALIAS),POSEKIT_ANTIALIAS="$(STUDIO_ANTIALIAS)") \
 	  JUPYTER_PATH="../posekit/viz/voila$(if $(JUPYTER_PATH),:$(JUPYTER_PATH))" \
 	  ../$(VENV)/bin/voila studio.ipynb --port=$(or $(STUDIO_PORT),8866) --template=posekit \

@@ -3,10 +3,12 @@
 ``posekit data inspect PATH [--json]``
     A BVH file, a folder of them, a ``.npz`` or a dataset name (``sample``, ``bandai1``, ``bandai2``):
     joints, parents, frame count, frame time, clip count.
-``posekit data convert IN.bvh OUT.npz [--scale S]``
-    Writes ``names`` (J), ``parents`` (J), ``positions`` (F, J, 3: global joint positions in metres, like
-    every loader: the file's unit detected from the skeleton's height unless ``--scale`` gives metres per
-    file unit) and ``frame_time``.
+``posekit data convert IN OUT.npz [--scale S]``
+    A BVH file or folder (one clip per file) to a motion file every posekit command reads (``data inspect``,
+    ``bench ... --data``, ``train ... --data``, the studio): :meth:`posekit.data.MotionSet.save`'s arrays, and
+    for readers that want positions only ``names`` (J), ``parents`` (J) and ``positions`` (F, J, 3: global joint
+    positions in metres, like every loader: the file's unit detected from the skeleton's height unless
+    ``--scale`` gives metres per file unit); ``frame_time`` (C,) is per clip.
 ``posekit data build-sample [--pybullet-data DIR] [--out FILE]``
     Rebuilds ``data_samples/deepmimic_humanoid.npz`` from pybullet's wheel (extra ``build-data``).
 ``posekit bench fk [--poses N] [--repeats R] [--json]``
@@ -50,7 +52,7 @@ def _inspect(args) -> int:
     from .io.rigs import rig_report, standing_height
     from .data.sources import open_dataset
 
-    ms = open_dataset(args.path, scale=args.scale, progress=not args.json and sys.stderr.isatty())
+    ms = open_dataset(args.path, scale=args.scale, progress=True)
     skel = ms.skeleton
     rig = getattr(ms, "rig", None) or rig_report(skel.names, skel.roles)
     units = getattr(ms, "units", None)  # set when read from BVH
@@ -97,20 +99,21 @@ def _inspect(args) -> int:
 
 
 def _convert(args) -> int:
-    from .io.bvh import read_bvh
+    from .data.sources import open_dataset
 
-    m = read_bvh(args.input, scale=args.scale)  # metres, like every loader: the unit detected unless --scale
-    positions = m.global_positions()
+    ms = open_dataset(args.input, scale=args.scale)  # metres, like every loader: the unit detected unless --scale
     out = Path(args.output)
-    np.savez_compressed(
-        out,
-        names=np.array(m.skeleton.names, dtype=str),
-        parents=m.skeleton.parents,
-        positions=positions,
-        frame_time=np.array(m.frame_time),
-    )
-    print(f"wrote {out}: {positions.shape[0]} frames, {positions.shape[1]} joints, positions in metres "
-          f"({m.units.describe()})")
+    if out.suffix.lower() != ".npz":
+        raise ValueError(f"{out}: the output must end in .npz (posekit's commands read .npz motion files)")
+    arrays = ms.arrays()
+    if ms.n_clips == 1:  # one file: frame_time a number, as before (MotionSet.load reads either)
+        arrays["frame_time"] = np.array(float(ms.frame_time[0]))
+    np.savez_compressed(out, **arrays, names=np.array(ms.skeleton.names, dtype=str), parents=ms.skeleton.parents,
+                        positions=ms.global_pos)
+    units = getattr(ms, "units", None)
+    print(f"wrote {out}: {ms.n_frames} frames, {ms.n_clips} clip(s), {ms.skeleton.n_joints} joints, positions in metres "
+          f"({units.describe() if units else 'as stored'}); every posekit command that takes --data or a path "
+          "reads it")
     return 0
 
 
@@ -133,7 +136,7 @@ def _build_sample(args) -> int:
         from .data.bandai_mini_build import build_bandai_mini
 
         try:
-            r = build_bandai_mini(args.data_dir, out=args.out, workers=args.workers, progress=sys.stderr.isatty())
+            r = build_bandai_mini(args.data_dir, out=args.out, workers=args.workers, progress=True)
         except (FileNotFoundError, ValueError) as e:
             print(f"posekit: {e}", file=sys.stderr)
             return 2
@@ -251,9 +254,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--scale", type=float, default=None,
                    help="file units to metres for BVH (default: detected from the skeleton's height)")
     p.set_defaults(fn=_inspect)
-    p = dsub.add_parser("convert", help="BVH -> .npz of global joint positions")
-    p.add_argument("input")
-    p.add_argument("output")
+    p = dsub.add_parser("convert", help="BVH file or folder -> one .npz motion file that every posekit command "
+                        "reads (data inspect, bench --data, train --data, the studio)",
+                        description="Writes the skeleton (skeleton_names, skeleton_parents, skeleton_offsets, "
+                        "skeleton_roles), the joint rotations (local_rot, root_pos), global joint positions in "
+                        "metres (global_pos, and positions with names and parents for readers that want positions "
+                        "only), clip_id, clip_names and frame_time (seconds per frame of each clip).")
+    p.add_argument("input", help="a BVH file or a folder of BVH files (one clip per file, one skeleton)")
+    p.add_argument("output", help="the .npz to write")
     p.add_argument("--scale", type=float, default=None,
                    help="file units to metres (0.01: cm -> m; default: detected from the skeleton's height)")
     p.set_defaults(fn=_convert)

@@ -18,10 +18,12 @@ import contextlib
 import os
 from pathlib import Path
 
-__all__ = ["samples_dir", "weights_path", "user_weights_dir", "use_weights", "shared_data_dir", "require_shared_data",
+__all__ = ["samples_dir", "weights_path", "find_checkpoint", "weights_note", "held_checkpoints", "use_skeleton", "user_weights_dir",
+           "use_weights", "shared_data_dir", "require_shared_data",
            "notebooks_dir", "course_assets_dir"]
 
 _USER_WEIGHTS: list[Path] = []
+_USER_SKELETON: list[tuple] = []
 
 _CHECKOUT = Path(__file__).resolve().parent.parent
 
@@ -32,20 +34,134 @@ def samples_dir() -> Path:
     return Path(env) if env else _CHECKOUT / "data_samples"
 
 
+IDENTITY_FIELDS = ("kind", "config.arch", "config.structured", "extra.method")
+"""What a checkpoint says it is: its ``kind`` (the trainer's model: ``ae_solvers``, ``aegan``, ``protores``,
+``invrig_nn``) and the fields that tell one trainer's models apart (ProtoRes's ``arch``, the AE-GAN's
+``structured`` latent, the inverse-rig network's supersampling ``method``)."""
+
+_HEADERS: dict = {}
+
+
+def _header(path: Path):
+    """``(identity, joint names)`` of a checkpoint (cached per file and modification time); None when the file is
+    not a posekit checkpoint."""
+    try:
+        st = path.stat()
+    except OSError:
+        return None
+    key = (str(path), st.st_mtime_ns, st.st_size)
+    if key not in _HEADERS:
+        from .io.torch_file import read_torch_file
+
+        try:
+            d = read_torch_file(path)
+        except Exception:  # noqa: BLE001 - not a checkpoint posekit can read: not a candidate
+            d = None
+        if not isinstance(d, dict) or d.get("format") != "posekit-checkpoint":
+            _HEADERS[key] = None
+        else:
+            def field(name):
+                value = d
+                for part in name.split("."):
+                    value = value.get(part) if isinstance(value, dict) else None
+                return value
+
+            skel = d.get("skeleton") or {}
+            _HEADERS[key] = (tuple(field(n) for n in IDENTITY_FIELDS), tuple(skel.get("names") or ()))
+    return _HEADERS[key]
+
+
+def _describe(identity) -> str:
+    parts = [str(identity[0])] + [f"{n.split('.')[-1]} {v}" for n, v in zip(IDENTITY_FIELDS[1:], identity[1:])
+                                  if v is not None]
+    return parts[0] + (f" ({', '.join(parts[1:])})" if len(parts) > 1 else "")
+
+
+def find_checkpoint(file: str, folder) -> Path | None:
+    """The checkpoint in ``folder`` that is the model the shipped ``file`` is: the same :data:`IDENTITY_FIELDS`
+    (trainer and variant), whatever its file name; among several, the one made for the skeleton of
+    :func:`use_skeleton` when one is in use, else the one named ``file``. None when the folder holds none.
+
+    Raises
+    ------
+    ValueError
+        Several checkpoints of that model and nothing to choose between them, naming them.
+    """
+    shipped = _header(samples_dir() / "weights" / file)
+    folder = Path(folder)
+    if shipped is None:  # not a shipped model: by name, as before
+        return folder / file if (folder / file).is_file() else None
+    found = [p for p in sorted(folder.glob("*.pt")) if (_header(p) or (None,))[0] == shipped[0]]
+    if _USER_SKELETON and len(found) > 1:
+        fits = [p for p in found if _header(p)[1] == _USER_SKELETON[-1]]
+        found = fits or found
+    if len(found) > 1:
+        named = [p for p in found if p.name == file]
+        if named:
+            return named[0]
+        raise ValueError(f"{folder}: {len(found)} checkpoints are {_describe(shipped[0])} models "
+                         f"({', '.join(p.name for p in found[:4])}{', ...' if len(found) > 4 else ''}) and none is "
+                         f"named {file}; keep one of them in the folder, or name the one to use {file}")
+    return found[0] if found else None
+
+
+def weights_note(file: str) -> str:
+    """What :func:`weights_path` looked for in the user's weights folder, in words (for an error): empty when no
+    folder is in use or it holds the model."""
+    mine = user_weights_dir()
+    shipped = _header(samples_dir() / "weights" / file)
+    if mine is None or shipped is None or not mine.is_dir():
+        return ""
+    try:
+        if find_checkpoint(file, mine) is not None:
+            return ""
+    except ValueError as e:
+        return str(e)
+    held = [f"{p.name} ({_describe(_header(p)[0]) if _header(p) else 'not a posekit checkpoint'})"
+            for p in sorted(mine.glob("*.pt"))]
+    return (f"{mine} holds no {_describe(shipped[0])} checkpoint (it holds {', '.join(held[:5]) or 'no .pt file'}"
+            f"{', ...' if len(held) > 5 else ''}), so the shipped {file} was used")
+
+
+def held_checkpoints() -> str:
+    """What the user's weights folder in use holds, in words (``"DIR holds a.pt (ae_solvers), ..."``); empty
+    when none is in use."""
+    mine = user_weights_dir()
+    if mine is None or not mine.is_dir():
+        return ""
+    held = [f"{p.name} ({_describe(_header(p)[0]) if _header(p) else 'not a posekit checkpoint'})"
+            for p in sorted(mine.glob("*.pt"))]
+    return f"{mine} holds {', '.join(held[:5]) or 'no .pt file'}{', ...' if len(held) > 5 else ''}"
+
+
 def weights_path(file: str, folder=None) -> Path:
     """Where the weight file ``file`` lives: in ``folder`` if given; else in the user's weights folder
-    (:func:`user_weights_dir`) when one is in use and holds ``file``; else in ``weights/`` of :func:`samples_dir`.
+    (:func:`user_weights_dir`) when one is in use and holds a checkpoint of that model (:func:`find_checkpoint`:
+    found by what the checkpoint says it is, not by its file name); else in ``weights/`` of :func:`samples_dir`.
 
-    Every learned model's weights are found through this one function (each model names its file:
+    Every learned model's weights are found through this one function (each model names its shipped file:
     ``WEIGHTS`` beside its networks), so a folder of models a user trained on their own data (``posekit train
-    ... --data FOLDER --out DIR/FILE``) replaces the shipped ones file by file; a file the folder lacks is the
-    shipped one."""
+    ... --data FOLDER --out DIR/ANY_NAME.pt``) replaces the shipped ones model by model; a model the folder
+    lacks is the shipped one."""
     if folder:
         return Path(folder) / file
     mine = user_weights_dir()
-    if mine is not None and (mine / file).is_file():
-        return mine / file
+    if mine is not None and mine.is_dir():
+        found = find_checkpoint(file, mine)
+        if found is not None:
+            return found
     return samples_dir() / "weights" / file
+
+
+@contextlib.contextmanager
+def use_skeleton(names):
+    """Within the block, :func:`find_checkpoint` prefers, among several checkpoints of one model in the user's
+    folder, the one trained for these joint names (the data a benchmark opened)."""
+    _USER_SKELETON.append(tuple(str(n) for n in names))
+    try:
+        yield
+    finally:
+        _USER_SKELETON.pop()
 
 
 def user_weights_dir() -> Path | None:

@@ -7,11 +7,74 @@ when the bar closes, updates that display, so the stored output is the finished 
 early on purpose (a time budget, early stopping) calls :func:`finish` before closing: the total becomes
 the count done, so the bar ends full and green rather than red at "460/9000". Used by the library's long
 loops (training, benchmarks).
+
+Outside a terminal (a log file, a pipe, CI) a redrawn bar is one endless line of carriage returns, or nothing at
+all; there the bar is a line of text every :data:`LOG_SECONDS` seconds (also while one step takes longer), one
+when it starts and one when it ends, so a long ``posekit train`` in a log is never silent for minutes.
 """
 
 from __future__ import annotations
 
-__all__ = ["tqdm", "finish"]
+import sys
+import threading
+import time
+
+__all__ = ["tqdm", "finish", "LOG_SECONDS"]
+
+LOG_SECONDS = 5.0
+"""Seconds between two progress lines when the output is not a terminal."""
+
+
+def _log_class():
+    from tqdm.std import tqdm as std
+
+    class LogBar(std):
+        """A bar written as whole lines: at the start, every :data:`LOG_SECONDS` seconds, and at the end."""
+
+        def __init__(self, *a, **kw):
+            kw.setdefault("mininterval", LOG_SECONDS)
+            kw.setdefault("file", sys.stderr)
+            self._written, self._text, self._write_lock, self._stop = 0.0, None, threading.Lock(), threading.Event()
+            super().__init__(*a, **kw)
+            if not self.disable:
+                threading.Thread(target=self._beat, daemon=True).start()
+
+        def _beat(self):
+            while not self._stop.wait(LOG_SECONDS / 5):
+                if time.time() - self._written >= LOG_SECONDS and not self.disable:
+                    self.display()
+
+        def display(self, msg=None, pos=None):
+            if self.disable:
+                return True
+            with self._write_lock:
+                text = str(self) if msg is None else msg
+                if text == self._text:  # the same line again (the last step, then the close)
+                    return True
+                self._written, self._text = time.time(), text
+                try:
+                    self.fp.write(text + "\n")
+                    self.fp.flush()
+                except (ValueError, OSError):  # the stream was closed under us
+                    self._stop.set()
+            return True
+
+        def close(self):
+            if self.disable:
+                return
+            self._stop.set()
+            self.display()
+            self.sp = None  # the base class then writes nothing more
+            super().close()
+
+    return LogBar
+
+
+def _is_terminal(stream) -> bool:
+    try:
+        return bool(stream.isatty())
+    except (AttributeError, ValueError):
+        return False
 
 
 def _notebook_class():
@@ -26,9 +89,12 @@ def _notebook_class():
 
 
 def tqdm(*args, **kwargs):
-    """``tqdm.auto.tqdm(*args, **kwargs)``; in Jupyter, a widget bar whose stored output ends finished."""
+    """``tqdm.auto.tqdm(*args, **kwargs)``; in Jupyter, a widget bar whose stored output ends finished; when the
+    output is not a terminal, a line every :data:`LOG_SECONDS` seconds."""
     base = _notebook_class()
     if base is None or kwargs.get("disable"):
+        if not kwargs.get("disable") and not _is_terminal(kwargs.get("file") or sys.stderr):
+            return _log_class()(*args, **kwargs)  # a log or a pipe: lines every few seconds
         from tqdm.auto import tqdm as auto
 
         return auto(*args, **kwargs)

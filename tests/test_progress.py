@@ -21,3 +21,23 @@ def test_finish_leaves_a_full_bar_and_none_alone():
     finish(bar)
     finish(None)
     assert bar.total == 3 and bar.n == 3
+
+
+def test_outside_a_terminal_the_bar_is_whole_lines_also_while_a_step_runs(monkeypatch):
+    """Issue 45: in a log (not a terminal) a bar writes a line at the start, every LOG_SECONDS seconds even while one
+    step runs long, and one at the end; never carriage returns."""
+    import threading
+
+    from posekit import progress
+
+    monkeypatch.setattr(progress, "LOG_SECONDS", 0.4)
+    out = io.StringIO()
+    bar = tqdm(total=2, desc="train", unit="epoch", file=out)
+    threading.Event().wait(2.2)  # one long step: the bar keeps saying it is alive
+    bar.update(2)
+    bar.close()
+    lines = out.getvalue().splitlines()
+    assert "\r" not in out.getvalue() and out.getvalue().endswith("\n")
+    assert lines[0].startswith("train:   0%") and lines[-1].startswith("train: 100%") and "2/2" in lines[-1]
+    assert sum("0/2" in ln for ln in lines) >= 2  # lines while the step ran, not only at its end
+    assert len(set(lines)) == len(lines)  # no line twice

@@ -305,9 +305,8 @@ def out_argument(value):
 
 
 def _cli_run(args) -> list[dict]:
-    import sys
 
-    show = not args.json and sys.stderr.isatty()
+    show = True  # on stderr: a bar in a terminal, a line every few seconds in a log (posekit.progress)
     out = out_argument(args.out)
     result = run_scale(args.protocol, n_cases=args.cases, seed=args.seed, out=out, progress=show, limit=args.limit,
                        step=args.step)

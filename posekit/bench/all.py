@@ -36,7 +36,7 @@ from pathlib import Path
 from ..data.cases import START_CONDITIONS, start_condition
 from ..ik.api import EFFECTOR_SETS
 from ..ik.registry import solver_info
-from .ik import RANDOM, TABLE_LABELS, _group_title, default_data, effector_set_names, resolve_solvers
+from .ik import RANDOM, TABLE_LABELS, TABLES as IK_TABLES, WEIGHTS_HELP, _group_title, default_data, effector_set_names, resolve_solvers
 from .ik import run as run_ik
 from .all_plot import plot
 from .plugin import arg, register_benchmark
@@ -49,12 +49,14 @@ FILES = ("bench_all.json", "bench_all.md", "bench_all.png")
 
 KEYS = ("method", "start", "effectors", "lesson", "kinds", "latency_ms_median", "mpjpe_mm_median",
         "effector_error_mm_median", "effector_error_deg_median", "natural_mm_median", "converged_fraction",
-        "bone_length_error_mm_max", "cases", "data")
-"""The keys of every row (definitions in :mod:`posekit.bench.ik`)."""
+        "bone_length_error_mm_max", "cases", "refused_cases", "refused_reason", "learned_kept_fraction", "data")
+"""The keys of every row (definitions in :mod:`posekit.bench.ik`; ``refused_cases`` and ``refused_reason``: the
+cases the solver refused and the first refusal's sentence; ``learned_kept_fraction``: for a learned solver with an
+exact finish, the share of its cases finished from the learned pose, else None)."""
 
 _DIGITS = {"latency_ms_median": 4, "mpjpe_mm_median": 3, "effector_error_mm_median": 3,
            "effector_error_deg_median": 3, "natural_mm_median": 3, "converged_fraction": 4,
-           "bone_length_error_mm_max": 4}
+           "bone_length_error_mm_max": 4, "learned_kept_fraction": 4}
 """Decimals kept in the rows (0.1 us, 1 um): beyond them the numbers are noise."""
 
 
@@ -146,7 +148,9 @@ def run(n_cases: int = 200, starts=("rest", "other-clip"), effectors=("2", "5", 
         for k, digits in _DIGITS.items():
             v = r.get(k)
             row[k] = None if v is None else round(float(v), digits)
-        row["cases"], row["data"] = int(r["cases"]), data
+        row["cases"] = int(r["cases"])
+        row["refused_cases"], row["refused_reason"] = int(r.get("refused_cases") or 0), r.get("refused_reason")
+        row["data"] = data
         rows.append(row)
     rows.sort(key=lambda r: (sets.index(r["effectors"]), starts.index(r["start"]), r["mpjpe_mm_median"], r["method"]))
     if out is not None:
@@ -163,6 +167,9 @@ def run(n_cases: int = 200, starts=("rest", "other-clip"), effectors=("2", "5", 
                 "seed": int(seed), "data": data, "threads": 1,
                 "solvers": list(names), "skipped": [n for n in names if n not in {r["method"] for r in rows}],
                 "refused": {f"{n} / {e}": why for (n, e), why in refused.items()},
+                "refused_cases": {f"{r['method']} / {r['effectors']} / {r['start']}":
+                                  {"cases": r["refused_cases"], "of": r["cases"], "reason": r["refused_reason"]}
+                                  for r in rows if r["refused_cases"]},
                 "natural_floor_mm_median": floors, "seconds": round(seconds, 1), "machine": machine(),
                 "date": today()}
         write_report(rows, meta, out)
@@ -221,14 +228,16 @@ SET_TEXT = {"2": "two hands", "5": "hands, feet and head", "5point": "chest, han
 """What each effector set asks for, in words."""
 
 
-def _columns(angular: bool) -> tuple:
+def _columns(angular: bool, refused: bool = False, kept: bool = False) -> tuple:
     return ("solver", "lesson", "ms per solve", "MPJPE mm", "effector mm") + (("effector deg",) if angular else ()) \
-        + ("natural mm", "converged")
+        + ("natural mm", "converged") + (("refused",) if refused else ()) + (("learned kept",) if kept else ())
 
 
 def _table(rows: list[dict]) -> str:
     angular = any(r.get("effector_error_deg_median") is not None for r in rows)
-    cols = _columns(angular)
+    refused = any(r.get("refused_cases") for r in rows)
+    kept = any(r.get("learned_kept_fraction") is not None for r in rows)
+    cols = _columns(angular, refused, kept)
     lines = ["| " + " | ".join(cols) + " |", "|:--|:-:|" + "--:|" * (len(cols) - 2)]
     for r in sorted(rows, key=lambda r: (r["mpjpe_mm_median"], r["method"])):
         cells = [f"`{r['method']}`", r["lesson"], _ms(r["latency_ms_median"]), f"{r['mpjpe_mm_median']:.1f}",
@@ -237,6 +246,11 @@ def _table(rows: list[dict]) -> str:
             deg = r.get("effector_error_deg_median")
             cells.append("n/a" if deg is None or deg != deg else f"{deg:.2f}" if deg < 10 else f"{deg:.1f}")
         cells += [_mm(r["natural_mm_median"]), f"{100 * r['converged_fraction']:.0f}%"]
+        if refused:
+            cells.append(f"{r.get('refused_cases') or 0} of {r['cases']}")
+        if kept:
+            k = r.get("learned_kept_fraction")
+            cells.append("" if k is None else f"{100 * k:.0f}%")
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
@@ -304,8 +318,13 @@ def markdown(rows: list[dict], meta: dict) -> str:
               if RANDOM in sets else "")
            + "; *natural mm*, the distance to the nearest training pose"
            + (f" (the true poses' own: {floor:.1f} mm)" if floor is not None else "")
-           + "; *converged*, the share of cases with every effector within its tolerance (1 mm, 1 degree). "
-           "*lesson*: the notebook that introduces the solver.", "",
+           + "; *converged*, the share of cases with every effector within its tolerance (1 mm, 1 degree)"
+           + ("; *refused*, the cases the solver refused (counted as not converged; the other columns are over the "
+              "cases it solved)" if any(r.get("refused_cases") for r in rows) else "")
+           + ("; *learned kept*, for a learned solver with an exact finish (`+dls`), the share of cases finished "
+              "from the learned pose — the rest were finished by DLS from the start pose, so the learned pose was "
+              "discarded" if any(r.get("learned_kept_fraction") is not None for r in rows) else "")
+           + ". *lesson*: the notebook that introduces the solver.", "",
            f"Machine: {m['platform']}, {m['processor']}, {m['cpu_count']} CPUs"
            + (f"; made on {meta['date']}" if meta.get("date") else "") + "; the run took "
            + f"{meta.get('seconds', float('nan')) / 60:.1f} min. Times depend on the machine and its load; "
@@ -323,6 +342,13 @@ def markdown(rows: list[dict], meta: dict) -> str:
         out += ["", "Not measured on a set (the solver refused its effectors): "
                 + "; ".join(f"`{e}`: " + ", ".join(f"`{n}`" for n in ns) for e, ns in by_set.items())
                 + f". The first refusal said: \"{reason[:300]}{'...' if len(reason) > 300 else ''}\""]
+    partly = meta.get("refused_cases") or {}
+    if partly:
+        first = next(iter(partly.values()))
+        out += ["", "Cases refused (counted in *refused*, not scored): "
+                + "; ".join(f"`{k.split(' / ')[0]}` {v['cases']} of {v['of']} (`{k.split(' / ')[1]}`, "
+                            f"{k.split(' / ')[2]})" for k, v in partly.items())
+                + f". The first refusal said: \"{(first['reason'] or '')[:300]}\""]
     out += ["", "## Who wins where", "",
             f"Per effector set and start: the closest pose of any solver, the closest of those that meet their "
             f"effectors (converged in at least {100 * EXACT:.0f}% of the cases), and plain DLS and FABRIK "
@@ -380,7 +406,6 @@ def _out(value):
 
 
 def _cli_run(args) -> list[dict]:
-    import sys
 
     from .ik import weights_and_data
 
@@ -388,7 +413,7 @@ def _cli_run(args) -> list[dict]:
     weights, data = weights_and_data(args, resolve_solvers("all"))
     with weights:
         return run(n_cases=args.cases, starts=args.start, effectors=args.effectors, seed=args.seed,
-                   out=_out(args.out), progress=not args.json and sys.stderr.isatty(), data=data)
+                   out=_out(args.out), progress=True, data=data)
 
 
 def _header(rows, args) -> str:
@@ -403,7 +428,7 @@ def _header(rows, args) -> str:
 
 TABLES = [("Speed and quality (medians over cases)",
            ["method", "effectors", "latency_ms_median", "mpjpe_mm_median", "effector_error_mm_median",
-            "effector_error_deg_median", "natural_mm_median", "converged_fraction"])]
+            "effector_error_deg_median", "natural_mm_median", "converged_fraction"]), IK_TABLES[-1]]
 """The table ``posekit bench all`` prints per start condition (fits 100 columns)."""
 
 register_benchmark(
@@ -421,9 +446,7 @@ register_benchmark(
         arg("--data", default=None,
             help="sample, bandai-mini, bandai1, bandai2, or a BVH file/folder (default: the data the shipped learned "
                  "solvers were trained on, bandai-mini); learned solvers made for another skeleton are skipped"),
-        arg("--weights", default=None,
-            help="a folder of checkpoints you trained (posekit train ... --data FOLDER --out DIR/FILE.pt): every "
-                 "learned solver loads its file from it (a file it lacks: the shipped one); give --data too"),
+        arg("--weights", default=None, help=WEIGHTS_HELP),
         arg("--out", default=None,
             help="folder for bench_all.json, .md and .png (default: data_samples/results; none or '': "
                  "do not write)"),

@@ -190,13 +190,49 @@ class SolverRefused(ValueError):
     """A solver refused a benchmark's effectors (e.g. a neural solver with no network for those joints)."""
 
 
+ONE_POINT = 1e-6
+"""Two joints closer than this (metres) in a target pose sit on one point: a zero-length bone joins them (CMU's
+Hips and LHipJoint), and no solver can place them apart."""
+
+
+def _apart(skeleton, case: list, target_pos) -> list:
+    """``case`` without the position effectors on a joint that sits on one point (:data:`ONE_POINT`) with the joint
+    of an earlier position effector: the second of two such effectors asks nothing the first does not."""
+    kept, taken = [], []
+    for e in case:
+        if e.kind == "position":
+            p = np.asarray(target_pos[skeleton.index(e.joint)], float)
+            if any(np.linalg.norm(p - q) < ONE_POINT for q in taken):
+                continue
+            taken.append(p)
+        kept.append(e)
+    return kept
+
+
 def case_effectors(cases: Cases, effectors: str, tolerance: float = 1e-3, seed: int = 0) -> list[list]:
-    """Every case's effectors: a named set at the true pose's joints, or the ``random`` mixed-kind draw."""
+    """Every case's effectors: a named set at the true pose's joints, or the ``random`` mixed-kind draw.
+
+    The ``random`` draw keeps one position effector per point: on a skeleton with zero-length bones (CMU's Hips
+    and LHipJoint, its shoulders and spine joints) two drawn joints can sit on one point, and the second effector
+    is dropped (:func:`_apart`); on a skeleton without such bones the draw is lesson 05's unchanged."""
     if effectors == RANDOM:
         from ..evaluation.effector_cases import random_case_effectors
 
-        return random_case_effectors(cases, seed, tolerance)
+        draw = random_case_effectors(cases, seed, tolerance)
+        return [_apart(cases.skeleton, case, cases.target_pos[i]) for i, case in enumerate(draw)]
     return [effector_set(cases.skeleton, effectors, cases.target_pos[i], tolerance) for i in range(len(cases))]
+
+
+def _take(cases: Cases, idx) -> Cases:
+    """The cases at ``idx`` (an index array), every per-case array cut alike."""
+    idx = np.asarray(idx, dtype=np.int64)
+    if len(idx) == len(cases) and np.array_equal(idx, np.arange(len(cases))):
+        return cases
+    cut = lambda a: None if a is None or np.ndim(a) == 0 else np.asarray(a)[idx]
+    return Cases(cases.skeleton, cases.start_rot[idx], cases.start_root[idx], cut(cases.start_local_pos),
+                 cases.start_pos[idx], cases.target_pos[idx], cases.start, cases.source, cut(cases.target_rot),
+                 cut(cases.target_root), cut(cases.target_local_pos), cut(cases.start_frame),
+                 cut(cases.target_frame), cases.train_frames, cases.split)
 
 
 def evaluate_solver(solver, cases: Cases, effectors: str, tolerance: float = 1e-3,
@@ -207,34 +243,63 @@ def evaluate_solver(solver, cases: Cases, effectors: str, tolerance: float = 1e-
     A solver is given the effectors of the kinds it honours (``solver.kinds``) and scored on all of them:
     with ``random`` a positions-only solver's rotation and look-at misses count against it.
 
+    A case the solver refuses (a ``ValueError``: e.g. FABRIK given two effectors on one point) is counted, not
+    fatal: ``refused_cases`` is how many, ``refused_reason`` the first refusal's sentence; the medians are over
+    the cases it solved, and ``converged_fraction`` is over every case (a refused case did not converge).
+    ``learned_kept_fraction``, for a learned solver with an exact finish (:mod:`posekit.ik.finish`), is the share
+    of its solved cases whose result was finished from the learned pose (not DLS from the start pose).
+
     Raises
     ------
     SolverRefused
-        The solver refused the first case's effectors (its message says why); nothing was measured.
+        The solver refused every case's effectors (its first message says why); nothing was measured.
     """
     effs = case_effectors(cases, effectors, tolerance, seed)
     given = [[e for e in case if e.kind in solver.kinds] for case in effs]
-    try:
-        solver.solve(cases.pose(0), given[0])  # warm-up (JIT)
-    except ValueError as err:
-        raise SolverRefused(str(err)) from err
-    lat, iters, pos, rots = [], [], [], []
+    reasons = {}
+    warm = None
+    for i in range(len(cases)):  # warm-up (JIT) on the first case the solver takes
+        try:
+            solver.solve(cases.pose(i), given[i])
+            warm = i
+            break
+        except ValueError as err:
+            reasons[i] = str(err)
+    if warm is None:
+        raise SolverRefused(next(iter(reasons.values())))
+    lat, iters, pos, rots, solved, kept = [], [], [], [], [], []
     for i in range(len(cases)):
+        if i in reasons:
+            continue
         start = cases.pose(i)
         t = time.perf_counter()
-        res = solver.solve(start, given[i])
+        try:
+            res = solver.solve(start, given[i])
+        except ValueError as err:
+            reasons[i] = str(err)
+            continue
         lat.append(time.perf_counter() - t)
         pos.append(res.pose.global_pos)
         rots.append(res.pose.local_rot)
         iters.append(res.iterations)
+        solved.append(i)
+        info = getattr(res, "info", None) or {}
+        if "learned_ms" in info:  # an exact finish (posekit.ik.finish): did it keep the learned pose?
+            kept.append(info.get("kept") != "start")
     tracemalloc.start()
-    solver.solve(cases.pose(0), given[0])
+    solver.solve(cases.pose(warm), given[warm])
     peak = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
     rot = np.stack(rots) if all(r is not None for r in rots) else None
-    scores = score_poses(cases, np.stack(pos), effs, rot, natural, natural_floor).summary()
+    floor = None if natural_floor is None else np.asarray(natural_floor)[solved]
+    scores = score_poses(_take(cases, solved), np.stack(pos), [effs[i] for i in solved], rot, natural,
+                         floor).summary()
+    if reasons:
+        scores["converged_fraction"] = float(scores["converged_fraction"]) * len(solved) / len(cases)
     row = {"cases": len(cases), "latency_ms_median": float(np.median(lat) * 1e3), **scores,
-           "iterations_median": float(np.median(iters)), "memory_kb": round(peak / 1024, 1)}
+           "iterations_median": float(np.median(iters)), "memory_kb": round(peak / 1024, 1),
+           "refused_cases": len(reasons), "refused_reason": reasons[min(reasons)] if reasons else None,
+           "learned_kept_fraction": float(np.mean(kept)) if kept else None}
     if hasattr(solver, "sizes_kb") and effectors in EFFECTOR_SETS:  # a learned solver: the networks one solve runs
         row.update(solver.sizes_kb(EFFECTOR_SETS[effectors]))
     return row
@@ -314,18 +379,24 @@ def run(motions, solvers=("fabrik", "ccd", "dls"), effector_sets=("2", "5"), n_c
     if natural:
         nat = NaturalnessIndex(s, motions.global_pos[first.train_frames], seed=seed)
         floor = nat.distance(first.target_pos)  # the targets are the same under every start condition
+    from ..paths import held_checkpoints, use_skeleton
+
     built, skipped = {}, {}
-    for name in solvers:
-        try:
-            built[name] = make_solver(name, s)
-        except ValueError as err:
-            if not every:  # asked for by name: its refusal (e.g. weights made for another skeleton) is the answer
-                raise
-            skipped[name] = str(err)
+    with use_skeleton(s.names):  # among several checkpoints of one model in --weights DIR: the one for this data
+        for name in solvers:
+            try:
+                built[name] = make_solver(name, s)
+            except ValueError as err:
+                if not every:  # asked for by name: its refusal (e.g. weights made for another skeleton) is the answer
+                    raise
+                skipped[name] = str(err)
     if skipped:
         first_reason = next(iter(skipped.values()))
+        held = held_checkpoints()
         warnings.warn(f"bench ik: skipping solver(s) {', '.join(map(repr, skipped))} on {first.source!r} "
-                      f"({first_reason[:200]}{'...' if len(first_reason) > 200 else ''})", UserWarning, stacklevel=2)
+                      f"({first_reason[:200]}{'...' if len(first_reason) > 200 else ''})"
+                      + (f"; a learned solver takes a checkpoint from your weights folder when the checkpoint says it "
+                         f"is that model, and {held}" if held else ""), UserWarning, stacklevel=2)
     solvers = tuple(built)
     jobs = [(st, name, e) for st in starts for name in solvers for e in effector_sets]
     bar = None
@@ -364,6 +435,12 @@ def run(motions, solvers=("fabrik", "ccd", "dls"), effector_sets=("2", "5"), n_c
                     bar.update()
     if bar is not None:
         bar.close()
+    partly = [r for r in rows if r.get("refused_cases")]
+    if partly:
+        warnings.warn("bench ik: cases refused (counted, not measured): "
+                      + "; ".join(f"{r['method']!r} {r['refused_cases']} of {r['cases']} on set {r['effectors']!r} "
+                                  f"from {r['start']}" for r in partly[:4]) + ("; ..." if len(partly) > 4 else "")
+                      + f" (the first said: {partly[0]['refused_reason'][:160]})", UserWarning, stacklevel=2)
     if refused:
         warnings.warn("bench ik: not measured (the solver refused the effectors): "
                       + "; ".join(f"{n!r} on set {e!r} ({why[:160]})" for (n, e), why in refused.items()),
@@ -386,6 +463,9 @@ TABLES = [
     ("Pose (medians over cases; body joints, pelvis-relative; floor: the true pose's own naturalness)",
      ["method", "effectors", "mpjpe_mm_median", "rotation_error_deg_median", "natural_mm_median",
       "natural_floor_mm_median"]),
+    ("Refused cases (not scored) and the exact finish (learned kept: finished from the learned pose)",
+     ["method", "effectors", "refused_cases", "learned_kept_fraction"],
+     lambda r: bool(r.get("refused_cases")) or r.get("learned_kept_fraction") is not None),
 ]
 """The tables ``posekit bench ik`` prints per start condition: (title, JSON keys). Each fits 100 columns."""
 
@@ -393,14 +473,26 @@ TABLE_LABELS = {
     "effectors": "effectors", "latency_ms_median": "ms", "paper_latency_ms": "paper ms", "memory_kb": "kB",
     "solves_per_s": "solves/s", "model_kb": "model kB", "solver_kb": "solver kB", "paper_kb": "paper kB",
     "us_per_pose": "us/pose", "effector_error_mm_median": "effector mm", "effector_error_deg_median": "effector deg",
-    "converged_fraction": "converged", "iterations_median": "iters", "bone_length_error_mm_max": "bone mm",
+    "converged_fraction": "converged", "refused_cases": "refused", "learned_kept_fraction": "learned kept",
+    "iterations_median": "iters", "bone_length_error_mm_max": "bone mm",
     "mpjpe_mm_median": "MPJPE mm", "rotation_error_deg_median": "rotation deg", "natural_mm_median": "natural mm",
     "natural_floor_mm_median": "floor mm",
 }
 """Short table headers for the JSON keys (units in the header)."""
 
-TABLE_COLUMNS = ["method"] + list(dict.fromkeys(c for _, cols in TABLES for c in cols if c != "method"))
+TABLE_COLUMNS = ["method"] + list(dict.fromkeys(c for t in TABLES for c in t[1] if c != "method"))
 """Every column in one table (``posekit bench ik --wide``)."""
+
+
+WEIGHTS_HELP = ("a folder of checkpoints you trained (posekit train NAME --data DATA --out DIR/ANY_NAME.pt): each learned "
+                "solver loads the checkpoint in DIR that says it is its model, whatever the file is called: neural* "
+                "(kind ae_solvers: train ae-solvers), latent-opt* (kind aegan, structured: train aegan without "
+                "--dense), protores, protores-masked-fcr, protores-transformer (kind protores, arch protores, "
+                "masked-fcr or transformer: train protores --arch ...); of several checkpoints of one model, the one "
+                "trained for --data's skeleton, else the one with the shipped file's name (ae_solvers.pt, aegan.pt, "
+                "protores.pt, protores_masked_fcr.pt, protores_transformer.pt); a model DIR lacks is the shipped one "
+                "(made for the Bandai skeleton: skipped on other data); give --data too")
+"""``--weights DIR`` of ``posekit bench ik`` and ``bench all``: how a checkpoint is found (:func:`posekit.paths.find_checkpoint`)."""
 
 
 def weights_and_data(args, solvers) -> tuple:
@@ -420,14 +512,13 @@ def weights_and_data(args, solvers) -> tuple:
 
 
 def _cli_run(args) -> list[dict]:
-    import sys
 
     from ..data.sources import open_dataset
 
     solvers = resolve_solvers(args.solvers)  # refuse bad names before loading data
     _starts(args.start)
     weights, data = weights_and_data(args, solvers)
-    show = not args.json and sys.stderr.isatty()
+    show = True  # on stderr: a bar in a terminal, a line every few seconds in a log (posekit.progress)
     with weights:
         motions = open_dataset(data, scale=args.scale, progress=show)
         return run(motions, solvers=solvers, effector_sets=args.effectors.split(","), n_cases=args.cases,
@@ -474,9 +565,7 @@ register_benchmark(
         arg("--data", default=None,
             help="sample, bandai-mini, bandai1, bandai2, or a BVH file/folder or .npz (default: the data the learned "
                  "solvers of the run were trained on, e.g. bandai-mini for neural; else sample)"),
-        arg("--weights", default=None,
-            help="a folder of checkpoints you trained (posekit train ... --data FOLDER --out DIR/FILE.pt): the learned "
-                 "solvers load their file from it (a file it lacks: the shipped one); give --data too"),
+        arg("--weights", default=None, help=WEIGHTS_HELP),
         arg("--scale", type=float, default=None,
             help="file units to metres for a BVH path (default: detected from the skeleton's height)"),
         arg("--seed", type=int, default=0, help="seed of the held-out split and of the case draw"),

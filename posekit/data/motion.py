@@ -136,8 +136,9 @@ class MotionSet:
         return self
 
     # ------------------------------------------------------------------ io
-    def save(self, path):
-        """Save as ``.npz`` (see :meth:`load`)."""
+    def arrays(self) -> dict:
+        """The arrays :meth:`save` writes: the skeleton's (``skeleton_*``), ``local_rot``, ``root_pos``,
+        ``global_pos``, ``clip_id``, ``clip_names``, ``frame_time`` and, when set, ``local_pos``."""
         arrays = {
             **self.skeleton.to_arrays(),
             "local_rot": self.local_rot, "root_pos": self.root_pos, "global_pos": self.global_pos,
@@ -146,14 +147,57 @@ class MotionSet:
         }
         if self.local_pos is not None:
             arrays["local_pos"] = self.local_pos
-        np.savez_compressed(path, **arrays)
+        return arrays
+
+    def save(self, path, **extra):
+        """Save as ``.npz`` (see :meth:`load`); ``extra`` arrays are stored beside :meth:`arrays` (``posekit data
+        convert`` adds ``names``, ``parents`` and ``positions`` for readers that want positions only)."""
+        np.savez_compressed(path, **self.arrays(), **extra)
 
     @classmethod
     def load(cls, path, source: str | None = None) -> "MotionSet":
-        """Load a file written by :meth:`save` or by ``posekit data build-sample``."""
-        with np.load(path, allow_pickle=False) as z:
-            return cls(
-                Skeleton.from_arrays(z), z["local_rot"], z["root_pos"], z["global_pos"], z["clip_id"],
-                list(z["clip_names"]), z["frame_time"], z["local_pos"] if "local_pos" in z else None,
-                source or str(path),
-            )
+        """Load a file written by :meth:`save`, by ``posekit data convert`` or by ``posekit data build-sample``.
+
+        Raises
+        ------
+        ValueError
+            A sentence naming the file when it is not an ``.npz`` numpy can read, lacks an array a motion set
+            needs (a file of joint positions only, as ``posekit data convert`` wrote before it kept rotations,
+            is told apart), or holds arrays of the wrong shapes.
+        """
+        import zipfile
+
+        path = str(path)
+        try:
+            z = np.load(path, allow_pickle=False)
+            if not hasattr(z, "files"):
+                raise ValueError(f"{path}: holds one numpy array, not an .npz archive of named arrays")
+            with z:
+                have = set(z.files)
+                need = {"skeleton_names", "skeleton_parents", "skeleton_offsets", "skeleton_roles", "skeleton_name",
+                        "local_rot", "root_pos", "global_pos", "clip_id", "clip_names", "frame_time"}
+                lacking = sorted(need - have)
+                if lacking:
+                    if {"names", "parents", "positions"} <= have:
+                        raise ValueError(f"{path}: holds joint positions only (an older `posekit data convert` wrote "
+                                         "it), without the joint rotations posekit's commands need; convert the BVH "
+                                         "again with this posekit's `posekit data convert`")
+                    shown = ", ".join(lacking[:4]) + (f" and {len(lacking) - 4} more" if len(lacking) > 4 else "")
+                    raise ValueError(f"{path}: not a posekit motion file: it lacks {shown} (posekit reads the .npz "
+                                     "files that `posekit data convert` and MotionSet.save write)")
+                return cls(
+                    Skeleton.from_arrays(z), z["local_rot"], z["root_pos"], z["global_pos"], z["clip_id"],
+                    list(z["clip_names"]), z["frame_time"], z["local_pos"] if "local_pos" in z.files else None,
+                    source or path,
+                )
+        except ValueError as e:
+            text = str(e)
+            if text.startswith(path + ":"):
+                raise
+            if "pickle" in text:  # numpy's advice to load with allow_pickle: never ours to give
+                raise ValueError(f"{path}: not a posekit .npz (numpy cannot read it as an archive of arrays)") from None
+            raise ValueError(f"{path}: not a posekit motion file ({text})") from None
+        except (zipfile.BadZipFile, EOFError, KeyError, OSError) as e:
+            if isinstance(e, (FileNotFoundError, IsADirectoryError, PermissionError)):
+                raise
+            raise ValueError(f"{path}: a broken .npz (numpy cannot read it: {e})") from None

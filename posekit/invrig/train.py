@@ -53,10 +53,9 @@ def train_all(methods=METHODS, samples: int = 20_000, epochs: int = 20, seed: in
 
 def _cli(args) -> int:
     """``posekit train invrig``."""
-    import sys
 
     paths = train_all(methods=args.methods.split(","), samples=args.samples, epochs=args.epochs, seed=args.seed,
-                      out=args.out, progress=sys.stderr.isatty())
+                      out=args.out, progress=True)
     for m, p in paths.items():
         print_written(p)
     return 0

@@ -262,6 +262,13 @@ def read_bvh(path, scale: float | None = 1.0, drop_tpose: bool = False, roles: d
     # ---- frame rows
     n_ch = sum(len(c) for c in channels)
     rows = [(i + 1, l) for i, l in enumerate(lines[row_at:], start=row_at) if l.strip()]
+    if rows and 0 < len(rows[-1][1].split()) < n_ch and len(rows) in (F, F + 1):
+        # the file ends inside a frame row (a cut copy, an interrupted export): that row is no frame
+        lineno, cut = rows.pop()
+        said = f"Frames: says {F}, " if len(rows) < F else ""
+        warnings.warn(f"{path}:{lineno}: the last frame row is cut off ({len(cut.split())} of {n_ch} values); "
+                      f"{said}read the {len(rows)} complete frame rows before it", BVHWarning, stacklevel=2)
+        F = len(rows)
     if len(rows) < F:
         last = rows[-1][0] if rows else row_at
         raise BVHError(path, last, f"Frames: says {F} frames but the file has {len(rows)} (truncated?)")

@@ -249,7 +249,7 @@ UNITS = (
     ("cm", 0.01, "centimetres"),
     ("mm", 0.001, "millimetres"),
     ("inch", 0.0254, "inches"),
-    ("cmu", CMU_SCALE, "CMU/ASF-style units, see CMU_SCALE"),
+    ("cmu", CMU_SCALE, "CMU mocap units: 0.07 m each puts the head joint about 1.6 m up"),
 )
 """Candidate units: (key, metres per file unit, description)."""
 
@@ -287,7 +287,7 @@ class UnitGuess:
         return self.file_height * self.scale
 
     def describe(self) -> str:
-        """E.g. ``"cmu (CMU/ASF-style units), scale 0.07, height 1.61 m"``."""
+        """E.g. ``"cm (centimetres), scale 0.01, height 1.49 m"``."""
         names = {k: d for k, _, d in UNITS}
         what = {"given": "scale given", "unknown": "unit not recognised"}.get(self.unit, names.get(self.unit))
         return f"{self.unit} ({what}), scale {self.scale:.6g}, height {self.height:.2f} m"

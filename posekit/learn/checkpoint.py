@@ -176,18 +176,36 @@ def _remake(ckpt: dict) -> str:
     return f"; remake it with `{ckpt['command']}`" if ckpt.get("command") else ""
 
 
+def _name_difference(theirs: list, mine: list) -> str:
+    """How two joint-name lists differ, in a line: the counts and the first few differences, never whole lists."""
+    if len(theirs) != len(mine):
+        extra = [n for n in theirs if n not in mine]
+        lacking = [n for n in mine if n not in theirs]
+        parts = [f"{len(theirs)} joints there, {len(mine)} here"]
+        if extra:
+            parts.append(f"only there: {', '.join(extra[:3])}{', ...' if len(extra) > 3 else ''}")
+        if lacking:
+            parts.append(f"only here: {', '.join(lacking[:3])}{', ...' if len(lacking) > 3 else ''}")
+        return "; ".join(parts)
+    differ = [j for j, (a, b) in enumerate(zip(theirs, mine)) if a != b]
+    shown = "; ".join(f"joint {j} is {theirs[j]!r} there, {mine[j]!r} here" for j in differ[:3])
+    return f"{len(differ)} of {len(mine)} joint names differ ({shown}{'; ...' if len(differ) > 3 else ''})"
+
+
 def _check_skeleton(path, ckpt: dict, skeleton: Skeleton):
     stored = ckpt.get("skeleton")
     if stored is None:
         raise ValueError(f"checkpoint {path} records no skeleton, so it cannot be checked against this one")
     names, mine = stored["names"], [str(n) for n in skeleton.names]
     if names != mine:
-        raise ValueError(f"checkpoint {path} was trained for skeleton joints {names} — this skeleton has {mine}")
+        raise ValueError(f"checkpoint {path} was trained for skeleton joints other than this skeleton's: "
+                         f"{_name_difference(names, mine)}")
     parents, mine_p = stored["parents"], [int(p) for p in skeleton.parents]
     if parents != mine_p:
-        j = next(i for i, (a, b) in enumerate(zip(parents, mine_p)) if a != b)
-        raise ValueError(f"checkpoint {path} was trained for skeleton parents {parents} — this skeleton has "
-                         f"{mine_p} (joint {names[j]!r}: parent {parents[j]} vs {mine_p[j]})")
+        moved = [i for i, (a, b) in enumerate(zip(parents, mine_p)) if a != b]
+        shown = "; ".join(f"joint {names[j]!r}: parent {parents[j]} there, {mine_p[j]} here" for j in moved[:3])
+        raise ValueError(f"checkpoint {path} was trained for skeleton parents other than this skeleton's: "
+                         f"{len(moved)} joint(s) hang from another parent ({shown}{'; ...' if len(moved) > 3 else ''})")
     offsets = np.asarray(stored["offsets"])
     mine_o = np.asarray(skeleton.offsets, dtype=np.float64)
     if offsets.shape != mine_o.shape or not np.allclose(offsets, mine_o, rtol=0, atol=_OFFSET_ATOL):

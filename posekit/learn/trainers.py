@@ -95,12 +95,11 @@ def cli_settings(args, defaults: dict) -> dict:
 def cli_data(args):
     """The :class:`~posekit.data.MotionSet` named by ``--data`` (a shipped set's name or a BVH folder,
     :func:`posekit.data.open_dataset`) and the ``--out`` path (None: the shipped file's place)."""
-    import sys
     from pathlib import Path
 
     from ..data.sources import open_dataset
 
-    return open_dataset(args.data, progress=sys.stderr.isatty()), (Path(args.out) if args.out else None)
+    return open_dataset(args.data, progress=True), (Path(args.out) if args.out else None)
 
 
 def print_written(path) -> None:

@@ -8,7 +8,12 @@ poses a user's own skeleton with the models they trained (README, "Your own moca
 * ``POSEKIT_STUDIO_DATA`` — a data set name or a BVH folder (:func:`posekit.data.open_dataset`; default the Bandai
   mini set);
 * ``POSEKIT_STUDIO_SOLVERS`` — 2-4 registered solver names shown first (default :data:`SOLVERS`);
-* ``POSEKIT_WEIGHTS_DIR`` — a folder of the user's checkpoints (:func:`posekit.paths.weights_path`).
+* ``POSEKIT_WEIGHTS_DIR`` — a folder of the user's checkpoints (:func:`posekit.paths.weights_path`);
+* ``POSEKIT_STUDIO_LICENCE`` — the licence of the user's data, shown as given in the page's data line
+  (:func:`data_line`).
+
+:func:`app_page` is the page's one cell: the data line, then the studio, or a sentence saying what is wrong with
+the data, weights or solver choice (never a traceback on the server's console only).
 
 A learned solver whose weights were made for another skeleton is left out of the choice, with its reason. Each
 page keeps its files (setups, uploads, exports) in a folder of its own (:func:`session_folder`; its *setup file* box
@@ -26,7 +31,7 @@ import time
 from pathlib import Path
 
 __all__ = ["SOLVERS", "VOILA_PATH", "VOILA_TEMPLATE", "EXPORTS", "studio_case", "usable_solvers", "session_folder",
-           "app_studio", "refused_note"]
+           "app_studio", "refused_note", "app_page", "data_line", "kept_label"]
 
 VOILA_PATH = Path(__file__).parent / "voila"
 """A Jupyter data folder (for ``JUPYTER_PATH``) holding the studio's Voila page template, :data:`VOILA_TEMPLATE`."""
@@ -104,6 +109,15 @@ def app_studio(data: str | None = None, solvers=None, export_dir=None):
         solvers = os.environ.get("POSEKIT_STUDIO_SOLVERS") or ",".join(SOLVERS)
     if isinstance(solvers, str):
         solvers = [s.strip() for s in solvers.split(",") if s.strip()]
+    weights = os.environ.get("POSEKIT_WEIGHTS_DIR")
+    if weights:  # a missing folder, or one without checkpoints, is said before any work (not silently the shipped)
+        from ..paths import use_weights
+
+        try:
+            with use_weights(weights):
+                pass
+        except FileNotFoundError as e:
+            raise FileNotFoundError(str(e).replace("--weights", "STUDIO_WEIGHTS", 1)) from None
     skeleton, (start, goal, effectors, tolerance_of), (available, refused) = _app_case(data)
     _return_freed_memory()
     unknown = [s for s in solvers if s not in available and s not in refused]
@@ -151,4 +165,75 @@ def refused_note(refused: dict) -> str:
     if not refused:
         return ""
     name, why = next(iter(refused.items()))
-    return (f"left out (made for another skeleton): {', '.join(refused)} — e.g. {name}: {why}")
+    other = all("trained for skeleton" in r or "trained for other skeleton" in r for r in refused.values())
+    what = "made for another skeleton" if other else "they refused this data or their weights"
+    return f"left out ({what}): {', '.join(refused)} — e.g. {name}: {why}"
+
+
+def data_line(data: str | None = None) -> str:
+    """The page's line on whose data it poses: the Bandai mini set and its licence by default, else the user's data
+    (``$POSEKIT_STUDIO_DATA``) with the licence they gave (``$POSEKIT_STUDIO_LICENCE``), or just "your data"."""
+    data = data or os.environ.get("POSEKIT_STUDIO_DATA") or "bandai-mini"
+    weights = os.environ.get("POSEKIT_WEIGHTS_DIR")
+    models = f"; models: yours, from {weights}" if weights else ""
+    if data == "bandai-mini":
+        return "Data: Bandai mini set (Bandai Namco Research Inc.), CC BY-NC 4.0" + models
+    if data in ("sample", "deepmimic"):
+        return "Data: the DeepMimic humanoid sample shipped with posekit (licence: data_samples/README.md)" + models
+    licence = (os.environ.get("POSEKIT_STUDIO_LICENCE") or "").strip()
+    return f"Data: your data, {data}" + (f" (licence: {licence})" if licence else "") + models
+
+
+def app_page():
+    """What ``notebooks/studio.ipynb`` shows: :func:`data_line`, then :func:`app_studio` with the solvers it left
+    out (:func:`refused_note`); when the data, the weights or the solver choice is wrong, that sentence on the page
+    instead of the studio (Voila shows only "error when executing cell" for an exception, and the sentence would be
+    on the server's console only). Displays them; returns the studio, or None when it could not start."""
+    import html
+
+    from IPython.display import HTML, display
+
+    display(HTML(f"<small>{html.escape(data_line())}</small>"))
+    try:
+        studio, refused = app_studio()
+    except (ValueError, OSError) as e:  # bad input: a missing path, a broken file, an unknown solver name
+        display(HTML(
+            "<p style='color:#a00'><b>The studio could not start.</b> " + html.escape(str(e)) + "</p>"
+            "<p><small>Check STUDIO_DATA (a data set name, a BVH file or folder, or a .npz), STUDIO_WEIGHTS (a folder "
+            "of checkpoints from <code>posekit train</code>) and STUDIO_SOLVERS (2-4 registered solver names) of "
+            "<code>make studio</code>, then reload this page.</small></p>"))
+        return None
+    note = refused_note(refused)
+    if note:
+        display(HTML(f"<small>{html.escape(note)}</small>"))
+    display(studio)
+    display(kept_label(studio.editor))
+    return studio
+
+
+def kept_label(editor):
+    """A line under the studio that counts, per learned solver with an exact finish (``+dls``), how often its finish
+    kept the learned pose since the page opened — the rest were finished by DLS from the start pose, the learned pose
+    discarded (:mod:`posekit.ik.finish`, ``info["kept"] == "start"``). Updated after every solve; an
+    ``ipywidgets.HTML`` (``.counts``: {solver: [kept, solves]})."""
+    import html
+
+    from ipywidgets import HTML
+
+    label = HTML()
+    label.counts = {}
+
+    def count(*_):
+        for name, res in editor.results.items():
+            info = getattr(res, "info", None) or {}
+            if "learned_ms" not in info:  # not an exact finish (or the solver refused)
+                continue
+            kept, total = label.counts.setdefault(name, [0, 0])
+            label.counts[name] = [kept + (info.get("kept") != "start"), total + 1]
+        parts = [f"{n} kept the learned pose in {k} of {t} solves" for n, (k, t) in label.counts.items()]
+        label.value = ("<small>Exact finish: " + html.escape("; ".join(parts)) + " (the others were finished by "
+                       "DLS from the start pose: the learned pose was discarded)</small>") if parts else ""
+
+    count()
+    editor.on_change(count)
+    return label

@@ -109,8 +109,9 @@ def test_the_markdown_has_a_sorted_table_per_set_and_start_with_every_solver(rep
     sections = re.split(r"^## ", md, flags=re.M)
     tables = [s for s in sections if s.startswith("Effectors ")]
     assert [t.split(" —")[0] for t in tables] == [f"Effectors {e}, start {START}" for e in SETS]
-    heads = ["| solver | lesson | ms per solve | MPJPE mm | effector mm | natural mm | converged |",
-             "| solver | lesson | ms per solve | MPJPE mm | effector mm | effector deg | natural mm | converged |"]
+    heads = ["| solver | lesson | ms per solve | MPJPE mm | effector mm | natural mm | converged | learned kept |",
+             "| solver | lesson | ms per solve | MPJPE mm | effector mm | effector deg | natural mm | converged | "
+             "learned kept |"]
     assert "| n/a |" in tables[1]  # positions-only solvers are not judged on the angular effectors
     for e, table, head in zip(SETS, tables, heads):
         lines = [ln for ln in table.splitlines() if ln.startswith("|")]
@@ -119,7 +120,9 @@ def test_the_markdown_has_a_sorted_table_per_set_and_start_with_every_solver(rep
         mine = [r for r in rows if r["effectors"] == e]
         assert [c[0].strip("`") for c in body] == [r["method"] for r in mine]  # every solver, by MPJPE
         assert [float(c[3]) for c in body] == [round(r["mpjpe_mm_median"], 1) for r in mine]
-        assert all(c[-1].endswith("%") for c in body)
+        assert all(c[-2].endswith("%") for c in body)  # converged
+        kept = {c[0].strip("`"): c[-1] for c in body}  # learned kept: a share for the exact finishes only
+        assert all(kept[n].endswith("%") if n.endswith("+dls") else kept[n] == "" for n in kept)
     wins = next(s for s in sections if s.startswith("Who wins where"))
     cells = [ln for ln in wins.splitlines() if ln.startswith("| `")]
     assert [c.split("|")[1].strip() for c in cells] == [f"`{e}`" for e in SETS]
@@ -182,5 +185,7 @@ def test_the_cli(report, capsys, monkeypatch):
     out = capsys.readouterr().out
     assert "report: not written" in out and f"Start: {START}" in out
     assert max(map(len, out.splitlines())) <= 100
-    table = out.split("Speed and quality")[1].splitlines()[3:]
+    table = out.split("Speed and quality")[1].split("\n\n")[0].splitlines()[3:]
     assert sorted(ln.split()[0] for ln in table if ln.strip()) == sorted(resolve_solvers("all"))
+    finish = out.split("the exact finish")[1].split("\n\n")[0].splitlines()[3:]  # learned kept: the +dls rows
+    assert sorted(ln.split()[0] for ln in finish) == sorted(n for n in resolve_solvers("all") if n.endswith("+dls"))

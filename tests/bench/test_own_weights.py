@@ -92,3 +92,33 @@ def test_the_studio_app_poses_with_the_users_own_models(own, tmp_path, monkeypat
     assert list(studio.editor.solvers) == ["fabrik", "neural+dls"]
     assert studio.editor.results["neural+dls"].converged
     assert {"neural", "neural-fabrik"} <= set(studio.available) and "protores" in refused
+
+
+def test_weights_are_found_by_what_the_checkpoint_says_not_by_file_name(own, tmp_path, capsys):
+    """Issue 45, item 4: a checkpoint saved as cmu_ae.pt is the user's ae-solvers model; two of one model and
+    nothing to choose between them are refused by name; a folder without the model says what it holds."""
+    import shutil
+
+    bvh, weights = own
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    shutil.copy(weights / "ae_solvers.pt", mine / "cmu_ae.pt")
+    assert paths.find_checkpoint("ae_solvers.pt", mine) == mine / "cmu_ae.pt"
+    assert paths.find_checkpoint("protores.pt", mine) is None
+    with paths.use_weights(mine):
+        assert paths.weights_path("ae_solvers.pt") == mine / "cmu_ae.pt"
+        assert paths.weights_path("aegan.pt") == paths.samples_dir() / "weights" / "aegan.pt"
+    capsys.readouterr()
+    assert main(["bench", "ik", "--solvers", "neural", "--weights", str(mine), "--data", str(bvh), "--cases", "3",
+                 "--effectors", "5", "--methods", "none", "--json"]) == 0
+    (row,) = json.loads(capsys.readouterr().out)
+    assert row["method"] == "neural" and np.isfinite(row["mpjpe_mm_median"])
+    shutil.copy(weights / "ae_solvers.pt", mine / "subject2.pt")
+    with pytest.raises(ValueError, match=r"2 checkpoints are ae_solvers models \(cmu_ae.pt, subject2.pt\)"):
+        paths.find_checkpoint("ae_solvers.pt", mine)
+    other = tmp_path / "other"
+    other.mkdir()
+    shutil.copy(paths.samples_dir() / "weights" / "aegan.pt", other / "gan.pt")
+    with pytest.warns(UserWarning, match=r"other holds gan.pt \(aegan \(structured True\)\)"):
+        assert main(["bench", "all", "--weights", str(other), "--data", str(bvh), "--cases", "2", "--start", "rest",
+                     "--effectors", "5", "--out", "none", "--json"]) == 0

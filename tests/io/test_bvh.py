@@ -88,7 +88,7 @@ def test_round_trip_keeps_a_files_layout(tmp_path):
     (lambda t: t[: t.index("MOTION")], None, "no MOTION section"),
     (lambda t: t.replace("Frames: 2", "Frames: 3"), 33, "says 3 frames but the file has 2"),
     (lambda t: t.replace("Frames: 2", "Frames: 0"), 32, "says 0 frames but 2 frame rows follow"),
-    (lambda t: t.replace("2.5e0 90 1E1", "2.5e0 90"), 33, "expected 15 values in a frame row, found 14"),
+    (lambda t: t.replace("1 90 0 0 0", "1 90 0 0"), 32, "expected 15 values in a frame row, found 14"),
     (lambda t: t.replace("1 90 0 0 0", "1 90 zero 0 0"), 32, "bad number 'zero'"),
     (lambda t: t.replace("Xrotation Yrotation Zrotation", "Xrotation Yrotation Wrotation"), 9,
      "unknown channel 'Wrotation' on joint Spine"),
@@ -142,11 +142,25 @@ def test_fewer_rows_than_declared_stays_an_error(tmp_path):
     with pytest.raises(BVHError, match="Frames: says 3 frames but the file has 2") as e:
         read_bvh(p)
     assert str(e.value).startswith(f"{p}:33:")
-    # one extra row that is incomplete is not the off-by-one slip: an error on that row
-    p = write(tmp_path, SIMPLE + "1 2 3\n", "ragged.bvh")
-    with pytest.raises(BVHError, match="says 2 frames but 3 frame rows follow") as e:
+    # two extra rows are no off-by-one slip: an error on the first of them
+    p = write(tmp_path, SIMPLE.replace("Frames: 2", "Frames: 1").replace("Frames: 1", "Frames: 0"), "two.bvh")
+    with pytest.raises(BVHError, match="says 0 frames but 2 frame rows follow"):
         read_bvh(p)
-    assert e.value.line == 34
+
+
+@pytest.mark.parametrize("declared", [2, 3])
+def test_a_cut_off_last_frame_row_is_reported_and_not_a_frame(tmp_path, declared):
+    """Issue 45: a file that ends inside a frame row (a cut copy) reads its complete rows, says which line was cut,
+    and never counts the cut row as a frame, whether or not ``Frames:`` counted it."""
+    from posekit.io.bvh import BVHWarning
+
+    text = SIMPLE.replace("Frames: 2", f"Frames: {declared}") + "1 2 3\n"
+    p = write(tmp_path, text, "cut.bvh")
+    with pytest.warns(BVHWarning, match=r"cut.bvh:34: the last frame row is cut off \(3 of \d+ values\)") as caught:
+        m = read_bvh(p)
+    assert m.n_frames == 2
+    np.testing.assert_allclose(m.global_positions(), read_bvh(write(tmp_path, SIMPLE)).global_positions())
+    assert ("Frames: says 3" in str(caught[0].message)) == (declared == 3)
 
 
 def test_guessed_roles_and_units_on_a_plain_file(tmp_path):

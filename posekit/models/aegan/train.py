@@ -257,14 +257,13 @@ def train_aegan(motions=None, *, seed: int = 0, out=None, progress: bool = True,
 
 def _cli(args) -> int:
     """``posekit train aegan``."""
-    import sys
 
     from ...data.metrics import body_joints
 
     settings = cli_settings(args, DEFAULTS)
     motions, out = cli_data(args)
     config = AEGANConfig(len(body_joints(motions.skeleton)), structured=not args.dense)
-    model, report = train_aegan(motions, seed=args.seed, out=out, config=config, progress=sys.stderr.isatty(),
+    model, report = train_aegan(motions, seed=args.seed, out=out, config=config, progress=True,
                                 **settings)
     path = out or weights_path()
     c = report["curves"]

@@ -156,13 +156,12 @@ def run_studies(motions=None, model: AESolvers | None = None, out=None, seed: in
 
 def _cli(args) -> int:
     """``posekit train ae-studies``."""
-    import sys
 
     from ...learn.threads import single_thread
 
     out = Path(args.out) if args.out else studies_path()
     with single_thread():
-        res = run_studies(seed=args.seed, out=out, progress=sys.stderr.isatty(), ae_epochs=args.ae_epochs)
+        res = run_studies(seed=args.seed, out=out, progress=True, ae_epochs=args.ae_epochs)
     for r in res["autoencoder"]:
         print(f"autoencoder d={r['latent']:<3} {r['decoder']:<7} held-out reconstruction {r['test_mm']:.1f} mm")
     print(f"wrote {out} in {res['seconds']:.0f} s")

@@ -207,7 +207,6 @@ def train_ae_solvers(motions=None, *, seed: int = 0, out=None, groups=tuple(GROU
 
 def _cli(args) -> int:
     """``posekit train ae-solvers``."""
-    import sys
 
     from ...learn.threads import single_thread
 
@@ -215,7 +214,7 @@ def _cli(args) -> int:
     motions, out = cli_data(args)
     with single_thread():  # these small layers gain little from a second thread, and one thread repeats exactly
         model, report = train_ae_solvers(motions, seed=args.seed, out=out, tied=args.tied, latent=args.latent,
-                                         progress=sys.stderr.isatty(), **settings)
+                                         progress=True, **settings)
     path = out or weights_path()
     sec = report["seconds"]
     print(f"trained in {sec['total']:.0f} s (" + ", ".join(f"{k} {v:.0f} s" for k, v in sec.items() if k != "total")

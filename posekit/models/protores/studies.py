@@ -207,7 +207,6 @@ def run_studies(seed: int = 0, out=None, workers: int = 2, progress: bool = True
 
 def _cli(args) -> int:
     """``posekit train protores-studies``."""
-    import sys
     from pathlib import Path
 
     if args.shipped:
@@ -225,7 +224,7 @@ def _cli(args) -> int:
         print(f"wrote {out} in {res['seconds']} s")
         return 0
     out = Path(args.out) if args.out else studies_path()
-    res = run_studies(seed=args.seed, out=out, workers=args.workers, progress=sys.stderr.isatty())
+    res = run_studies(seed=args.seed, out=out, workers=args.workers, progress=True)
     for r in res["rows"] + res["width"]:
         print(f"{r['method']:<28} random L_ikd-L2 {r['random_ikd_l2_e3']:.3f}e-3 m^2, "
               f"L_loc-geo {r['random_loc_geo']:.3f}; "

@@ -278,7 +278,6 @@ def train_protores(motions=None, *, arch: str = "protores", seed: int = 0, out=N
 
 def _cli(args) -> int:
     """``posekit train protores``."""
-    import sys
     from pathlib import Path
 
     from ...data.bandai_mini import load_bandai_mini
@@ -291,7 +290,7 @@ def _cli(args) -> int:
     config = ProtoResConfig(len(body_joints(motions.skeleton)), arch=args.arch, width=args.width, gpd=not args.no_gpd)
     out = Path(args.out) if args.out else None
     net, report = train_protores(motions, arch=args.arch, seed=args.seed, out=out, config=config,
-                                 progress=sys.stderr.isatty(), **settings)
+                                 progress=True, **settings)
     v = report["val"]
     print(f"trained {args.arch} ({report['parameters']} parameters) {report['steps']} steps in "
           f"{report['seconds']:.0f} s ({report['seconds_per_step'] * 1000:.0f} ms/step); validation: L_ikd-L2 "
