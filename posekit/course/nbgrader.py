@@ -351,10 +351,10 @@ def trial(course_dir, chosen=None, progress: bool = False) -> dict:
         dest = course_dir / "submitted" / "trial-solution" / a
         dest.mkdir(parents=True, exist_ok=True)
         shutil.copy(course_dir / "source" / a / f"{a}.ipynb", dest / f"{a}.ipynb")
-        t0 = time.perf_counter()
+        t0, cpu0 = time.perf_counter(), _children_cpu_s()
         rc, _ = autograde(course_dir, a, student="trial-solution", force=True, extra=("--log-level=ERROR",),
                           log=subprocess.DEVNULL)
-        seconds = time.perf_counter() - t0
+        seconds, cpu = time.perf_counter() - t0, _children_cpu_s() - cpu0
         if rc != 0:
             raise RuntimeError(f"nbgrader autograde failed on {a} (exit {rc}); run it in {course_dir} to see why")
         from nbgrader.api import Gradebook
@@ -362,8 +362,18 @@ def trial(course_dir, chosen=None, progress: bool = False) -> dict:
         with Gradebook(f"sqlite:///{course_dir / 'gradebook.db'}") as gb:
             sub = gb.find_submission(a, "trial-solution")
             rows.append({"lesson": lesson.number, "assignment": a, "autograde_s": round(seconds, 1),
+                         "autograde_cpu_s": round(cpu, 1),
                          "score": sub.code_score, "max_score": sub.max_code_score})
     return {"command": "posekit course nbgrader --trial", "machine": f"{platform.machine()}, "
             f"{os.cpu_count()} CPUs, Python {platform.python_version()}", "cell_timeout_s": CELL_TIMEOUT_S,
-            "what": "wall time of `nbgrader autograde` on one submission (the source version) per lesson; "
-                    "score and max_score are the autograded (code) points", "lessons": rows}
+            "what": "autograde_s: wall time of `nbgrader autograde` on one submission (the source version) of "
+                    "each lesson, kernel start included; autograde_cpu_s: CPU time of nbgrader and its kernel "
+                    "(less load-dependent on a shared machine); score / max_score: the autograded points",
+            "lessons": rows}
+
+
+def _children_cpu_s() -> float:
+    import resource
+
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
