@@ -131,11 +131,19 @@ def _nbgrader(*args, cwd, ok=True):
 
 @pytest.fixture(scope="module")
 def course(tmp_path_factory):
-    """Every lesson written by the command and released with ``nbgrader generate_assignment``."""
+    """Every lesson written by the command and released by nbgrader's ``generate_assignment`` (its Python API,
+    in this process: one nbgrader start instead of seven)."""
+    from nbgrader.apps import NbGraderAPI
+    from traitlets.config.loader import PyFileConfigLoader
+
     root = tmp_path_factory.mktemp("course")
-    _run([sys.executable, "-m", "posekit", "course", "nbgrader", "--out", str(root), "--cell-timeout", "40"], ROOT)
+    _run([sys.executable, "-m", "posekit", "course", "nbgrader", "--out", str(root), "--cell-timeout", "30"], ROOT)
+    config = PyFileConfigLoader("nbgrader_config.py", path=str(root)).load_config()
+    config.CourseDirectory.root = str(root)
+    api = NbGraderAPI(config=config)
     for stem in STEMS:
-        _nbgrader("generate_assignment", stem, cwd=root)
+        result = api.generate_assignment(stem)
+        assert result["success"], result.get("error") or result.get("log")
     return root
 
 
@@ -213,6 +221,12 @@ def _cell_scores(course, stem, student) -> dict[str, float]:
         return {g.name: g.auto_score for g in nb.grades if g.cell.cell_type == "code"}
 
 
+def _errors(course, stem, student) -> list[str]:
+    nb = nbformat.read(str(course / "autograded" / student / stem / f"{stem}.ipynb"), as_version=4)
+    return [f"{_grading(c).get('grade_id')}: {o.get('ename')}" for c in nb.cells if c.cell_type == "code"
+            for o in c.outputs if o.output_type == "error"]
+
+
 def _outputs(course, stem, student, grade_id) -> str:
     nb = nbformat.read(str(course / "autograded" / student / stem / f"{stem}.ipynb"), as_version=4)
     cell = next(c for c in nb.cells if _grading(c).get("grade_id") == grade_id)
@@ -225,8 +239,11 @@ def test_autograde_and_export_grade_a_class_of_lesson_00_and_06(course):
     a, b = STEMS[0], STEMS[6]
     did = _class(course, a)
     _class(course, b)
-    for student in ("right", "untouched", "wrong", "deleted", "raises", "loops", "other", "broken", "empty"):
-        _nbgrader("db", "student", "add", student, cwd=course)
+    from nbgrader.api import Gradebook
+
+    with Gradebook(f"sqlite:///{course / 'gradebook.db'}") as gb:  # the class list
+        for student in ("right", "untouched", "wrong", "deleted", "raises", "loops", "other", "broken", "empty"):
+            gb.update_or_create_student(student)
     proc = _run([sys.executable, "-m", "posekit", "course", "autograde", a, "--course", str(course)], ROOT, ok=False)
     assert proc.returncode == 1, proc.stdout + proc.stderr  # graded, but three folders refused
     for student in ("other", "broken", "empty"):
@@ -246,7 +263,10 @@ def test_autograde_and_export_grade_a_class_of_lesson_00_and_06(course):
         assert len(scores) == n and all(v == 1 for v in scores.values()), scores
         assert score(stem, "right") == n
         assert set(_cell_scores(course, stem, "untouched").values()) == {0} and score(stem, "untouched") == 0
-        assert "not attempted yet" in _outputs(course, stem, "untouched", f"{exercises(read_notebook(ROOT / 'notebooks' / f'{stem}.ipynb'))[0].function}_tests")
+        # both run top to bottom: no cell of the lesson, the answers or the tests raised
+        assert _errors(course, stem, "right") == [] and _errors(course, stem, "untouched") == []
+        for test in (g for g in scores if g.endswith("_tests")):
+            assert "not attempted yet" in _outputs(course, stem, "untouched", test)
     first, second = did["first"], did["second"]
     # one wrong answer loses exactly that exercise's point
     wrong = _cell_scores(course, a, "wrong")

@@ -146,7 +146,8 @@ def _course_nbgrader(args) -> int:
     print(f"course directory: {args.out} (next: cd {args.out} && nbgrader generate_assignment <lesson>)")
     if not args.trial:
         return 0
-    results = trial(args.out, chosen, progress=sys.stderr.isatty())
+    results = trial(args.out, chosen, progress=sys.stderr.isatty(),
+                    command="posekit " + " ".join(sys.argv[1:]))
     out = Path(args.results) if args.results else Path(args.out) / "autograde_trial.json"
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(results, indent=2) + "\n", encoding="utf-8")

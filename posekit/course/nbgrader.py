@@ -323,26 +323,29 @@ def autograde(course_dir, assignment: str, student: str | None = None, force: bo
     return proc.returncode, refused
 
 
-def trial(course_dir, chosen=None, progress: bool = False) -> dict:
-    """Autograde one submission of each lesson, its source version (all answers right), and time it.
+def trial(course_dir, chosen=None, progress: bool = False, command: str = "posekit course nbgrader --trial") -> dict:
+    """Autograde one submission of each lesson, its source version (every answer right), and time it.
 
-    Writes the course (:func:`write_course`), runs ``nbgrader generate_assignment`` and puts the source
-    version in ``submitted/trial-solution/<stem>/``, then ``nbgrader autograde`` and ``export``. Every
-    figure comes from nbgrader's grade book and a wall clock around ``autograde``.
+    In the course directory ``course_dir`` (written by :func:`write_course`), runs ``nbgrader
+    generate_assignment``, puts the source version in ``submitted/trial-solution/<stem>/`` and times
+    ``nbgrader autograde`` on it (through :func:`autograde`); the score is read from nbgrader's grade book.
 
     Returns
     -------
     dict
-        ``{"machine": ..., "lessons": [{"lesson", "assignment", "autograde_s", "score", "max_score"}, ...]}``.
+        ``{"command", "machine", "cell_timeout_s", "what", "lessons": [{"lesson", "assignment", "autograde_s",
+        "autograde_cpu_s", "load_avg_1min_before", "score", "max_score"}, ...]}``; times in seconds.
     """
     import platform
+    import re
     import shutil
 
+    from nbgrader.api import Gradebook
     from tqdm.auto import tqdm
 
     course_dir = Path(course_dir)
     chosen = lessons() if chosen is None else chosen
-    write_course(course_dir, chosen)
+    timeout = re.search(r"^c\.Execute\.timeout = (\d+)", (course_dir / "nbgrader_config.py").read_text(), re.M)
     rows = []
     for lesson in tqdm(chosen, desc="autograde one submission per lesson", disable=not progress):
         a = lesson.stem
@@ -351,24 +354,26 @@ def trial(course_dir, chosen=None, progress: bool = False) -> dict:
         dest = course_dir / "submitted" / "trial-solution" / a
         dest.mkdir(parents=True, exist_ok=True)
         shutil.copy(course_dir / "source" / a / f"{a}.ipynb", dest / f"{a}.ipynb")
+        load = os.getloadavg()[0]
         t0, cpu0 = time.perf_counter(), _children_cpu_s()
         rc, _ = autograde(course_dir, a, student="trial-solution", force=True, extra=("--log-level=ERROR",),
                           log=subprocess.DEVNULL)
         seconds, cpu = time.perf_counter() - t0, _children_cpu_s() - cpu0
         if rc != 0:
             raise RuntimeError(f"nbgrader autograde failed on {a} (exit {rc}); run it in {course_dir} to see why")
-        from nbgrader.api import Gradebook
-
         with Gradebook(f"sqlite:///{course_dir / 'gradebook.db'}") as gb:
             sub = gb.find_submission(a, "trial-solution")
             rows.append({"lesson": lesson.number, "assignment": a, "autograde_s": round(seconds, 1),
-                         "autograde_cpu_s": round(cpu, 1),
+                         "autograde_cpu_s": round(cpu, 1), "load_avg_1min_before": round(load, 2),
                          "score": sub.code_score, "max_score": sub.max_code_score})
-    return {"command": "posekit course nbgrader --trial", "machine": f"{platform.machine()}, "
-            f"{os.cpu_count()} CPUs, Python {platform.python_version()}", "cell_timeout_s": CELL_TIMEOUT_S,
-            "what": "autograde_s: wall time of `nbgrader autograde` on one submission (the source version) of "
-                    "each lesson, kernel start included; autograde_cpu_s: CPU time of nbgrader and its kernel "
-                    "(less load-dependent on a shared machine); score / max_score: the autograded points",
+    return {"command": command,
+            "machine": f"{platform.machine()}, {os.cpu_count()} CPUs, Python {platform.python_version()}",
+            "cell_timeout_s": int(timeout.group(1)) if timeout else None,
+            "what": "autograde_s: wall time of `nbgrader autograde` on one submission (the lesson's source version) "
+                    "of each lesson, nbgrader's and the kernel's start included; autograde_cpu_s: CPU time of "
+                    "nbgrader and its kernel (less dependent on what else the machine runs); "
+                    "load_avg_1min_before: the machine's load average when it started; score / max_score: the "
+                    "autograded points",
             "lessons": rows}
 
 
