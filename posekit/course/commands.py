@@ -187,7 +187,8 @@ def add_commands(sub) -> None:
     p.add_argument("--html", action="store_true", help="also write a static HTML page next to the notebook")
     p.set_defaults(fn=_exercises_solutions)
 
-    course = sub.add_parser("course", help="lecture slides and the static course page (instructors)")
+    course = sub.add_parser("course",
+                            help="lecture slides, the static course page and the nbgrader course (instructors)")
     csub = course.add_subparsers(dest="cmd", required=True)
     p = csub.add_parser("slides", help="every lesson as reveal.js slides, from its stored outputs")
     p.add_argument("--out", default=str(Path("build") / "course"), help="course folder (default build/course)")
