@@ -23,7 +23,7 @@ import pytest
 pytest.importorskip("nbgrader")
 
 from posekit.course.lessons import lessons, read_notebook  # noqa: E402
-from posekit.course.nbgrader import assignment_notebook, screen, write_course  # noqa: E402
+from posekit.course.nbgrader import assignment_notebook, screen  # noqa: E402
 from posekit.course.solutions import exercises, notes  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
