@@ -75,6 +75,30 @@ def test_source_version_marks_every_exercise_for_nbgrader(lesson):
         [c.source for i, c in enumerate(lesson_nb.cells) if i not in {e.code_cell for e in exs}]
 
 
+def test_an_exercise_cell_can_set_its_points(tmp_path):
+    import dataclasses
+
+    lesson = LESSONS[0]
+    nb = read_notebook(lesson.path)
+    exs = exercises(nb)
+    checked, opened = next(e for e in exs if not e.open), next(e for e in exs if e.open)
+    nb.cells[checked.text_cell].metadata["posekit"] = {"points": 3}
+    nb.cells[opened.text_cell].metadata["posekit"] = {"points": 2.5}
+    copy = tmp_path / lesson.path.name
+    nbformat.write(nb, str(copy))
+    out = assignment_notebook(dataclasses.replace(lesson, path=copy))
+    points = {_grading(c)["grade_id"]: _grading(c)["points"] for c in out.cells if _grading(c).get("grade")}
+    assert points[f"{checked.function}_tests"] == 3 and points[f"exercise_{opened.number}_answer"] == 2.5
+    assert sum(points.values()) == 3 + 2.5 + len(exs) - 2
+    tests = next(c for c in out.cells if _grading(c).get("grade_id") == f"{checked.function}_tests")
+    assert tests.source.splitlines()[-1].startswith("3 if done else 0")
+    nb.cells[checked.text_cell].metadata["posekit"] = {"points": "many"}
+    nbformat.write(nb, str(copy))
+    says = rf"{lesson.path.name}, exercise {checked.number}: .*positive number, not 'many'"
+    with pytest.raises(ValueError, match=says):
+        assignment_notebook(dataclasses.replace(lesson, path=copy))
+
+
 # ---- screening what students hand in --------------------------------------------------------------------
 
 

@@ -87,10 +87,10 @@ def _nbgrader(grade_id: str, *, solution=False, grade=False, locked=False, point
     return meta
 
 
-def _points(cell, default: float) -> float:
+def _points(cell, default: float, where: str) -> float:
     value = cell.get("metadata", {}).get("posekit", {}).get("points", default)
-    if not isinstance(value, (int, float)) or value <= 0:
-        raise ValueError(f"exercise cell: metadata posekit.points must be a positive number, not {value!r}")
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or value <= 0:
+        raise ValueError(f"{where}: the cell metadata's posekit.points must be a positive number, not {value!r}")
     return float(value)
 
 
@@ -153,14 +153,14 @@ def assignment_notebook(lesson, points_checked: float = 1, points_open: float = 
             if not rubric:
                 raise LookupError(f"lesson {lesson.number}, exercise {n} (open): no notes in "
                                   f"posekit/exercises/solutions/nb{lesson.number}.md")
-            pts = _points(text, points_open)
+            pts = _points(text, points_open, f"{lesson.path}, exercise {n}")
             answer = cell("markdown", "### BEGIN SOLUTION\n"
                           f"**Rubric (instructor notes) — exercise {n}, {pts:g} point{'s' * (pts != 1)}.**\n\n"
                           f"{rubric}\n### END SOLUTION", f"exercise-{n}-answer",
                           grade_id=f"exercise_{n}_answer", solution=True, grade=True, points=pts)
             replace[ex.text_cell] = [text, answer, cell("code", _SCRATCH.format(number=n), f"exercise-{n}-scratch")]
             continue
-        pts = _points(text, points_checked)
+        pts = _points(text, points_checked, f"{lesson.path}, exercise {n}")
         code = nb.cells[ex.code_cell]
         stub = _stub(code.source)
         lines = code.source.splitlines()
