@@ -60,6 +60,9 @@ c.CourseDirectory.course_id = "posekit"
 # notebook goes on: a student's endless loop costs one timeout, not the batch.
 c.Execute.timeout = {timeout}
 c.Execute.interrupt_on_timeout = True
+# On a busy machine a kernel can be slow to send a cell's last output after the cell has finished; wait for
+# it (nbclient's default is 4 s, and running out fails the whole submission) rather than lose it.
+c.Execute.iopub_timeout = 60
 
 # A graded cell a student deleted is put back from the source version (and says so) before grading.
 c.OverwriteCells.add_missing_cells = True
