@@ -161,7 +161,7 @@ def course(tmp_path_factory):
     from traitlets.config.loader import PyFileConfigLoader
 
     root = tmp_path_factory.mktemp("course")
-    _run([sys.executable, "-m", "posekit", "course", "nbgrader", "--out", str(root), "--cell-timeout", "30"], ROOT)
+    _run([sys.executable, "-m", "posekit", "course", "nbgrader", "--out", str(root), "--cell-timeout", "120"], ROOT)
     config = PyFileConfigLoader("nbgrader_config.py", path=str(root)).load_config()
     config.CourseDirectory.root = str(root)
     api = NbGraderAPI(config=config)
@@ -268,7 +268,9 @@ def test_autograde_and_export_grade_a_class_of_lesson_00_and_06(course):
     with Gradebook(f"sqlite:///{course / 'gradebook.db'}") as gb:  # the class list
         for student in ("right", "untouched", "wrong", "deleted", "raises", "loops", "other", "broken", "empty"):
             gb.update_or_create_student(student)
-    proc = _run([sys.executable, "-m", "posekit", "course", "autograde", a, "--course", str(course)], ROOT, ok=False)
+    # lesson 00's cells are short: a 45 s limit (not the course's 120 s) bounds what the endless loop costs
+    proc = _run([sys.executable, "-m", "posekit", "course", "autograde", a, "--course", str(course),
+                 "--cell-timeout", "45"], ROOT, ok=False)
     assert proc.returncode == 1, proc.stdout + proc.stderr  # graded, but three folders refused
     for student in ("other", "broken", "empty"):
         assert re.search(rf"refused {student}: .*submitted/{student}/{a}.*counts as missing", proc.stderr), \

@@ -13,7 +13,7 @@
 ``posekit course nbgrader [--out DIR] [--lesson N ...] [--force] [--cell-timeout S] [--trial [--results FILE]]``
     The lessons as an nbgrader course directory (``build/nbgrader/``); ``--trial`` also autogrades one
     submission of each lesson with nbgrader and writes the times (``DIR/autograde_trial.json``).
-``posekit course autograde LESSON [--course DIR] [--student ID] [--force]``
+``posekit course autograde LESSON [--course DIR] [--student ID] [--force] [--cell-timeout S]``
     ``nbgrader autograde LESSON`` after refusing, by name, the student folders it cannot grade.
 """
 
@@ -167,7 +167,9 @@ def _course_autograde(args) -> int:
         print(f"posekit: error: {course} is not a course directory (no nbgrader_config.py; make one with "
               "`posekit course nbgrader --out DIR`)", file=sys.stderr)
         return 2
-    rc, refused = autograde(course, find_lesson(args.lesson).stem, student=args.student, force=args.force)
+    extra = (f"--Execute.timeout={args.cell_timeout}",) if args.cell_timeout else ()
+    rc, refused = autograde(course, find_lesson(args.lesson).stem, student=args.student, force=args.force,
+                            extra=extra)
     for r in refused:
         print(f"refused {r.student}: {r}", file=sys.stderr)
     return rc or (1 if refused else 0)
@@ -215,4 +217,6 @@ def add_commands(sub) -> None:
     p.add_argument("--course", default=str(Path("build") / "nbgrader"), help="course folder (default build/nbgrader)")
     p.add_argument("--student", help="only this student's submission")
     p.add_argument("--force", action="store_true", help="grade again a submission already autograded")
+    p.add_argument("--cell-timeout", type=int,
+                   help="seconds a cell may run before it is interrupted (default: the course's nbgrader_config.py)")
     p.set_defaults(fn=_course_autograde)
