@@ -1,2 +1,3 @@
-"""The instructor kit: lecture slides, exercise solutions and a static course page, all made from the
-lessons themselves (``make slides``, ``posekit exercises solutions LESSON``, ``make course``)."""
+"""The instructor kit: lecture slides, exercise solutions, a static course page and an nbgrader course, all made
+from the lessons themselves (``make slides``, ``posekit exercises solutions LESSON``, ``make course``,
+``posekit course nbgrader``)."""

@@ -10,6 +10,11 @@
     The static course page with every lesson, its slides and the benchmark report (``build/course/``).
 ``posekit course mark NOTEBOOK ... [--check]``
     Apply the slide convention to notebooks (``--check``: only say which differ, exit 1 if any).
+``posekit course nbgrader [--out DIR] [--lesson N ...] [--force] [--cell-timeout S] [--trial [--results FILE]]``
+    The lessons as an nbgrader course directory (``build/nbgrader/``); ``--trial`` also autogrades one
+    submission of each lesson with nbgrader and writes the times (``DIR/autograde_trial.json``).
+``posekit course autograde LESSON [--course DIR] [--student ID] [--force] [--cell-timeout S]``
+    ``nbgrader autograde LESSON`` after refusing, by name, the student folders it cannot grade.
 """
 
 from __future__ import annotations
@@ -131,6 +136,45 @@ def _course_mark(args) -> int:
     return 1 if args.check and differ else 0
 
 
+def _course_nbgrader(args) -> int:
+    from .lessons import find_lesson
+    from .nbgrader import trial, write_course
+
+    chosen = [find_lesson(k) for k in args.lesson] if args.lesson else None
+    for path in write_course(args.out, chosen, force=args.force, cell_timeout_s=args.cell_timeout):
+        print(f"wrote {path}")
+    print(f"course directory: {args.out} (next: cd {args.out} && nbgrader generate_assignment <lesson>)")
+    if not args.trial:
+        return 0
+    results = trial(args.out, chosen, progress=sys.stderr.isatty(),
+                    command="posekit " + " ".join(sys.argv[1:]))
+    out = Path(args.results) if args.results else Path(args.out) / "autograde_trial.json"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(results, indent=2) + "\n", encoding="utf-8")
+    print(f"{'lesson':<25}{'autograde s':>12}{'score':>8}")
+    for r in results["lessons"]:
+        print(f"{r['assignment']:<25}{r['autograde_s']:>12.1f}{r['score']:>5g}/{r['max_score']:g}")
+    print(f"wrote {out}")
+    return 0 if all(r["score"] == r["max_score"] for r in results["lessons"]) else 1
+
+
+def _course_autograde(args) -> int:
+    from .lessons import find_lesson
+    from .nbgrader import autograde
+
+    course = Path(args.course)
+    if not (course / "nbgrader_config.py").is_file():
+        print(f"posekit: error: {course} is not a course directory (no nbgrader_config.py; make one with "
+              "`posekit course nbgrader --out DIR`)", file=sys.stderr)
+        return 2
+    extra = (f"--Execute.timeout={args.cell_timeout}",) if args.cell_timeout else ()
+    rc, refused = autograde(course, find_lesson(args.lesson).stem, student=args.student, force=args.force,
+                            extra=extra)
+    for r in refused:
+        print(f"refused {r.student}: {r}", file=sys.stderr)
+    return rc or (1 if refused else 0)
+
+
 def add_commands(sub) -> None:
     """Register the ``exercises`` and ``course`` command groups on ``posekit``'s subparsers ``sub``."""
     ex = sub.add_parser("exercises", help="the lessons' exercises and their reference solutions (instructors)")
@@ -145,7 +189,8 @@ def add_commands(sub) -> None:
     p.add_argument("--html", action="store_true", help="also write a static HTML page next to the notebook")
     p.set_defaults(fn=_exercises_solutions)
 
-    course = sub.add_parser("course", help="lecture slides and the static course page (instructors)")
+    course = sub.add_parser("course",
+                            help="lecture slides, the static course page and the nbgrader course (instructors)")
     csub = course.add_subparsers(dest="cmd", required=True)
     p = csub.add_parser("slides", help="every lesson as reveal.js slides, from its stored outputs")
     p.add_argument("--out", default=str(Path("build") / "course"), help="course folder (default build/course)")
@@ -157,3 +202,21 @@ def add_commands(sub) -> None:
     p.add_argument("notebooks", nargs="+")
     p.add_argument("--check", action="store_true", help="write nothing; exit 1 if a notebook differs")
     p.set_defaults(fn=_course_mark)
+    p = csub.add_parser("nbgrader", help="the lessons as an nbgrader course directory (one assignment per lesson)")
+    p.add_argument("--out", default=str(Path("build") / "nbgrader"), help="course folder (default build/nbgrader)")
+    p.add_argument("--lesson", action="append", help="only this lesson (number or name; repeat for more)")
+    p.add_argument("--force", action="store_true", help="also rewrite an existing nbgrader_config.py")
+    p.add_argument("--cell-timeout", type=int, default=300,
+                   help="seconds a cell may run under autograde before it is interrupted (default 300)")
+    p.add_argument("--trial", action="store_true",
+                   help="then autograde each lesson's source version with nbgrader and write the times")
+    p.add_argument("--results", help="where --trial writes its JSON (default OUT/autograde_trial.json)")
+    p.set_defaults(fn=_course_nbgrader)
+    p = csub.add_parser("autograde", help="nbgrader autograde LESSON, refusing by name the folders it cannot grade")
+    p.add_argument("lesson", help="the assignment: a lesson's number or notebook stem (01 or 01_fabrik)")
+    p.add_argument("--course", default=str(Path("build") / "nbgrader"), help="course folder (default build/nbgrader)")
+    p.add_argument("--student", help="only this student's submission")
+    p.add_argument("--force", action="store_true", help="grade again a submission already autograded")
+    p.add_argument("--cell-timeout", type=int,
+                   help="seconds a cell may run before it is interrupted (default: the course's nbgrader_config.py)")
+    p.set_defaults(fn=_course_autograde)

@@ -1,0 +1,317 @@
+"""The lessons as an nbgrader course (``posekit course nbgrader``), graded by nbgrader's own commands.
+
+The fast tests read the source notebooks and the screening of bad folders; the slow ones run nbgrader
+(``generate_assignment`` for every lesson; ``autograde`` and ``export`` on lessons 00 and 06 with a class of
+made-up submissions: right, untouched, one wrong answer, a deleted cell, an answer that raises at import, an
+endless loop, and three folders nbgrader cannot grade).
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import nbformat
+import pytest
+
+pytest.importorskip("nbgrader")
+
+from posekit.course.lessons import lessons, read_notebook  # noqa: E402
+from posekit.course.nbgrader import assignment_notebook, screen  # noqa: E402
+from posekit.course.solutions import exercises, notes  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+LESSONS = lessons()
+STEMS = [le.stem for le in LESSONS]
+ENV = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+
+
+def _grading(cell) -> dict:
+    return cell.metadata.get("nbgrader", {})
+
+
+@pytest.mark.parametrize("lesson", LESSONS, ids=STEMS)
+def test_source_version_marks_every_exercise_for_nbgrader(lesson):
+    nb = assignment_notebook(lesson)
+    lesson_nb = read_notebook(lesson.path)
+    exs = exercises(lesson_nb)
+    ids = [_grading(c)["grade_id"] for c in nb.cells if _grading(c)]
+    assert len(ids) == len(set(ids)), "grade ids must be unique"
+    answers = {_grading(c)["grade_id"]: c for c in nb.cells if _grading(c).get("solution")}
+    tests = {_grading(c)["grade_id"]: c for c in nb.cells if _grading(c).get("grade") and not _grading(c)["solution"]}
+    open_notes = notes(lesson)
+    for ex in exs:
+        if ex.open:
+            cell = answers[f"exercise_{ex.number}_answer"]
+            assert cell.cell_type == "markdown" and _grading(cell)["grade"] and _grading(cell)["points"] > 0
+            assert open_notes[ex.number].splitlines()[0] in cell.source  # the instructor notes are the rubric
+            assert cell.source.startswith("### BEGIN SOLUTION") and cell.source.endswith("### END SOLUTION")
+        else:
+            answer = answers[ex.function]
+            assert answer.cell_type == "code" and not _grading(answer)["grade"] and not _grading(answer)["locked"]
+            assert answer.source.startswith(f"def {ex.function}(")
+            assert "### BEGIN SOLUTION" in answer.source and "NotImplementedError" not in answer.source
+            test = tests[f"{ex.function}_tests"]
+            assert _grading(test)["locked"] and _grading(test)["points"] > 0
+            assert f"{ex.checker}({ex.function})" in test.source
+    n_graded = sum(1 for c in nb.cells if _grading(c).get("grade"))
+    assert n_graded == len(exs)  # one graded cell per exercise: the checked one's tests, the open one's answer
+    # every lesson cell is read-only; only answers and the open exercises' scratch cells are not
+    for c in nb.cells:
+        g = _grading(c)
+        if not g:
+            assert c.source.startswith("# Your working for exercise"), c.source[:80]
+        elif not g["solution"]:
+            assert g["locked"], g
+    # the lesson's own cells are all there, in order (the checked ones split around the answer)
+    assert [c.source for c in nb.cells if _grading(c).get("grade_id", "").startswith("cell_")
+            and not _grading(c)["grade_id"].endswith(("_before", "_after"))] == \
+        [c.source for i, c in enumerate(lesson_nb.cells) if i not in {e.code_cell for e in exs}]
+
+
+def test_an_exercise_cell_can_set_its_points(tmp_path):
+    import dataclasses
+
+    lesson = LESSONS[0]
+    nb = read_notebook(lesson.path)
+    exs = exercises(nb)
+    checked, opened = next(e for e in exs if not e.open), next(e for e in exs if e.open)
+    nb.cells[checked.text_cell].metadata["posekit"] = {"points": 3}
+    nb.cells[opened.text_cell].metadata["posekit"] = {"points": 2.5}
+    copy = tmp_path / lesson.path.name
+    nbformat.write(nb, str(copy))
+    out = assignment_notebook(dataclasses.replace(lesson, path=copy))
+    points = {_grading(c)["grade_id"]: _grading(c)["points"] for c in out.cells if _grading(c).get("grade")}
+    assert points[f"{checked.function}_tests"] == 3 and points[f"exercise_{opened.number}_answer"] == 2.5
+    assert sum(points.values()) == 3 + 2.5 + len(exs) - 2
+    tests = next(c for c in out.cells if _grading(c).get("grade_id") == f"{checked.function}_tests")
+    assert tests.source.splitlines()[-1].startswith("3 if done else 0")
+    nb.cells[checked.text_cell].metadata["posekit"] = {"points": "many"}
+    nbformat.write(nb, str(copy))
+    says = rf"{lesson.path.name}, exercise {checked.number}: .*positive number, not 'many'"
+    with pytest.raises(ValueError, match=says):
+        assignment_notebook(dataclasses.replace(lesson, path=copy))
+
+
+# ---- screening what students hand in --------------------------------------------------------------------
+
+
+def _released_like(stem: str, lesson: str) -> str:
+    nb = nbformat.v4.new_notebook()
+    nb.metadata["posekit"] = {"lesson": lesson}
+    nb.cells = [nbformat.v4.new_markdown_cell("# hello")]
+    return nbformat.writes(nb)
+
+
+def test_screen_names_each_folder_it_cannot_grade(tmp_path):
+    a = STEMS[0]
+    sub = tmp_path / "submitted"
+    good, other, renamed, broken, empty, cells = (sub / s / a for s in
+                                                  ("good", "other", "renamed", "broken", "empty", "cells"))
+    for d in (good, other, renamed, broken, empty, cells):
+        d.mkdir(parents=True)
+    (good / f"{a}.ipynb").write_text(_released_like(a, "00"))
+    (other / f"{STEMS[1]}.ipynb").write_text(_released_like(STEMS[1], "01"))      # another lesson, its own name
+    (renamed / f"{a}.ipynb").write_text(_released_like(a, "01"))                  # another lesson, renamed
+    (broken / f"{a}.ipynb").write_text('{"cells": [\n  {"cell_type": "code",\n  oops\n')  # not JSON
+    (empty / "notes.txt").write_text("I forgot")
+    (cells / f"{a}.ipynb").write_text('{"metadata": {}}')                          # JSON, not a notebook
+    refused = {r.student: str(r) for r in screen(tmp_path, a)}
+    assert set(refused) == {"other", "renamed", "broken", "empty", "cells"}
+    assert f"no {a}.ipynb; found {STEMS[1]}.ipynb" in refused["other"]
+    assert "lesson 01's notebook, expected lesson 00" in refused["renamed"]
+    assert re.search(r"broken/.+\.ipynb: not a Jupyter notebook \(not JSON: .* at line 3, column 3\)",
+                     refused["broken"])
+    assert "no notebook (expected" in refused["empty"] and "counts as missing" in refused["empty"]
+    assert "JSON without a 'cells' list" in refused["cells"]
+
+
+def test_autograde_command_refuses_a_folder_that_is_not_a_course(tmp_path, capsys):
+    from posekit.cli import main
+
+    assert main(["course", "autograde", "00", "--course", str(tmp_path)]) == 2
+    assert "no nbgrader_config.py" in capsys.readouterr().err
+
+
+# ---- nbgrader itself (slow: kernels run whole lessons) ----------------------------------------------------
+
+
+def _run(cmd, cwd, ok=True):
+    proc = subprocess.run(cmd, cwd=cwd, env=ENV, capture_output=True, text=True)
+    if ok and proc.returncode != 0:
+        raise AssertionError(f"{' '.join(cmd)} exited {proc.returncode}:\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}")
+    return proc
+
+
+def _nbgrader(*args, cwd, ok=True):
+    return _run([sys.executable, "-m", "nbgrader", *args, "--log-level=WARN"], cwd, ok)
+
+
+@pytest.fixture(scope="module")
+def course(tmp_path_factory):
+    """Every lesson written by the command and released by nbgrader's ``generate_assignment`` (its Python API,
+    in this process: one nbgrader start instead of seven)."""
+    from nbgrader.apps import NbGraderAPI
+    from traitlets.config.loader import PyFileConfigLoader
+
+    root = tmp_path_factory.mktemp("course")
+    _run([sys.executable, "-m", "posekit", "course", "nbgrader", "--out", str(root), "--cell-timeout", "120"], ROOT)
+    config = PyFileConfigLoader("nbgrader_config.py", path=str(root)).load_config()
+    config.CourseDirectory.root = str(root)
+    api = NbGraderAPI(config=config)
+    for stem in STEMS:
+        result = api.generate_assignment(stem)
+        assert result["success"], result.get("error") or result.get("log")
+    return root
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("stem", STEMS)
+def test_generate_assignment_releases_every_lesson_without_its_solutions(course, stem):
+    released = nbformat.read(str(course / "release" / stem / f"{stem}.ipynb"), as_version=4)
+    source = assignment_notebook(stem[:2])
+    text = "\n".join(c.source for c in released.cells)
+    assert "BEGIN SOLUTION" not in text and "Rubric (instructor notes)" not in text
+    for ex in exercises(read_notebook(ROOT / "notebooks" / f"{stem}.ipynb")):
+        if not ex.open:
+            answer = next(c for c in released.cells if _grading(c).get("grade_id") == ex.function)
+            assert answer.source.startswith(f"def {ex.function}(") and "raise NotImplementedError()" in answer.source
+    # read-only cells stay so for the student (nbgrader's lock), and the lesson keeps all its cells
+    assert all(c.metadata.get("deletable") is False for c in released.cells if _grading(c).get("locked"))
+    assert len(released.cells) == len(source.cells)
+
+
+def _answer(nb, function) -> nbformat.NotebookNode:
+    return next(c for c in nb.cells if _grading(c).get("grade_id") == function)
+
+
+def _class(course, stem) -> dict[str, str]:
+    """A class's submissions of ``stem``; returns what each student did."""
+    src = nbformat.read(str(course / "source" / stem / f"{stem}.ipynb"), as_version=4)
+    released = course / "release" / stem / f"{stem}.ipynb"
+    checked = [ex for ex in exercises(read_notebook(ROOT / "notebooks" / f"{stem}.ipynb")) if not ex.open]
+
+    def hand_in(student, nb=None, raw=None, name=f"{stem}.ipynb"):
+        d = course / "submitted" / student / stem
+        d.mkdir(parents=True, exist_ok=True)
+        if raw is not None:
+            (d / name).write_text(raw, encoding="utf-8")
+        elif nb is not None:
+            nbformat.write(nb, str(d / name))
+
+    hand_in("right", src)
+    shutil.copytree(released.parent, course / "submitted" / "untouched" / stem)
+    if stem != STEMS[0]:
+        return {}
+    first, second = checked[0].function, checked[1].function
+    wrong = nbformat.from_dict(json.loads(json.dumps(src)))
+    cell = _answer(wrong, second)  # returns a number where the checker expects an array
+    cell.source = cell.source.replace("### BEGIN SOLUTION\n", "### BEGIN SOLUTION\n    return 0.0\n")
+    hand_in("wrong", wrong)
+    deleted = nbformat.from_dict(json.loads(json.dumps(src)))   # the first tests cell and the second answer gone
+    deleted.cells = [c for c in deleted.cells if _grading(c).get("grade_id") not in (f"{first}_tests", second)]
+    hand_in("deleted", deleted)
+    raises = nbformat.from_dict(json.loads(json.dumps(src)))
+    _answer(raises, first).source = "import posekit_has_no_such_module\n\n" + _answer(raises, first).source
+    hand_in("raises", raises)
+    loops = nbformat.from_dict(json.loads(json.dumps(src)))
+    _answer(loops, second).source = _answer(loops, second).source.replace(
+        "### BEGIN SOLUTION\n", "### BEGIN SOLUTION\n    while True:\n        pass\n")
+    hand_in("loops", loops)
+    hand_in("other", nbformat.read(str(course / "release" / STEMS[1] / f"{STEMS[1]}.ipynb"), as_version=4))
+    hand_in("broken", raw='{"cells": [\n  {"cell_type": "code",\n  oops\n')
+    (course / "submitted" / "empty" / stem).mkdir(parents=True)
+    (course / "submitted" / "empty" / stem / "notes.txt").write_text("I forgot")
+    return {"first": first, "second": second}
+
+
+def _grades(course) -> dict[tuple[str, str], dict]:
+    _nbgrader("export", cwd=course)
+    with open(course / "grades.csv", newline="") as fh:
+        return {(r["assignment"], r["student_id"]): r for r in csv.DictReader(fh)}
+
+
+def _cell_scores(course, stem, student) -> dict[str, float]:
+    from nbgrader.api import Gradebook
+
+    with Gradebook(f"sqlite:///{course / 'gradebook.db'}") as gb:
+        nb = gb.find_submission_notebook(stem, stem, student)
+        return {g.name: g.auto_score for g in nb.grades if g.cell.cell_type == "code"}
+
+
+def _errors(course, stem, student) -> list[str]:
+    nb = nbformat.read(str(course / "autograded" / student / stem / f"{stem}.ipynb"), as_version=4)
+    return [f"{_grading(c).get('grade_id')}: {o.get('ename')}" for c in nb.cells if c.cell_type == "code"
+            for o in c.outputs if o.output_type == "error"]
+
+
+def _outputs(course, stem, student, grade_id) -> str:
+    nb = nbformat.read(str(course / "autograded" / student / stem / f"{stem}.ipynb"), as_version=4)
+    cell = next(c for c in nb.cells if _grading(c).get("grade_id") == grade_id)
+    return "\n".join(o.get("ename", "") + o.get("text", "") + str(o.get("data", {}).get("text/plain", ""))
+                     for o in cell.outputs)
+
+
+@pytest.mark.slow
+def test_autograde_and_export_grade_a_class_of_lesson_00_and_06(course):
+    a, b = STEMS[0], STEMS[6]
+    did = _class(course, a)
+    _class(course, b)
+    from nbgrader.api import Gradebook
+
+    with Gradebook(f"sqlite:///{course / 'gradebook.db'}") as gb:  # the class list
+        for student in ("right", "untouched", "wrong", "deleted", "raises", "loops", "other", "broken", "empty"):
+            gb.update_or_create_student(student)
+    # lesson 00's cells are short: a 45 s limit (not the course's 120 s) bounds what the endless loop costs
+    proc = _run([sys.executable, "-m", "posekit", "course", "autograde", a, "--course", str(course),
+                 "--cell-timeout", "45"], ROOT, ok=False)
+    assert proc.returncode == 1, proc.stdout + proc.stderr  # graded, but three folders refused
+    for student in ("other", "broken", "empty"):
+        assert re.search(rf"refused {student}: .*submitted/{student}/{a}.*counts as missing", proc.stderr), \
+            proc.stderr
+    _run([sys.executable, "-m", "posekit", "course", "autograde", "06", "--course", str(course)], ROOT)
+    grades = _grades(course)
+    n_a = len([e for e in exercises(read_notebook(ROOT / "notebooks" / f"{a}.ipynb")) if not e.open])
+    n_b = len([e for e in exercises(read_notebook(ROOT / "notebooks" / f"{b}.ipynb")) if not e.open])
+
+    def score(stem, student):
+        return float(grades[(stem, student)]["raw_score"])
+
+    # the source version earns every autograded point; the released one none (open answers wait for a person)
+    for stem, n in ((a, n_a), (b, n_b)):
+        scores = _cell_scores(course, stem, "right")
+        assert len(scores) == n and all(v == 1 for v in scores.values()), scores
+        assert score(stem, "right") == n
+        assert set(_cell_scores(course, stem, "untouched").values()) == {0} and score(stem, "untouched") == 0
+        # both run top to bottom: no cell of the lesson, the answers or the tests raised
+        assert _errors(course, stem, "right") == [] and _errors(course, stem, "untouched") == []
+        for test in (g for g in scores if g.endswith("_tests")):
+            assert "not attempted yet" in _outputs(course, stem, "untouched", test)
+    first, second = did["first"], did["second"]
+    # one wrong answer loses exactly that exercise's point
+    wrong = _cell_scores(course, a, "wrong")
+    assert wrong[f"{second}_tests"] == 0 and sum(wrong.values()) == n_a - 1, wrong
+    assert "✗ check_" in _outputs(course, a, "wrong", f"{second}_tests")
+    # a deleted tests cell is put back by nbgrader and graded; a deleted answer is an error worth 0
+    deleted = _cell_scores(course, a, "deleted")
+    assert deleted[f"{first}_tests"] == 1 and deleted[f"{second}_tests"] == 0 and sum(deleted.values()) == n_a - 1
+    assert "NameError" in _outputs(course, a, "deleted", f"{second}_tests")
+    # an answer raising at import: its error is shown, the rest is graded
+    raises = _cell_scores(course, a, "raises")
+    assert raises[f"{first}_tests"] == 0 and sum(raises.values()) == n_a - 1
+    assert "ModuleNotFoundError" in _outputs(course, a, "raises", first)
+    # an endless loop is interrupted after the per-cell timeout; the cells after it still run
+    loops = _cell_scores(course, a, "loops")
+    assert loops[f"{second}_tests"] == 0 and sum(loops.values()) == n_a - 1, loops
+    assert re.search(r"KeyboardInterrupt|CellTimeoutError", _outputs(course, a, "loops", f"{second}_tests"))
+    # the refused folders are graded as missing; export has a row for each
+    for student in ("other", "broken", "empty"):
+        row = grades[(a, student)]
+        assert row["timestamp"] == "" and float(row["raw_score"]) == 0
+        assert not (course / "autograded" / student / a).exists()
