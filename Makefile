@@ -30,6 +30,12 @@ $(STAMP): pyproject.toml tools/jupyterlab_overrides.json
 	$(PY) -m pip install -q --upgrade pip
 	$(PY) -m pip install -q -e ".[dev]"
 	mkdir -p $(dir $(LAB_OVERRIDES)) && cp tools/jupyterlab_overrides.json $(LAB_OVERRIDES)
+	@# nbgrader (a dev dependency: posekit course nbgrader and its tests) would add its menus, panels and server
+	@# extensions to every JupyterLab this environment starts, the lessons' included; they are for an instructor's
+	@# grading server (docs/nbgrader.md), so they are off here
+	$(VENV)/bin/jupyter labextension disable --level=sys_prefix @jupyter/nbgrader >/dev/null 2>&1 || true
+	for e in formgrader validate_assignment assignment_list course_list; do \
+	  $(VENV)/bin/jupyter server extension disable --sys-prefix nbgrader.server_extensions.$$e >/dev/null 2>&1 || true; done
 	touch $(STAMP)
 
 setup: $(STAMP)
