@@ -50,7 +50,7 @@ def rng():
 # Without this file -- `pytest notebooks/...` -- plain loadfile still keeps each notebook on one worker.)
 _BROWSER_MODULES = {"test_browser.py", "test_studio_browser.py", "test_studio_class_browser.py"}
 # measured on 2 cores, longest first; groups not listed come after, in collection order
-_FIRST = ["browser", "04_aegan_latent_space.ipynb", "05_protores.ipynb", "02_inverse_rig_mapping.ipynb",
+_FIRST = ["browser", "04_aegan_latent_space.ipynb", "05_protores.ipynb", "test_nbgrader.py", "02_inverse_rig_mapping.ipynb",
           "03_autoencoder_solvers.ipynb", "01_fabrik.ipynb"]
 
 
