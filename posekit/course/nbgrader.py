@@ -339,7 +339,6 @@ def trial(course_dir, chosen=None, progress: bool = False, command: str = "posek
         ``{"command", "machine", "cell_timeout_s", "what", "lessons": [{"lesson", "assignment", "autograde_s",
         "autograde_cpu_s", "load_avg_1min_before", "score", "max_score"}, ...]}``; times in seconds.
     """
-    import platform
     import re
     import shutil
 
@@ -369,8 +368,9 @@ def trial(course_dir, chosen=None, progress: bool = False, command: str = "posek
             rows.append({"lesson": lesson.number, "assignment": a, "autograde_s": round(seconds, 1),
                          "autograde_cpu_s": round(cpu, 1), "load_avg_1min_before": round(load, 2),
                          "score": sub.code_score, "max_score": sub.max_code_score})
-    return {"command": command,
-            "machine": f"{platform.machine()}, {os.cpu_count()} CPUs, Python {platform.python_version()}",
+    from ..provenance import stamp
+
+    return {**stamp(command),
             "cell_timeout_s": int(timeout.group(1)) if timeout else None,
             "what": "autograde_s: wall time of `nbgrader autograde` on one submission (the lesson's source version) "
                     "of each lesson, nbgrader's and the kernel's start included; autograde_cpu_s: CPU time of "

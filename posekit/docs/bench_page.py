@@ -188,6 +188,14 @@ def _generic(name: str, d: dict) -> str:
     return "\n\n".join(parts)
 
 
+def _nbgrader(name: str, d: dict) -> str:
+    cols = ["lesson", "assignment", "autograde_s", "autograde_cpu_s", "load_avg_1min_before", "score", "max_score"]
+    labels = {"autograde_s": "autograde s (wall)", "autograde_cpu_s": "CPU s", "load_avg_1min_before":
+              "load before", "max_score": "of"}
+    return "\n\n".join([_provenance(name, d), _num(d.get("what", "")), _table(d["lessons"], cols, labels),
+                         "How to grade a class: [grading with nbgrader](nbgrader.md)."])
+
+
 SECTIONS = [
     ("bench_all.json", "Every solver on the same cases", _bench_all),
     (STUDIO_SESSIONS, "The studio for a class: sizing", _studio),
@@ -195,6 +203,7 @@ SECTIONS = [
     ("protores_scaling.json", "ProtoRes: scaling", _protores),
     ("ae_scale_full.json", "Lesson 03 at full scale", _ae_scale),
     ("ae_scale_cross.json", "Lesson 03 across datasets", _ae_scale),
+    ("nbgrader_autograde.json", "Autograding one submission of each lesson", _nbgrader),
 ]
 """The known results files, in the page's order: (file, title, renderer)."""
 
