@@ -117,7 +117,7 @@ ALLOWED = {
     ("04", "40 cm"): "a suggested target for the reader to try",
     ("03", "0.94 m"): "the mini set's root helper point below the pelvis (a fact of the data)",
     ("03", "442 kB"): "Victor et al. 2021: their model's size for two effectors",
-    ("04", "0.1 %"): "the optimisers' stopping rule (a setting)", ("04", "8 steps"): "L-BFGS's memory (a setting)",
+    ("04", "0.1 %"): "the optimisers' stopping rule (a setting)", ("04", "0.05"): "Adam's step size (a setting)", ("04", "8 steps"): "L-BFGS's memory (a setting)",
     ("00", "30 fps"): "the Bandai data's frame rate (a fact of the data)",
     ("01", "60°"): "the near-extended step's threshold (a setting)",
 }
