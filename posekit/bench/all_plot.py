@@ -33,7 +33,7 @@ def plot(rows: list[dict], meta: dict, path=None):
 
     sets = [meta["effectors"]] if isinstance(meta["effectors"], str) else list(meta["effectors"])
     sets = [e for e in sets if any(r.get("effectors", e) == e for r in rows)] or sets[:1]
-    fig = Figure(figsize=(12, 7.5 * len(sets)), dpi=DPI)
+    fig = Figure(figsize=(10, 6.5 * len(sets)), dpi=DPI)
     FigureCanvasAgg(fig)
     axes = [fig.add_subplot(len(sets), 1, i + 1) for i in range(len(sets))]
     starts = list(meta["starts"])
