@@ -91,3 +91,12 @@ def test_benchmark_report_headers_name_glossary_measures():
     cols = {c.strip() for line in shipped.splitlines() if line.startswith("| solver |") for c in line.strip("|").split("|")}
     assert [c for c in cols if MEASURE_WORDS.search(c) and c not in headers] == []
     assert bench_all is not None and measures.__doc__
+
+
+def test_lesson_01_shows_the_glossary_as_it_is_now():
+    """Lesson 01 renders the glossary where the measures first appear; its stored output is the current one
+    (re-execute lesson 01 after changing the glossary)."""
+    nb = json.loads(next(p for p in NOTEBOOKS if p.name.startswith("01_")).read_text(encoding="utf-8"))
+    shown = ["".join(o["data"]["text/markdown"]) for c in nb["cells"] if c["cell_type"] == "code"
+             and "glossary_markdown()" in "".join(c["source"]) for o in c.get("outputs", []) if "text/markdown" in o.get("data", {})]
+    assert shown == [glossary_markdown()]
