@@ -113,3 +113,18 @@ def test_a_stored_widget_says_what_would_be_there(path):
             if "application/vnd.jupyter.widget-view+json" in o.get("data", {})
             and re.match(r"[A-Z]\w*\(", "".join(o["data"].get("text/plain", "")))]
     assert bare == [], f"{path.name}: cells {bare} store a widget as its Python repr"
+
+
+@pytest.mark.parametrize("path", [p for p in NOTEBOOKS if p.name[:2] != "00"], ids=lambda p: p.name)
+def test_goals_are_set_in_the_aim_and_judged_in_a_verdict_table(path):
+    """Goals before verdicts: the Aim's cell sets **Goals**, and a later code cell prints the verdict table
+    (posekit.evaluation.measures.verdict_table: goal, measured, met / not met). Lesson 00 judges no goal."""
+    nb = json.loads(path.read_text())
+    cells = nb["cells"]
+    goals = [k for k, c in enumerate(cells) if c["cell_type"] == "markdown" and "**Goals**" in "".join(c["source"])]
+    verdicts = [k for k, c in enumerate(cells) if c["cell_type"] == "code" and "verdict_table(" in "".join(c["source"])]
+    assert goals and goals[0] <= 1, f"{path.name}: the Aim sets no **Goals**"
+    assert verdicts and verdicts[-1] > goals[0], f"{path.name}: no verdict table after the goals"
+    printed = "".join("".join(o.get("text", "")) for o in cells[verdicts[-1]].get("outputs", []))
+    assert printed.startswith("goal") and ("met" in printed or "not judged" in printed), \
+        f"{path.name}: the verdict table cell is not stored executed"

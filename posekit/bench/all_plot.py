@@ -65,8 +65,10 @@ def _panel(ax, rows: list[dict], starts: list, meta: dict, effectors: str) -> No
                    marker=marker, color=colour, zorder=3, label=f"start: {st}")
     ax.set_xscale("log")
     ax.set_yscale("log")  # both log: equal steps are equal ratios (twice as fast, half the error)
-    for axis in (ax.xaxis, ax.yaxis):
-        axis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+    # x spans decades (1, 2, 5 per decade); y spans less than one or two, so it is labelled at 1-1.5-2-3-...-8:
+    # values such as 67.8 and 75.8 mm can be read off the grid
+    for axis, subs in ((ax.xaxis, (1.0, 2.0, 5.0)), (ax.yaxis, (1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0))):
+        axis.set_major_locator(LogLocator(base=10, subs=subs))
         axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
         axis.set_minor_formatter(NullFormatter())
     x = np.array([r["latency_ms_median"] for r in rows])
@@ -87,7 +89,7 @@ def _panel(ax, rows: list[dict], starts: list, meta: dict, effectors: str) -> No
 
 def _label_points(fig, ax, rows: list[dict], colours: dict, fontsize: float = 6.5) -> None:
     """Name every point (in a darker shade of its start's colour). Each label takes the nearest spot (a
-    greedy search over 8 directions and 5 distances, the most crowded points first) that overlaps no
+    greedy search over 16 directions and 7 distances, the most crowded points first) that overlaps no
     other label, point, the legend or the frame, and is nearer its own point than any other; a leader line
     joins a label that is not next to its point."""
     from matplotlib.colors import to_rgb
@@ -100,7 +102,8 @@ def _label_points(fig, ax, rows: list[dict], colours: dict, fontsize: float = 6.
     if ax.get_legend() is not None:
         lb = ax.get_legend().get_window_extent(renderer)
         taken.append((lb.x0, lb.y0, lb.x1, lb.y1))
-    dirs = [(1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (-1, 1), (1, -1), (-1, -1)]
+    dirs = [(1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (-1, 1), (1, -1), (-1, -1),
+            (2, 1), (-2, 1), (2, -1), (-2, -1), (1, 2), (-1, 2), (1, -2), (-1, -2)]
     align = {-1: "right", 0: "center", 1: "left"}, {-1: "top", 0: "center", 1: "bottom"}
     ink = {st: tuple(0.6 * np.array(to_rgb(c))) for st, c in colours.items()}
 
@@ -124,12 +127,12 @@ def _label_points(fig, ax, rows: list[dict], colours: dict, fontsize: float = 6.
         text = ax.annotate(r["method"], (r["latency_ms_median"], r["mpjpe_mm_median"]), fontsize=fontsize,
                            textcoords="offset points", xytext=(0, 0), zorder=4, color=ink[r["start"]])
         best = None
-        for dist in (5, 11, 19, 30, 45):
+        for dist in (5, 11, 19, 30, 45, 65, 90):
             for dx, dy in dirs:
-                step = dist / np.sqrt(2) if dx and dy else dist
+                step = dist / np.hypot(dx, dy)
                 text.set_position((dx * step, dy * step))
-                text.set_ha(align[0][dx])
-                text.set_va(align[1][dy])
+                text.set_ha(align[0][int(np.sign(dx))])
+                text.set_va(align[1][int(np.sign(dy))])
                 b = text.get_window_extent(renderer)
                 box = (b.x0 - 1, b.y0 - 1, b.x1 + 1, b.y1 + 1)
                 c = cost(box, i)
@@ -141,8 +144,8 @@ def _label_points(fig, ax, rows: list[dict], colours: dict, fontsize: float = 6.
                 break
         _, ox, oy, dx, dy, box = best
         text.set_position((ox, oy))
-        text.set_ha(align[0][dx])
-        text.set_va(align[1][dy])
+        text.set_ha(align[0][int(np.sign(dx))])
+        text.set_va(align[1][int(np.sign(dy))])
         if np.hypot(ox, oy) > 6:
             ax.annotate("", (r["latency_ms_median"], r["mpjpe_mm_median"]), textcoords="offset points",
                         xytext=(ox, oy), zorder=2, arrowprops={"arrowstyle": "-", "color": colours[r["start"]],

@@ -10,6 +10,8 @@ commands (:mod:`posekit.bench`) import it, it imports neither.
 * :mod:`~posekit.evaluation.effector_cases` — ProtoRes's two effector benchmarks (5-point and random,
   Oreshkin et al. 2022, Sec. 4), shipped as files;
 * :mod:`~posekit.evaluation.effector_scores` — the paper's metrics on them (L_ikd-L2, L_gpd-L2,
-  L_loc-geo, MPJPE, effector errors per kind), the classical methods run from the same information
-  (``posekit bench protores``, lesson 05's studies).
+  L_loc-geo, the world joint error, effector errors per kind), the classical methods run from the same
+  information (``posekit bench protores``, lesson 05's studies);
+* :mod:`~posekit.evaluation.measures` — the glossary: every measure's frame, reduction and unit, the column
+  headers that show it, and the verdict table that ends a lesson's Discussion (``docs/measures.md``).
 """

@@ -8,7 +8,9 @@ method is scored by :func:`scores` on the same cases (:mod:`posekit.evaluation.e
 * ``gpd_l2`` — L_gpd-L2: the same for the global position decoder's positions (learned models with a GPD);
 * ``loc_geo`` — L_loc-geo: mean geodesic angle between predicted and true local rotations over the
   body joints, radians;
-* ``mpjpe_mm`` — mean per-joint distance, millimetres (the same error as ``ikd_l2``, easier to picture);
+* ``mpjpe_mm`` — the *world joint error* of :mod:`posekit.evaluation.measures`: mean per-joint distance in the
+  world frame, averaged over the cases, millimetres (the same error as ``ikd_l2``, easier to picture). It is not
+  the pelvis-relative, median MPJPE of :mod:`posekit.data.metrics` (the key keeps its name for the stored results);
 * effector errors per kind (medians: position mm, rotation and look-at degrees), by the one definition
   every solver shares (:func:`posekit.ik.effector_errors.errors_into`).
 
