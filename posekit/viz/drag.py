@@ -101,7 +101,13 @@ class DragTargets:
 
     def _on_drag_mode(self, change):
         self.orbit.enabled = not change["new"]
+        self._let_go()
+
+    def _let_go(self):
+        """End a drag: the sliders show where the target went (they wait while the mouse is down)."""
         self.dragging = None
+        if self._sliders_due:
+            self._sync_sliders()
 
     def grab(self, point):
         """Start dragging at ``point`` (world frame, metres): the target marker it is on (within two
@@ -143,4 +149,4 @@ class DragTargets:
             self.drag_to(np.asarray(change["new"], float) + self._offset)
 
     def _on_release(self, change):
-        self.dragging = None
+        self._let_go()

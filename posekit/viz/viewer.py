@@ -18,9 +18,9 @@ Interaction: orbit with the mouse (drag to rotate, wheel to zoom, right-drag to 
 orbit drag); the X/Y/Z sliders then move that joint's target, in 1 mm steps within
 :attr:`SkeletonViewer.SLIDER_SPAN` of it (a slider pushed to an end of its range re-centres on the new
 value, so any point can be reached). A joint with both a target and a look-at target gets a choice of
-which one the sliders move. Selecting never moves anything: the sliders' new ranges and values reach the
-browser in one message each, and a value the browser sends back that the kernel set itself (an echo) is
-not taken as a move. Helper joints that are not part of the body (Bandai's ``joint_Root``, the world
+which one the sliders move. Selecting never moves anything, and a key press moves the joint selected when it
+arrives by exactly its steps, however soon after a selection: the kernel never changes a slider the browser
+shows, it replaces it (:mod:`posekit.viz.sliders`). Helper joints that are not part of the body (Bandai's ``joint_Root``, the world
 point under the feet) cannot be selected. With **drag in 3D** on, orbiting stops and pressing the mouse
 on a target marker or a joint and moving it drags that target across the plane through it that faces
 the camera. ``on_target_change`` callbacks (an IK solver, in later lessons) receive
@@ -199,7 +199,7 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         self.joint_select.observe(lambda ch: self.select(ch["new"] or None), names="value")
         self.drag_mode = self._drag_toggle()
         self._init_sliders()
-        self.controls = w.VBox([w.HBox([self.joint_select, self.drag_mode]), self.handle_choice, *self.sliders,
+        self.controls = w.VBox([w.HBox([self.joint_select, self.drag_mode]), self.handle_choice, self.slider_box,
                                 self.status])
         self.controls.layout.display = None if controls else "none"
         self._extra = w.VBox([])

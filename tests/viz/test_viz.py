@@ -166,8 +166,8 @@ def test_drag_moves_the_target_across_the_camera_facing_plane(sample):
     v.drag_to(cam + 0.5 * (goal - cam))
     assert seen and seen[-1][0] == "left_wrist"
     np.testing.assert_allclose(v.targets["left_wrist"], goal, atol=1e-9)
-    np.testing.assert_allclose(v.sliders[0].value, goal[0], atol=v.SLIDER_STEP)
     v._on_release({"new": [0, 0, 0]})
+    np.testing.assert_allclose(v.sliders[0].value, goal[0], atol=v.SLIDER_STEP)  # shown once the mouse is up
     n = len(seen)
     v.drag_to(cam + 0.5 * (hand - cam))
     assert len(seen) == n  # released: moving the mouse no longer drags
@@ -368,10 +368,10 @@ def test_dragging_an_orange_marker_moves_the_look_at_target():
     assert not np.allclose(ed.rows[0]["target"], head) and np.allclose(ed.rows[1]["target"], goal)
 
 
-def test_stale_values_the_browser_sends_after_a_new_selection_move_nothing(sample):
-    """Issue 27: selecting a joint re-ranges the sliders; the browser may send back the previous joint's value
-    clamped into the new range. That is an echo, not a move; a real move changes one axis only,
-    and a slider pushed to an end re-centres on its value."""
+def test_values_sent_back_unchanged_move_nothing_and_a_move_changes_one_axis(sample):
+    """Issue 27: selecting joints one after another never moves a target: the browser sending back a slider's own
+    value (or its snap to the step grid) is zero steps. A move changes its own axis only, and a slider pushed to an
+    end re-centres on its value."""
     s = sample.skeleton
     v = SkeletonViewer(s, sample.global_pos[0])
     seen = []
@@ -381,65 +381,62 @@ def test_stale_values_the_browser_sends_after_a_new_selection_move_nothing(sampl
     wrist = v.targets["left_wrist"].copy()
     assert len(seen) == 1
     for other in ("left_knee", "chest", "left_wrist"):
-        old = [sl.value for sl in v.sliders]
+        old = list(v.sliders)
         v.select(other)
-        for sl, x in zip(v.sliders, old):  # the browser's stale values, clamped into the new ranges
-            sl.value = float(np.clip(x, sl.min, sl.max))
+        assert not set(old) & set(v.sliders)  # new slider models for every selection
+        for sl in old + v.sliders:  # the browser sends back what each model holds, snapped to its grid
+            sl.value = float(sl.min + round((sl.value - sl.min) / sl.step) * sl.step)
     assert len(seen) == 1 and set(v.targets) == {"left_wrist"}, seen
     np.testing.assert_array_equal(v.targets["left_wrist"], wrist)
-    assert [sl.value for sl in v.sliders] == pytest.approx(wrist)  # put back where the target is
-    # a move: only that axis of the target changes, whatever the other sliders hold
-    v.sliders[2].value = wrist[2] + 0.1
+    assert [sl.value for sl in v.sliders] == pytest.approx(wrist, abs=v.SLIDER_STEP / 2)
+    z = v.sliders[2]
+    z.value += 0.1
     np.testing.assert_allclose(v.targets["left_wrist"], wrist + [0.0, 0.0, 0.1])
-    # pushed to the top of its range: the range re-centres on the new value, so the next push goes further
-    # (later than ECHO_S after the selection: an end of a new range is taken as a stale echo only just after it)
-    v.ECHO_S = 0.0
+    assert v.sliders[2] is z  # its own move does not replace the slider (the browser keeps its focus)
     top = v.sliders[1].max
-    v.sliders[1].value = top
-    assert v.targets["left_wrist"][1] == pytest.approx(top) and v.sliders[1].max > top + 0.4
+    v.sliders[1].value = top  # pushed to the top: new sliders, centred on the new value
+    assert v.targets["left_wrist"][1] == pytest.approx(top, abs=v.SLIDER_STEP) and v.sliders[1].max > top + 0.4
 
 
-def test_a_stale_value_that_arrives_after_the_next_selection_moves_nothing(sample):
-    """Seen in JupyterLab under load (lesson 02): selecting left_wrist, then right_ankle, then chest, the browser
-    sent the wrist's height clamped into the *ankle's* range at the ankle's selection and once more after chest
-    was selected, and chest got a target 45 cm below it. A value clamped into any recent range is an echo too."""
+def test_a_press_on_the_previous_selections_slider_moves_the_new_joint_one_step(sample):
+    """Issue 44: select one joint, then another, and press before the browser shows the new sliders: the press
+    arrives on the old slider model, with the old joint's value plus one step. It moves the joint selected now by
+    one step on that axis, never to the old joint's value, and the sliders are made anew to show it."""
     s = sample.skeleton
     v = SkeletonViewer(s, sample.global_pos[0])
     seen = []
-    v.on_target_change(lambda name, p: seen.append(name))
-    v.select("head")
-    wrist = [sl.value for sl in v.sliders]
-    v.select("right_ankle")
-    lagged = [float(np.clip(x, sl.min, sl.max)) for sl, x in zip(v.sliders, wrist)]  # what the browser clamped
-    assert any(not np.isclose(x, w) for x, w in zip(lagged, wrist))
-    for sl, x in zip(v.sliders, lagged):  # the browser sends them once, at the ankle's selection ...
-        sl.value = x
-    v.select("right_knee")
-    for sl, x in zip(v.sliders, lagged):  # ... and again after the knee's ranges, inside them
-        assert sl.min < x < sl.max
-        sl.value = x
-    assert seen == [] and v.targets == {}
-    knee = sample.global_pos[0][s.index("right_knee")]
-    assert [sl.value for sl in v.sliders] == pytest.approx(knee)  # put back where the joint is
-    v.sliders[0].value = knee[0] + 0.05  # a real move still moves
-    assert seen == ["right_knee"]
+    v.on_target_change(lambda name, p: seen.append((name, p.copy())))
+    v.select("left_knee")
+    knee_sliders = list(v.sliders)
+    knee_y = knee_sliders[1].value  # what the browser shows until the new sliders arrive
+    v.select("right_wrist")
+    wrist_sliders = list(v.sliders)
+    hand = sample.global_pos[0][s.index("right_wrist")]
+    for k in range(1, 6):  # five presses on the knee's y slider, still on screen
+        knee_sliders[1].value = knee_y + k * v.SLIDER_STEP
+        assert seen[-1][0] == "right_wrist"
+        np.testing.assert_allclose(v.targets["right_wrist"], hand + [0.0, k * v.SLIDER_STEP, 0.0], atol=1e-12)
+    assert "left_knee" not in v.targets
+    assert v.sliders[1] is not wrist_sliders[1] and v.sliders[1].value == pytest.approx(hand[1] + 0.005, abs=6e-4)
+    wrist_sliders[1].value = wrist_sliders[1].value + v.SLIDER_STEP  # and one on the first wrist sliders
+    np.testing.assert_allclose(v.targets["right_wrist"], hand + [0.0, 0.006, 0.0], atol=1e-12)
+    assert len(seen) == 6
 
 
 def test_quick_moves_back_and_forth_after_a_selection_all_move(sample):
     """Right, left, right by one step within a second of selecting a joint (a student tapping the arrow keys, or
-    ``posekit bench studio``): every press moves the target, though the third value is one the slider held a
-    moment ago. Only values held up to the new range can be echoes."""
+    ``posekit bench studio``): every press moves the target by one step."""
     s = sample.skeleton
     v = SkeletonViewer(s, sample.global_pos[0])
     seen = []
-    v.on_target_change(lambda name, p: seen.append(round(float(p[0]), 4)))
+    v.on_target_change(lambda name, p: seen.append(round(float(p[0]), 6)))
     v.select("head")
     v.select("left_wrist")
-    x0 = v.sliders[0].value
+    x0, j0 = v.sliders[0].value, sample.global_pos[0][s.index("left_wrist"), 0]
     for x in (x0 + 0.001, x0, x0 + 0.001, x0):
         v.sliders[0].value = x
-    assert seen == [round(x0 + 0.001, 4), round(x0, 4), round(x0 + 0.001, 4), round(x0, 4)]
-    assert v.targets["left_wrist"][0] == pytest.approx(x0)
+    assert seen == [round(j0 + d, 6) for d in (0.001, 0.0, 0.001, 0.0)]
+    assert v.targets["left_wrist"][0] == pytest.approx(j0)
 
 
 def test_helper_joints_are_not_selectable_and_markers_stay_pickable():
