@@ -211,8 +211,11 @@ def test_a_press_right_after_a_selection_moves_the_new_joint_by_one_step(page):
                 shown[:] = [_status_rows(page)]
                 return _target_mm(page, joint) == expected[joint]
 
-            wait_for(moved, 30, f"press {i + 1}: {joint}'s target to move up one step, to {expected[joint]} mm (the "
-                                f"first view's table: {shown})", every=0.2)
+            try:
+                wait_for(moved, 30, "the target to move", every=0.2)
+            except pytest.fail.Exception:
+                pytest.fail(f"press {i + 1}: {joint}'s target did not move up one step, to {expected[joint]} mm; the "
+                            f"first view's table shows {shown}")
     finally:
         busy.kill()
         busy.wait()
