@@ -16,7 +16,8 @@ from ..ik.api import Effector, Pose
 from ..ik.effectors import resolve_effectors
 from .viewer import SkeletonViewer, show_widget
 
-__all__ = ["SolverPanel", "solver_views", "solve_views", "status_line", "status_table", "worst_errors"]
+__all__ = ["SolverPanel", "ignored_effectors", "reached_mark", "solver_views", "solve_views", "status_line",
+           "status_table", "worst_errors"]
 
 
 def _kinds_text(kinds) -> str:
@@ -30,15 +31,26 @@ def status_line(result, ms: float, joints=None, ignored=()) -> str:
     iterations and time (ms). ``ignored``: effectors the solver was not given because it does not honour
     their kind — the view says so ("look-at ignored") and never calls them reached."""
     it = result.iterations
-    if ignored:
-        kinds = _kinds_text(e.kind for e in ignored)
-        used = len(result.effector_error)
-        mark = (f"✓ {used} of {used + len(ignored)} reached" if result.converged else "✗ not reached")
-        mark += f" · <span style='color:#b9770e'>{kinds} ignored</span>"
-    else:
-        mark = "✓ reached" if result.converged else "✗ not reached"
-    return status_table(f"<b>{mark}</b>", [("worst effector", worst_errors(result, joints, sep="<br>")),
+    return status_table(f"<b>{reached_mark(result, ignored)}</b>", [("worst effector", worst_errors(result, joints, sep="<br>")),
                                            (f"iteration{'' if it == 1 else 's'}", str(it)), ("time", f"{ms:.2f} ms")])
+
+
+def reached_mark(result, ignored=()) -> str:
+    """Whether a solver reached its effectors, as HTML: ``"✓ reached"``, ``"✗ not reached"``, or with effectors it
+    ignored (not given, their kind not honoured) ``"✓ 3 of 5 reached · look-at, rotation ignored"`` — never a plain
+    ✓ then. The views (:func:`status_line`) and the studio's summary say it in these words."""
+    if not ignored:
+        return "✓ reached" if result.converged else "✗ not reached"
+    used = len(result.effector_error)
+    mark = f"✓ {used} of {used + len(ignored)} reached" if result.converged else "✗ not reached"
+    return mark + f" · <span style='color:#b9770e'>{_kinds_text(e.kind for e in ignored)} ignored</span>"
+
+
+def ignored_effectors(solver, effectors) -> list:
+    """The effectors ``solver`` is not given: those of a kind it does not honour (``solver.kinds``; default
+    positions only)."""
+    kinds = getattr(solver, "kinds", ("position",))
+    return [e for e in effectors if e.kind not in kinds]
 
 
 def worst_errors(result, joints=None, sep: str = ", ") -> str:
@@ -116,7 +128,7 @@ def _solve_one(name, solver, viewer, label, start, effectors, names, results, ti
         return
     kinds = getattr(solver, "kinds", ("position",))
     use = [k for k, e in enumerate(effectors) if e.kind in kinds]
-    ignored = [e for e in effectors if e.kind not in kinds]
+    ignored = ignored_effectors(solver, effectors)
     if not use:
         results.pop(name, None)
         label.value = (f"<b>nothing to solve</b><br>{html.escape(name)} honours "

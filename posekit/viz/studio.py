@@ -30,7 +30,7 @@ import numpy as np
 
 from ..ik.api import Effector, Pose
 from ..ik.registry import make_solver, solver_names
-from .compare import status_table, worst_errors
+from .compare import ignored_effectors, reached_mark, status_table, worst_errors
 from .effector_editor import EffectorEditor
 from .studio_export import StudioExport, link
 from .studio_timeline import StudioTimeline
@@ -253,15 +253,21 @@ class PosingStudio(StudioExport, StudioTimeline):
 
     def _refresh(self):
         rows = []
-        for name in self.editor.solvers:
+        effectors = self.editor.effectors
+        for name, solver in self.editor.solvers.items():
             res = self.editor.results.get(name)
-            if res is None:
+            ignored = ignored_effectors(solver, effectors)
+            if res is None and effectors and ignored:
+                rows.append((html.escape(name), "nothing to solve · <span style='color:#b9770e'>"
+                             f"{html.escape(', '.join(dict.fromkeys(e.kind.replace('_', '-') for e in ignored)))} "
+                             "ignored</span>"))
+            elif res is None:
                 rows.append((html.escape(name), "no effectors"))
             elif isinstance(res, Exception):
                 rows.append((html.escape(name), _error(f"failed: {res}")))
             else:
-                mark = "✓" if res.converged else "✗"
-                rows.append((html.escape(name), f"{mark} {worst_errors(res)}, {self.editor.times.get(name, 0):.2f} ms"))
+                rows.append((html.escape(name), f"{reached_mark(res, ignored)}: {worst_errors(res)}, "
+                                                f"{self.editor.times.get(name, 0):.2f} ms"))
         self.undo_button.disabled = getattr(self, "position", 0) == 0
         self.redo_button.disabled = getattr(self, "position", 0) >= len(getattr(self, "history", [None])) - 1
         # the update counter last: when the browser shows it, every view and button of this update is there

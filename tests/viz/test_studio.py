@@ -409,3 +409,24 @@ def test_make_lab_and_make_studio_pass_the_websocket_setting():
     studio = [line for line in lines if "voila studio.ipynb" in line]
     assert len(lab) == 1 and server_flags("lab")[0] in lab[0].split(), lab
     assert len(studio) == 1 and server_flags("voila")[0] in studio[0].split(), studio
+
+
+def test_the_summary_names_the_effectors_a_solver_ignored(bandai, tmp_path):
+    """Issue 44: with a look-at and a rotation effector, FABRIK (positions only) reaches its five targets; the "All
+    solvers" summary says so as its view does — "5 of 7 reached · look-at, rotation ignored" — never a plain ✓."""
+    import re
+
+    from posekit.viz import PosingStudio
+
+    m, cases = bandai
+    s = m.skeleton
+    studio = PosingStudio(s, cases.pose(0), ["fabrik", "dls"], effector_set(s, "5", cases.target_pos[0]),
+                          export_dir=tmp_path)
+    studio.editor.add("Chest", "rotation")
+    studio.editor.add("Neck", "look_at")
+    rows = dict(re.findall(r"<td[^>]*>([^<]+)</td><td[^>]*>(.*?)</td></tr>", studio.summary.value))
+    assert studio.editor.results["fabrik"].converged
+    assert "5 of 7 reached" in rows["fabrik"] and "rotation, look-at ignored" in rows["fabrik"], rows["fabrik"]
+    view = studio.editor.labels["fabrik"].value
+    assert "5 of 7 reached" in view and "rotation, look-at ignored" in view
+    assert "ignored" not in rows["dls"], rows["dls"]  # DLS honours every kind
