@@ -307,7 +307,7 @@ class Figure:
         old = list(self._shared.values())
         self._shared = {"position": attribute(self._positions.astype(np.float32)),
                         "normal": attribute(normals),
-                        "color": attribute(self._colours)}
+                        "color": attribute(self._colours.copy())}  # a copy: highlight() changes _colours
         corner = rows["corners"].start  # an empty part draws one degenerate triangle (or line) on a corner
         first = {p: rows[p].start for p in rows}
         indices = {"bones": self._tubes.faces + first["bones"],

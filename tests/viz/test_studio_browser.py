@@ -87,6 +87,10 @@ def test_studio_loads_and_every_view_shows_a_skeleton(page):
         assert (np.abs(img - BACKGROUND).sum(-1) > 60).mean() > 0.002
     texts = _texts(page)
     assert len(texts) == 4 and all("worst effector" in t and "ms" in t for t in texts), texts
+    # issue 44: the left hand, selected as the app opens, is yellow from the first display (it was blue)
+    yellow = lambda: (lambda im: selected_joint(im) if ((im[..., 0] > 180) & (im[..., 1] > 120) & (im[..., 1] < 215)  # noqa: E731
+                                                        & (im[..., 2] < 90)).sum() > 3 else None)(_pixels(canvases[0]))
+    wait_for(yellow, 30, "the selected joint's yellow marker in the first view")
     summary = page.locator(".posekit-summary").inner_text()
     assert all(n in summary for n in ("fabrik", "dls", "protores+dls", "latent-opt+dls")), summary
 

@@ -99,6 +99,29 @@ def test_selected_joint_is_drawn_larger_and_yellow_in_the_joints_mesh(sample):
     assert J.highlighted is None and np.allclose(joint_colours()[j], colours[0])
 
 
+def test_the_selected_joints_colour_reaches_the_browser_on_first_display_and_after_a_new_marker(sample):
+    """Issue 44: the first selection after the view's arrays were made (a fresh view, or a new marker) sends the
+    colour array with the joint in yellow (the kernel's copy held yellow while the browser kept blue: the array
+    sent had been changed in place, so the new one looked unchanged)."""
+    s = sample.skeleton
+    v = SkeletonViewer(s, sample.global_pos[0])
+    f = v._figure
+    yellow = np.array([0xF1, 0xC4, 0x0F]) / 255
+
+    def sends_yellow(joint):
+        sent = []
+        f._shared["color"].observe(lambda ch: sent.append(np.asarray(ch["new"])), names="array")
+        v.select(joint)
+        rows = f._rows["joints"]
+        V = len(f.unit)
+        k = s.index(joint)
+        return bool(sent) and np.allclose(sent[-1][rows][k * V:(k + 1) * V], yellow, atol=1e-6)
+
+    assert sends_yellow("left_wrist")
+    v.move_target("head", sample.global_pos[0][s.index("head")] + 0.1)  # a new marker: new arrays
+    assert sends_yellow("right_knee")
+
+
 def test_bones_are_coloured_by_side(sample):
     s = sample.skeleton
     v = SkeletonViewer(s)
