@@ -76,14 +76,16 @@ def status_table(title: str, rows) -> str:
     return f"{title}<table style='border-collapse:collapse'>{body}</table>"
 
 
-def solver_views(skeleton, names, pose, truth=None, width: int = 300, height: int = 330):
-    """One viewer per solver name (the first with the joint selector and target sliders), a status label
-    under each: ``(viewers, labels, boxes)``, dicts by name and the list of titled boxes to lay out."""
+def solver_views(skeleton, names, pose, truth=None, width: int = 300, height: int = 330, selectable=None):
+    """One viewer per solver name (the first with the joint selector and target sliders, offering the joints
+    ``selectable``, default all), a status label under each: ``(viewers, labels, boxes)``, dicts by name and the
+    list of titled boxes to lay out."""
     import ipywidgets as w
 
     viewers, labels, boxes = {}, {}, []
     for k, name in enumerate(names):
-        v = SkeletonViewer(skeleton, pose, ghost=truth, width=width, height=height, controls=(k == 0))
+        v = SkeletonViewer(skeleton, pose, ghost=truth, width=width, height=height, controls=(k == 0),
+                           selectable=selectable if k == 0 else None)
         viewers[name], labels[name] = v, w.HTML(layout=w.Layout(width=f"{width}px"))  # a long message wraps
         boxes.append(w.VBox([w.HTML(f"<b>{html.escape(str(name))}</b>"), v.renderer, labels[name]]))
     return viewers, labels, boxes
@@ -161,10 +163,14 @@ class SolverPanel:
     start : Pose
         Start pose of every solve (rotation-based solvers need its rotations).
     effectors : list of Effector
-        Initial effectors (one per joint: the viewer moves one point per joint); moving a joint
-        without one adds a position effector, moving a look-at target moves the point looked at.
+        Initial effectors (one per joint: the viewer moves one point per joint); the first view offers their
+        joints (``selectable``); moving a look-at target moves the point looked at; :meth:`move_target` on a
+        joint without one adds a position effector.
     truth : ndarray, shape (J, 3), optional
         Shown as the ghost in every viewer.
+    selectable : sequence of str, optional
+        The joints the first view offers; default the joints of ``effectors``, so a slider never gives a joint a
+        new effector that a solver of the panel was not made for (a learned solver takes only its joint set).
 
     Attributes
     ----------
@@ -179,7 +185,7 @@ class SolverPanel:
     """
 
     def __init__(self, skeleton, solvers: dict, start: Pose, effectors, truth=None, width: int = 300,
-                 height: int = 330):
+                 height: int = 330, selectable=None):
         import ipywidgets as w
 
         self.skeleton = skeleton
@@ -187,7 +193,10 @@ class SolverPanel:
         self.start = start
         self.effectors = {skeleton.names[skeleton.index(e.joint)]: e for e in effectors}
         self.results, self.times = {}, {}
-        self.viewers, self.labels, boxes = solver_views(skeleton, self.solvers, start.global_pos, truth, width, height)
+        if selectable is None:
+            selectable = list(self.effectors) or None
+        self.viewers, self.labels, boxes = solver_views(skeleton, self.solvers, start.global_pos, truth, width, height,
+                                                        selectable)
         first = next(iter(self.viewers.values()))
         first.on_target_change(self._on_target)
         first.on_look_target_change(self._on_target)

@@ -119,6 +119,9 @@ class DragTargets:
         near = [c for c in red + orange if c[0] <= 2.6 * self._joint_radius]
         # on a marker: that target (an orange one: the point the joint looks at); else the nearest joint's
         _, name, self.dragging_look = min(near) if near else (0.0, self._nearest_joint(p), False)
+        if self.skeleton.index(name) not in self.selectable:  # a joint this view does not offer: nothing to drag
+            self._refuse(name)
+            return
         self.dragging = name
         if self.selected != name:
             self.select(name)

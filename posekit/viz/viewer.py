@@ -118,6 +118,9 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         Smooth the edges (multisampling). Default: on, unless the environment variable ``POSEKIT_ANTIALIAS`` is
         ``0`` (:func:`antialias_default`) — for browsers that draw WebGL in software (no GPU), where it costs the
         most.
+    selectable : sequence of str or int, optional
+        The joints offered (the *selected* list, double-click, drag in 3D): names, roles or indices; default every
+        body joint. A panel whose solvers take only some joints offers only those (lesson 02: the rig's handles).
 
     Attributes
     ----------
@@ -134,7 +137,8 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
 
     def __init__(self, skeleton: Skeleton, pose=None, ghost=None, targets=None, width: int = 560,
                  height: int = 420, joint_radius: float = 0.025, controls: bool = True,
-                 background: str = "#f7f7f2", floor: bool = True, follow: bool = True, antialias: bool | None = None):
+                 background: str = "#f7f7f2", floor: bool = True, follow: bool = True, antialias: bool | None = None,
+                 selectable=None):
         import ipywidgets as w
         import pythreejs as three
 
@@ -151,7 +155,8 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         self._select_callbacks, self._target_callbacks, self._look_callbacks = [], [], []
         self._init_drag()
         self._held, self._status_due = False, False
-        self.body = [int(j) for j in body_joints(skeleton)]  # what can be selected (not a helper root)
+        self.body = [int(j) for j in body_joints(skeleton)]  # the body (not a helper root)
+        self.selectable = self.body if selectable is None else self._selectable(selectable)  # what can be selected
 
         # bones, joints (the selected one larger and yellow), targets, rays and triads: one position array
         self._figure = Figure(skeleton, joint_radius, 0.7 * joint_radius, "#2e86c1", SELECTED_COLOUR, TARGET_COLOUR,
@@ -194,7 +199,7 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
 
         self.status = w.HTML(value="double-click a joint to select it")
         # "" stands for no selection: a Dropdown whose value is None shows a blank box
-        self.joint_select = w.Dropdown(options=[("(none)", "")] + [(skeleton.names[j],) * 2 for j in self.body],
+        self.joint_select = w.Dropdown(options=[("(none)", "")] + [(skeleton.names[j],) * 2 for j in self.selectable],
                                        value="", description="selected", layout=w.Layout(width="230px"))
         self.joint_select.observe(lambda ch: self.select(ch["new"] or None), names="value")
         self.drag_mode = self._drag_toggle()
@@ -330,6 +335,8 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         name = None if joint is None else self.skeleton.names[self.skeleton.index(joint)]
         if name is not None and self.skeleton.index(name) not in self.body:
             raise ValueError(f"{name} is a helper joint, not part of the body: it cannot be selected")
+        if name is not None and self.skeleton.index(name) not in self.selectable:
+            raise ValueError(f"{name} is not offered in this view: choose one of {self._offered()}")
         self.selected = name
         self._show_handle_choice()
         if self.joint_select.value != (name or ""):
@@ -341,6 +348,22 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         for cb in self._select_callbacks:
             cb(name)
 
+    def _selectable(self, joints) -> list:
+        """Body joint indices of ``joints`` (names, roles or indices), in skeleton order."""
+        wanted = {int(self.skeleton.index(j)) for j in joints}
+        helpers = [self.skeleton.names[j] for j in wanted if j not in self.body]
+        if helpers:
+            raise ValueError(f"selectable: {', '.join(helpers)} not part of the body (helper joints)")
+        return [j for j in self.body if j in wanted]
+
+    def _offered(self) -> str:
+        return ", ".join(self.skeleton.names[j] for j in self.selectable)
+
+    def _refuse(self, name):
+        """Say in the status line that ``name`` (clicked or pressed on) is not offered here."""
+        self.status.value = (f"<span style='color:#b03a2e'>{html.escape(name)} is not offered here (no solver of this "
+                             f"view takes it): choose {html.escape(self._offered())}</span>")
+
     def _nearest_joint(self, p):
         """The body joint nearest to point ``p`` (3,), world frame, metres."""
         body = self.pose[self.body]
@@ -350,7 +373,11 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         p = np.asarray(change["new"], dtype=float)
         if p.shape != (3,) or not np.all(np.isfinite(p)) or self.picker.distance is None:
             return  # the double-click hit nothing
-        self.select(self._nearest_joint(p + self._offset))  # picked point is in scene coordinates
+        name = self._nearest_joint(p + self._offset)  # picked point is in scene coordinates
+        if self.skeleton.index(name) not in self.selectable:
+            self._refuse(name)
+            return
+        self.select(name)
 
     def move_target(self, joint, position):
         """Set one joint's target (creating it if needed) and notify ``on_target_change`` callbacks."""

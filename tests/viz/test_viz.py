@@ -294,6 +294,34 @@ def test_solver_panel_resolves_on_target_moves(sample):
         assert label.count("<tr>") == 3 and ">iterations<" in label and " ms<" in label
 
 
+def test_a_panel_offers_only_the_joints_its_solvers_were_given(sample):
+    """Issue 44: a panel's first view offers the joints of its effectors only (lesson 03's neural solver refused a
+    new effector on any other joint, and nothing but re-running the cell recovered); a double-click on another
+    joint says why it is not offered and selects nothing; a viewer can offer a chosen few (lesson 02: the rig's
+    handles), and a marker never appears on another joint."""
+    from posekit.ik import Effector, Pose, make_solver
+    from posekit.viz import SolverPanel
+
+    s, P = sample.skeleton, sample.global_pos[0]
+    hands = ["left_wrist", "right_wrist"]
+    panel = SolverPanel(s, {"fabrik": make_solver("fabrik", s), "ccd": make_solver("ccd", s)}, Pose(P),
+                        [Effector(j, P[s.index(j)]) for j in hands])
+    v = panel.viewers["fabrik"]
+    assert sorted(o[1] for o in v.joint_select.options) == ["", "left_wrist", "right_wrist"]
+    with pytest.raises(ValueError, match="not offered"):
+        v.select("left_elbow")
+    v.picker.distance = 1.0
+    v._on_pick({"new": list(P[s.index("left_elbow")] - v._offset)})
+    assert v.selected is None and "left_elbow is not offered" in v.status.value
+    v.drag_mode.value = True
+    v.grab(P[s.index("left_knee")])
+    assert v.dragging is None and set(panel.effectors) == set(hands)
+    v._on_pick({"new": list(P[s.index("left_wrist")] - v._offset)})
+    assert v.selected == "left_wrist"
+    rig = SkeletonViewer(s, P, selectable=["left_hand", "right_ankle"])  # roles or names
+    assert sorted(o[1] for o in rig.joint_select.options) == ["", "left_wrist", "right_ankle"]
+
+
 def test_effector_editor_edits_every_kind_and_re_solves():
     """Lesson 05's EffectorEditor: effectors of all three kinds added, turned, loosened and removed; every
     change re-solves each solver; a solver that refuses a kind gets only the kinds it honours."""
