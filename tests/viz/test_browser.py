@@ -357,7 +357,8 @@ def _select_others_and_back(page, cell, labels, what):
     orig = joints.input_value()
     others = [o for o in joints.locator("option").all_inner_texts() if o not in (orig, "(none)")]
     texts = [l.inner_text() for l in labels.all()]
-    for j in (others[1 % len(others)], others[len(others) // 2], orig or "(none)"):  # a panel offers its effectors' joints only
+    # (a panel offers its effectors' joints only: lesson 04 has two)
+    for j in (others[1 % len(others)], others[len(others) // 2], orig or "(none)"):
         joints.select_option(label=j)
         time.sleep(0.8)
     time.sleep(2.0)  # let any echo from the browser arrive
