@@ -87,7 +87,9 @@ def solver_views(skeleton, names, pose, truth=None, width: int = 300, height: in
         v = SkeletonViewer(skeleton, pose, ghost=truth, width=width, height=height, controls=(k == 0),
                            selectable=selectable if k == 0 else None)
         viewers[name], labels[name] = v, w.HTML(layout=w.Layout(width=f"{width}px"))  # a long message wraps
-        boxes.append(w.VBox([w.HTML(f"<b>{html.escape(str(name))}</b>"), v.renderer, labels[name]]))
+        # a view keeps its width (never squeezed into a scrolled box): a narrow page wraps the views onto rows
+        boxes.append(w.VBox([w.HTML(f"<b>{html.escape(str(name))}</b>"), v.renderer, labels[name]],
+                            layout=w.Layout(flex="0 0 auto", margin="0 8px 8px 0")))
     return viewers, labels, boxes
 
 
@@ -200,7 +202,7 @@ class SolverPanel:
         first = next(iter(self.viewers.values()))
         first.on_target_change(self._on_target)
         first.on_look_target_change(self._on_target)
-        self.widget = w.VBox([w.HBox(boxes), first.controls])
+        self.widget = w.VBox([w.HBox(boxes, layout=w.Layout(flex_flow="row wrap")), first.controls])
         self.solve()
 
     def _ipython_display_(self):

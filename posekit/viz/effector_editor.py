@@ -86,14 +86,17 @@ class EffectorEditor:
         self.add_joint = w.Dropdown(options=[skeleton.names[j] for j in self.first.body],
                                     value=skeleton.names[skeleton.pelvis()],
                                     description="joint", layout=w.Layout(width="220px"))
-        self.add_kind = w.Dropdown(options=list(KIND_CHOICES), value="position", description="kind",
+        self.add_kind = w.Dropdown(options=[(k.replace("_", "-"), k) for k in KIND_CHOICES], value="position",
+                                   description="kind",
                                    layout=w.Layout(width="200px"))
         self.add_button = w.Button(description="add effector", button_style="info")
         self.add_button.on_click(lambda _: self._add_clicked())
         self.message = w.HTML()
         self.rows_box = w.VBox([])
-        self.widget = w.VBox([w.HBox(boxes), self.first.controls,
-                              w.HBox([self.add_joint, self.add_kind, self.add_button, self.message]), self.rows_box])
+        wrap = w.Layout(flex_flow="row wrap", align_items="center")  # a narrow page: views and controls wrap
+        self.widget = w.VBox([w.HBox(boxes, layout=wrap), self.first.controls,
+                              w.HBox([self.add_joint, self.add_kind, self.add_button, self.message], layout=wrap),
+                              self.rows_box])
         self._quiet = True
         for e in effectors:
             self.add(e.joint, e.kind, target=e.target, axis=e.axis)

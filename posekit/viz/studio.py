@@ -48,6 +48,46 @@ def _error(text: str) -> str:
     return f"<span style='color:#b03a2e'>{html.escape(text)}</span>"
 
 
+BUSY_SIGN = ("<style>@keyframes posekit-spin {to {transform: rotate(360deg)}}</style>"
+             "<span style='display:inline-block;width:10px;height:10px;margin-right:6px;vertical-align:-1px;"
+             "border:2px solid #b9770e;border-top-color:transparent;border-radius:50%;"
+             "animation:posekit-spin 0.9s linear infinite'></span>")
+"""A spinning ring drawn by CSS alone: it shows in any browser, whatever fonts it has (an emoji sign showed as an
+empty box where no emoji font is installed)."""
+
+WRAP = {"flex_flow": "row wrap", "align_items": "center"}
+"""A row of controls that wraps onto the next line when the page is narrow (JupyterLab with its sidebar open)."""
+
+
+class StudioMessages:
+    """The studio's messages, each on the line of the controls that caused it (``row``: ``"solvers"``,
+    ``"setup"``, ``"export"``, ``"timeline"``). Setting :attr:`value` writes the current row's line and clears the
+    others: one message at a time, next to its control, gone at the next action that succeeds."""
+
+    ROWS = ("solvers", "setup", "export", "timeline")
+
+    def __init__(self):
+        import ipywidgets as w
+
+        self.lines = {r: w.HTML(layout=w.Layout(margin="0 0 0 8px")) for r in self.ROWS}
+        for r, line in self.lines.items():
+            line.add_class("posekit-message")
+            line.add_class(f"posekit-message-{r}")
+        self.row = "setup"
+
+    @property
+    def value(self) -> str:
+        """The current row's message (HTML)."""
+        return self.lines[self.row].value
+
+    @value.setter
+    def value(self, text: str):
+        for r, line in self.lines.items():
+            if r != self.row and line.value:
+                line.value = ""
+        self.lines[self.row].value = text
+
+
 class PosingStudio(StudioExport, StudioTimeline):
     """Registered solvers side by side on shared effectors, with undo, setups, export and a timeline.
 
@@ -103,13 +143,15 @@ class PosingStudio(StudioExport, StudioTimeline):
         self.checks = {n: w.Checkbox(value=False, description=n, indent=False, layout=w.Layout(width="175px"))
                        for n in self.available}
         self.choose = w.GridBox(list(self.checks.values()),
-                                layout=w.Layout(grid_template_columns="repeat(5, 175px)", width="900px"))
+                                layout=w.Layout(grid_template_columns="repeat(auto-fill, 175px)",
+                                                width="min(900px, 100%)"))
         self.compare_button = w.Button(description="compare", button_style="info",
                                        tooltip=f"pose with the ticked {MIN_SOLVERS}-{MAX_SOLVERS} solvers")
-        self.compare_button.on_click(lambda _: self._safely(lambda: self.set_solvers(self.chosen)))
+        self.compare_button.on_click(lambda _: self._safely(lambda: self.set_solvers(self.chosen), "solvers"))
         self.busy = w.HTML()
         self.summary = w.HTML()
-        self.message = w.HTML()
+        self.message = StudioMessages()
+        lines = self.message.lines
         self.undo_button = w.Button(description="undo", icon="undo", disabled=True, layout=w.Layout(width="90px"))
         self.redo_button = w.Button(description="redo", icon="repeat", disabled=True, layout=w.Layout(width="90px"))
         self.undo_button.on_click(lambda _: self.undo())
@@ -117,44 +159,46 @@ class PosingStudio(StudioExport, StudioTimeline):
         self.setup_path = w.Text(value="setup.json" if self.own_folder else str(self.export_dir / "setup.json"),
                                  description="setup file", layout=w.Layout(width="380px"))
         self.save_button = w.Button(description="save setup")
-        self.save_button.on_click(lambda _: self._safely(lambda: self.save(self.setup_file())))
+        self.save_button.on_click(lambda _: self._safely(lambda: self.save(self.setup_file()), "setup"))
         self.load_button = w.Button(description="load setup")
-        self.load_button.on_click(lambda _: self._safely(lambda: self.load(self.setup_file())))
-        self.upload = w.FileUpload(accept=".json,.bvh", multiple=False, description="upload setup / BVH")
+        self.load_button.on_click(lambda _: self._safely(lambda: self.load(self.setup_file()), "setup"))
+        self.upload = w.FileUpload(accept=".json,.bvh", multiple=False, description="upload setup / BVH",
+                                   layout=w.Layout(width="auto"))
         self.upload.observe(self._on_upload, names="value")
         self.export_solver = w.Dropdown(description="export", layout=w.Layout(width="260px"))
         bvh = w.Button(description="pose as BVH")
-        bvh.on_click(lambda _: self._safely(lambda: self.export_bvh()))
+        bvh.on_click(lambda _: self._safely(lambda: self.export_bvh(), "export"))
         png = w.Button(description="views as PNG")
-        png.on_click(lambda _: self._safely(lambda: self.export_png()))
+        png.on_click(lambda _: self._safely(lambda: self.export_png(), "export"))
         self.inbetweens = w.BoundedIntText(value=10, min=0, max=120, description="in-betweens",
                                            layout=w.Layout(width="180px"))
         self.ease = w.Dropdown(options=["smooth", "linear"], value="smooth", description="ease",
                                layout=w.Layout(width="180px"))
         add_key = w.Button(description="add key", icon="key")
-        add_key.on_click(lambda _: self._safely(self.add_key))
+        add_key.on_click(lambda _: self._safely(self.add_key, "timeline"))
         clear = w.Button(description="clear keys")
-        clear.on_click(lambda _: self._safely(self.clear_keys))
+        clear.on_click(lambda _: self._safely(self.clear_keys, "timeline"))
         build = w.Button(description="build animation", button_style="info")
-        build.on_click(lambda _: self._safely(self.build_animation))
+        build.on_click(lambda _: self._safely(self.build_animation, "timeline"))
         anim = w.Button(description="animation as BVH")
-        anim.on_click(lambda _: self._safely(lambda: self.export_animation()))
+        anim.on_click(lambda _: self._safely(lambda: self.export_animation(), "timeline"))
         self.keys_label = w.HTML("no keys yet")
         self.timeline_box = w.VBox([])
         self.views_box = w.VBox([])
+        row = lambda *ws: w.HBox(list(ws), layout=w.Layout(**WRAP))  # noqa: E731
         self.widget = w.VBox([
             w.HTML(f"<b>Solvers</b> — tick {MIN_SOLVERS} to {MAX_SOLVERS}, then compare"),
-            w.HBox([self.choose, w.VBox([self.compare_button, self.busy])]),
+            row(self.choose, w.VBox([self.compare_button, self.busy, lines["solvers"]])),
             self.views_box,
             w.HTML("<b>All solvers</b>"), self.summary,
-            w.HBox([self.undo_button, self.redo_button, self.setup_path, self.save_button, self.load_button,
-                    self.upload]),
-            w.HBox([self.export_solver, bvh, png]),
+            row(self.undo_button, self.redo_button, self.setup_path, self.save_button, self.load_button, self.upload,
+                lines["setup"]),
+            row(self.export_solver, bvh, png, lines["export"]),
             w.HTML("<b>Timeline</b> — key setups; in-betweens posed by the export solver"),
-            w.HBox([add_key, clear, self.inbetweens, self.ease, build, anim]), self.keys_label, self.timeline_box,
-            self.message])
+            row(add_key, clear, self.inbetweens, self.ease, build, anim, lines["timeline"]), self.keys_label,
+            self.timeline_box], layout=w.Layout(max_width="100%"))
         for widget, name in ((self.summary, "summary"), (self.choose, "solver-choice"), (self.busy, "busy"),
-                             (self.compare_button, "compare"), (self.views_box, "views"), (self.message, "message")):
+                             (self.compare_button, "compare"), (self.views_box, "views")):
             widget.add_class(f"posekit-{name}")  # for a browser test (and a stylesheet)
         self.editor = None
         self.set_solvers(solvers, effectors=effectors)
@@ -165,13 +209,17 @@ class PosingStudio(StudioExport, StudioTimeline):
                                  "effectors, with undo, setups, export and a timeline. It runs in a live Jupyter "
                                  "kernel: run the notebook, or serve it with make studio]")
 
-    def _safely(self, action):
-        """Run a button's action with the studio marked busy; a ValueError (bad input) becomes the message,
-        never a traceback."""
+    def _safely(self, action, row: str):
+        """Run a button's action with the studio marked busy; what it says, or a ValueError (bad input) as an
+        error, goes on the line of its ``row`` of controls (:class:`StudioMessages`), never a traceback; an earlier
+        message, anywhere, is cleared."""
+        self.message.row = row
+        self.message.value = ""
         try:
             with self.working():
                 action()
         except (ValueError, OSError) as err:
+            self.message.row = row
             self.message.value = _error(str(err))
 
     @property
@@ -182,7 +230,7 @@ class PosingStudio(StudioExport, StudioTimeline):
     @contextmanager
     def working(self, what: str = "working"):
         """Mark the studio busy (a note beside *compare*, the button disabled) while the block runs."""
-        self.busy.value = f"<span style='color:#b9770e'>⏳ {html.escape(what)}…</span>"
+        self.busy.value = f"<span style='color:#b9770e'>{BUSY_SIGN}{html.escape(what)}…</span>"
         self.compare_button.disabled = True
         try:
             yield
@@ -324,6 +372,7 @@ class PosingStudio(StudioExport, StudioTimeline):
     def save(self, path) -> Path:
         """Write the effectors and the solvers as a setup JSON file; the message links a download."""
         path = save_setup(path, self.skeleton, self.editor.setup(), self.solvers)
+        self.message.row = "setup"
         self.message.value = f"saved {html.escape(str(path))} ({len(self.editor.rows)} effectors) — {link(path, 'application/json')}"
         return path
 
@@ -351,12 +400,15 @@ class PosingStudio(StudioExport, StudioTimeline):
             except ValueError:
                 self.editor.set_setup(before)
                 raise
+        self.message.row = "setup"
         self.message.value = f"loaded {html.escape(source)}: {len(doc['effectors'])} effectors"
 
     def _on_upload(self, change):
         files = change["new"]
         if not files:
             return
+        self.message.row = "setup"
+        self.message.value = ""
         f = files[0]
         name, content = f["name"], bytes(f["content"])
         try:
@@ -372,4 +424,5 @@ class PosingStudio(StudioExport, StudioTimeline):
                     raise SetupError(f"{name}: not a text file (expected setup JSON)") from None
                 self.load_text(text, source=name)
         except ValueError as err:
+            self.message.row = "setup"
             self.message.value = _error(str(err))

@@ -269,7 +269,7 @@ def test_a_look_at_marker_drags_its_own_target(page, server):
     """Issue 27: the head holds a position and a look-at effector. Pressing on the orange marker (drag in 3D)
     moves the point it looks at and leaves its position target; the *sliders move* choice appears and, on
     look-at, the X slider moves the look-at target too."""
-    _add(page, "Head", "look_at")
+    _add(page, "Head", "look-at")
     _joint_list(page).select_option("Head")
     wait_for(lambda: "looks at" in _status_rows(page), 30, "the head's look-at target in the status table")
     rows0 = _status_rows(page)
@@ -331,7 +331,7 @@ def test_rotation_and_look_at_effectors_change_the_pose(page):
     wait_for(lambda: _all_changed(before, [_pixels(c) for c in _canvases(page)[1:]]), 30, "their views to turn")
     assert all("°" in t for t in _texts(page)[1:])  # an angular error is reported
     # a look-at on the neck, its target moved with the sliders (the first view's joint list selects it)
-    _add(page, "Neck", "look_at")
+    _add(page, "Neck", "look-at")
     page.locator(VIEWS).locator(".widget-dropdown", has_text="selected").first.locator("select").select_option("Neck")
     before = [_pixels(c) for c in _canvases(page)[1:]]
     texts = _texts(page)[1:]
@@ -351,7 +351,7 @@ def test_bvh_export_downloads_a_file_posekit_reads(page, tmp_path):
 
     page.locator(".widget-dropdown", has_text="export").locator("select").select_option("dls")
     page.get_by_role("button", name="pose as BVH").click()
-    message = page.locator(".posekit-message")
+    message = page.locator(".posekit-message-export")
     wait_for(lambda: "read back within 0.000 mm" in message.inner_text(), 60, "the export message")
     with page.expect_download(timeout=30_000) as dl:
         message.get_by_text("download pose_dls.bvh").click()
@@ -365,7 +365,9 @@ def test_bvh_export_downloads_a_file_posekit_reads(page, tmp_path):
         page.get_by_role("button", name="upload setup / BVH").click()
     chooser.value.set_files(files=[{"name": "bad.json", "mimeType": "application/json",
                                     "buffer": b'{"format": "posekit-effector-setup",\n oops}'}])
-    wait_for(lambda: "bad.json, line 2, column 2" in message.inner_text(), 30, "the upload's error message")
+    setup_line = page.locator(".posekit-message-setup")  # beside the upload box, the export's message gone
+    wait_for(lambda: "bad.json, line 2, column 2" in setup_line.inner_text(), 30, "the upload's error message")
+    assert message.inner_text() == ""
     assert page.locator(VIEWS).get_by_role("button", name="remove").count() == n_rows
 
 
