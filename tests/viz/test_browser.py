@@ -53,6 +53,9 @@ RIG_SHIM = ("from posekit.invrig import refine\nfrom posekit.invrig.nn import lo
 """Lesson 02's cells the browser test runs: the rig, its data and the posing viewer; the shim defines the two names
 of the skipped sections the viewer cell uses, the shipped network loaded as they load it (their fits and studies
 take minutes)."""
+STUDIO_NOTEBOOK = "06_posing_studio.ipynb"
+STUDIO_CELLS = ("motions = load_bandai_mini()", "studio = PosingStudio(")
+"""Lesson 06's cells the browser test runs: set-up and the studio (its benchmark report and timeline are not needed)."""
 CHROMIUM = os.environ.get("POSEKIT_CHROMIUM", "/usr/bin/chromium")
 FLAGS = ["--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader", "--disable-background-networking",
          "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-quic"]
@@ -90,6 +93,7 @@ def lab(tmp_path_factory):
     _trimmed(ROOT / "notebooks" / LATENT_NOTEBOOK, work / LATENT_NOTEBOOK, LATENT_CELLS)
     _trimmed(ROOT / "notebooks" / PROTORES_NOTEBOOK, work / PROTORES_NOTEBOOK, PROTORES_CELLS)
     _trimmed(ROOT / "notebooks" / RIG_NOTEBOOK, work / RIG_NOTEBOOK, RIG_CELLS, RIG_SHIM)
+    _trimmed(ROOT / "notebooks" / STUDIO_NOTEBOOK, work / STUDIO_NOTEBOOK, STUDIO_CELLS)
     port, token = _free_port(), "posekit-test"
     cmd = [sys.executable, "-m", "jupyter", "lab", "--no-browser", f"--port={port}", "--ip=127.0.0.1",
            f"--ServerApp.token={token}", f"--ServerApp.root_dir={work}", "--ServerApp.open_browser=False",
@@ -459,5 +463,49 @@ def test_rig_viewer_selection_moves_nothing(lab, chromium):
         assert target.locator("td").all_inner_texts()[:3] == where, "selecting joints moved the wrist's target"
         assert status.inner_text() == said, "selecting joints re-posed the rig"
         page.screenshot(path=str(work / "rig_02.png"))
+    finally:
+        page.close()
+
+
+_CLIPPED = """(root) => [root, ...root.querySelectorAll('.widget-box, .widget-html-content, .jp-OutputArea-output')]
+    .filter(el => el.scrollWidth > el.clientWidth + 2)
+    .map(el => `${el.className.split(' ').slice(0, 3).join('.')}: ${el.scrollWidth} px in ${el.clientWidth} px`)"""
+
+
+def test_the_studio_fits_jupyterlab_at_1280_px_with_the_sidebar_open(lab, chromium):
+    """Issue 44: lesson 06's studio in JupyterLab, 1280 px wide, the file browser open beside the notebook: no part
+    of it scrolls sideways inside its box (each of the four views was clipped with a scrollbar of its own), every
+    view, the *compare* button and the upload box lie whole inside the notebook's width, and the busy sign is CSS."""
+    url, token, work = lab
+    page = _lab_page(chromium, {"width": 1280, "height": 1000})
+    try:
+        _open_and_run_all(page, url, token, work, STUDIO_NOTEBOOK)
+        browser_tab = page.locator(".jp-SideBar li[data-id='filebrowser']").first
+        if not page.locator("#filebrowser").is_visible():
+            browser_tab.click()
+        page.locator("#filebrowser").wait_for(state="visible", timeout=30_000)
+        summary = page.locator(".posekit-summary", has_text="update")
+        _wait_visible(page, summary, 300, url, token, work, "the studio")
+        studio = page.locator(".jp-OutputArea-output", has=page.locator(".posekit-summary")).first
+        canvases = studio.locator(".posekit-views canvas")
+        _wait_for(lambda: canvases.count() == 4 or None, 60, "four views")
+        area = studio.bounding_box()
+        assert area["width"] < 1000, f"the file browser is not open: the output is {area['width']:.0f} px wide"
+        clipped = studio.evaluate(_CLIPPED)
+        assert clipped == [], clipped
+        parts = [*canvases.all(), studio.get_by_role("button", name="compare"),
+                 studio.get_by_role("button", name="upload setup / BVH")]
+        for part in parts:
+            part.scroll_into_view_if_needed()
+            box, area = part.bounding_box(), studio.bounding_box()
+            assert box["x"] >= area["x"] - 1 and box["x"] + box["width"] <= area["x"] + area["width"] + 1, (box, area)
+        upload = studio.get_by_role("button", name="upload setup / BVH")
+        assert upload.evaluate("(b) => b.scrollWidth <= b.clientWidth + 1"), "the upload button's text is cut off"
+        shots = os.environ.get("POSEKIT_SHOTS")
+        if shots:  # what a person sees: the views, then the controls under them
+            canvases.first.scroll_into_view_if_needed()
+            page.screenshot(path=str(Path(shots) / "lab_1280_studio_views.png"))
+            upload.scroll_into_view_if_needed()
+            page.screenshot(path=str(Path(shots) / "lab_1280_studio_controls.png"))
     finally:
         page.close()
