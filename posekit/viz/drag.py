@@ -105,9 +105,11 @@ class DragTargets:
 
     def _let_go(self):
         """End a drag: the sliders show where the target went (they wait while the mouse is down)."""
-        self.dragging = None
+        held, self.dragging = self.dragging, None
         if self._sliders_due:
             self._sync_sliders()
+        if held is not None:
+            self._follow()  # the camera waited for the mouse to be released
 
     def grab(self, point):
         """Start dragging at ``point`` (world frame, metres): the target marker it is on (within two

@@ -78,7 +78,7 @@ class EffectorEditor:
         self.rows = []  # dicts: effector fields + lam + euler + base rotation + widgets
         self.results, self.times = {}, {}
         self.updates = 0  # solves so far (every change solves once)
-        self._change_callbacks = []
+        self._change_callbacks, self._before_callbacks = [], []
         self.viewers, self.labels, boxes = solver_views(skeleton, self.solvers, start.global_pos, truth, width, height)
         self.first = next(iter(self.viewers.values()))
         self.first.on_target_change(self._on_target)
@@ -218,9 +218,16 @@ class EffectorEditor:
         ``"tolerance"``, ``"rotation"``, ``"move"`` (row ``index``) or ``"setup"`` (a whole setup, index None)."""
         self._change_callbacks.append(callback)
 
+    def on_before_change(self, callback):
+        """Call ``callback(what, index)`` after a change to the effectors and before its solve re-poses the views
+        (the studio notes each view's camera as it was)."""
+        self._before_callbacks.append(callback)
+
     def _changed(self, what, index):
         if self._quiet:
             return
+        for cb in self._before_callbacks:
+            cb(what, index)
         self.solve()
         self.first.flush()  # a target moved in the first view is drawn there before any listener hears of the change
         for cb in self._change_callbacks:

@@ -8,7 +8,8 @@ dragging in 3D) with what an animator expects around it:
   check boxes: a solver a later lesson or a student registers appears without a change here; a summary
   table gives each one's worst effector error and solve time; while solvers load (or anything slow runs)
   the studio says it is busy;
-* **undo / redo** — every change is a step (a drag, or a slider moved without a second's pause, is one);
+* **undo / redo** — every change is a step (a drag, or a slider moved without a second's pause, is one); a step
+  brings back the views' cameras with the pose;
 * **setups** — save and load the effectors as JSON (:mod:`posekit.viz.setup_file`), from a path on the
   server or uploaded from the browser; a malformed file is reported and nothing is lost;
 * **export** — the chosen solver's pose as BVH (read back through :func:`posekit.io.bvh.read_bvh` to check it)
@@ -119,6 +120,9 @@ class PosingStudio(StudioExport, StudioTimeline):
         The current views and effector rows (rebuilt when the solvers change).
     history : list of list of dict
         Setups (:meth:`EffectorEditor.setup`), one per undo step; ``history[position]`` is the current one.
+    cameras : list of dict
+        Each step's cameras (solver name -> :meth:`~posekit.viz.SkeletonViewer.camera_state`): undo and redo put
+        the views back with the pose.
     keys : list of list of dict
         The timeline's key setups.
     frames : list of IKResult
@@ -203,6 +207,7 @@ class PosingStudio(StudioExport, StudioTimeline):
         self.editor = None
         self.set_solvers(solvers, effectors=effectors)
         self.history, self.position = [self.editor.setup()], 0
+        self.cameras = [self._cameras()]
 
     def _ipython_display_(self):
         show_widget(self.widget, f"[posing studio: {', '.join(self.solvers)} side by side on {len(self.editor.rows)} "
@@ -269,6 +274,7 @@ class PosingStudio(StudioExport, StudioTimeline):
             editor.updates += self.editor.updates  # the summary's update count goes on across solver changes
             editor.set_setup(setup)
         editor.on_change(self._on_change)
+        editor.on_before_change(self._before_change)
         if self.editor is not None and self.editor.first.selected is not None:
             editor.first.select(self.editor.first.selected)  # keep the joint the sliders move
         self.editor = editor
@@ -328,17 +334,32 @@ class PosingStudio(StudioExport, StudioTimeline):
             same = what == "move" and self._last_move[0] == index and now - self._last_move[1] < COALESCE_S
             if same and self.position == len(self.history) - 1 and self.position > 0:
                 self.history[self.position] = self.editor.setup()
+                self.cameras[self.position] = self._cameras()
             else:
                 del self.history[self.position + 1:]
+                del self.cameras[self.position + 1:]
                 self.history.append(self.editor.setup())
+                self.cameras.append(self._cameras())
                 self.position += 1
             self._last_move = (index, now) if what == "move" else (None, -1e9)
         self._refresh()
 
-    def _restore(self, setup):
+    def _before_change(self, what, index):
+        """The current step's cameras as the views show them just before a change (an orbit since is kept)."""
+        if not self._restoring and hasattr(self, "cameras"):
+            self.cameras[self.position] = self._cameras()
+
+    def _cameras(self) -> dict:
+        """Each view's camera (:meth:`~posekit.viz.SkeletonViewer.camera_state`), by solver name."""
+        return {n: v.camera_state() for n, v in self.editor.viewers.items()}
+
+    def _restore(self, setup, cameras=None):
         self._restoring = True
         try:
             self.editor.set_setup(setup)
+            for name, state in (cameras or {}).items():  # each view as it was at that step (solvers shown then)
+                if name in self.editor.viewers:
+                    self.editor.viewers[name].set_camera_state(state)
         finally:
             self._restoring = False
         self._last_move = (None, -1e9)
@@ -348,13 +369,13 @@ class PosingStudio(StudioExport, StudioTimeline):
         """Go back one step (no-op at the first)."""
         if self.position > 0:
             self.position -= 1
-            self._restore(self.history[self.position])
+            self._restore(self.history[self.position], self.cameras[self.position])
 
     def redo(self):
         """Redo the step undone last (no-op when there is none)."""
         if self.position < len(self.history) - 1:
             self.position += 1
-            self._restore(self.history[self.position])
+            self._restore(self.history[self.position], self.cameras[self.position])
 
     # ------------------------------------------------------------------ setups
     def setup_file(self) -> Path:

@@ -203,9 +203,12 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
                                        value="", description="selected", layout=w.Layout(width="230px"))
         self.joint_select.observe(lambda ch: self.select(ch["new"] or None), names="value")
         self.drag_mode = self._drag_toggle()
+        self.reset_button = w.Button(description="reset view", icon="home", layout=w.Layout(width="110px"),
+                                     tooltip="frame the pose again, seen from the front")
+        self.reset_button.on_click(lambda _: self.reset_view())
         self._init_sliders()
-        self.controls = w.VBox([w.HBox([self.joint_select, self.drag_mode]), self.handle_choice, self.slider_box,
-                                self.status])
+        self.controls = w.VBox([w.HBox([self.joint_select, self.drag_mode, self.reset_button]), self.handle_choice,
+                                self.slider_box, self.status])
         self.controls.layout.display = None if controls else "none"
         self._extra = w.VBox([])
         self.widget = w.VBox([self.renderer, self.controls, self._extra])

@@ -460,3 +460,20 @@ def test_a_message_shows_beside_its_control_and_clears_at_the_next_success(studi
         # text a Debian browser's fonts hold (DejaVu: "…"), no emoji (U+23F3 and above)
         assert "posekit-spin" in studio.busy.value and all(ord(ch) < 0x2300 for ch in studio.busy.value)
     assert "⏳" not in BUSY_SIGN
+
+
+def test_undo_brings_back_the_camera_with_the_pose(studio):
+    """Issue 44: a target moved far widens the camera; undo puts the pose *and* every view's camera back, redo the
+    widened one."""
+    ed = studio.editor
+    before = {n: list(v.camera.position) for n, v in ed.viewers.items()}
+    ed.move_target(0, ed.rows[0]["target"] + [0.0, 3.0, 0.0])
+    after = {n: list(v.camera.position) for n, v in ed.viewers.items()}
+    assert all(np.linalg.norm(after[n]) > np.linalg.norm(before[n]) + 0.5 for n in before), (before, after)
+    studio.undo()
+    for n, v in studio.editor.viewers.items():
+        np.testing.assert_allclose(v.camera.position, before[n], err_msg=n)
+    studio.redo()
+    for n, v in studio.editor.viewers.items():
+        np.testing.assert_allclose(v.camera.position, after[n], err_msg=n)
+    studio.undo()

@@ -201,6 +201,38 @@ def test_drag_moves_the_target_across_the_camera_facing_plane(sample):
     assert v.orbit.enabled is True and v.dragging is None
 
 
+def test_a_drag_keeps_the_camera_until_the_mouse_is_up_and_reset_view_frames_again(sample):
+    """Issue 44: dragging a target out of the framed region used to step the camera back mid-drag, so each pixel
+    moved the target further (a 120 px drag lifted a hand 1.94 m): the camera now waits for the release. *reset view*
+    frames the pose from the front again, looking at it, after any orbit."""
+    from posekit.viz.drag import drag_point
+
+    s = sample.skeleton
+    v = SkeletonViewer(s, sample.global_pos[0])
+    hand = sample.global_pos[0][s.index("left_wrist")]
+    v.drag_mode.value = True
+    v.grab(hand)
+    cam0 = list(v.camera.position)
+    camera = np.asarray(cam0, float) + v._offset
+    for k in range(1, 6):  # the mouse ray through points ever higher above the hand: the target leaves the frame
+        through = camera + 0.5 * (hand + [0.0, 0.4 * k, 0.0] - camera)
+        v.drag_to(through)
+        assert list(v.camera.position) == cam0, f"the camera moved during the drag, at step {k}"
+        # where the ray from the camera of the grab meets the drag plane: the same scale all along
+        np.testing.assert_allclose(v.targets["left_wrist"], drag_point(camera, through, *v._drag_plane), atol=1e-9)
+    assert v.targets["left_wrist"][1] > hand[1] + 1.5
+    v._on_release({"new": [0, 0, 0]})
+    assert np.linalg.norm(v.camera.position) > np.linalg.norm(cam0)  # released: the view takes the target in
+    v.camera.position = [4.0, 0.5, -1.0]  # the user orbited behind the character
+    v.reset_button.click()
+    pos = np.asarray(v.camera.position)
+    np.testing.assert_allclose(pos / np.linalg.norm(pos), v.VIEW_DIRECTION, atol=1e-9)
+    # three.js' lookAt: the camera's -Z axis points at the pivot (the origin of the scene frame)
+    x, y, z, w = v.camera.quaternion
+    forward = -np.array([2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)])
+    np.testing.assert_allclose(forward, -pos / np.linalg.norm(pos), atol=1e-9)
+
+
 def test_target_sliders_are_fine_and_centred_on_the_joint(sample):
     s = sample.skeleton
     v = SkeletonViewer(s, sample.global_pos[0])
