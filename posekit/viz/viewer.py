@@ -372,15 +372,25 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         body = self.pose[self.body]
         return self.skeleton.names[self.body[int(np.argmin(np.linalg.norm(body - p, axis=1)))]]
 
+    PICK_RESET = [0.0, -1000.0, 0.0]
+    """Where the kernel puts the picker's point after each double-click (never a point of the scene): the browser
+    reports a point only when it changes, so a second double-click on the same pixel, after the dropdown chose
+    another joint, would otherwise say nothing."""
+
     def _on_pick(self, change):
         p = np.asarray(change["new"], dtype=float)
-        if p.shape != (3,) or not np.all(np.isfinite(p)) or self.picker.distance is None:
-            return  # the double-click hit nothing
-        name = self._nearest_joint(p + self._offset)  # picked point is in scene coordinates
-        if self.skeleton.index(name) not in self.selectable:
-            self._refuse(name)
-            return
-        self.select(name)
+        if list(change["new"]) == self.PICK_RESET:
+            return  # the kernel's own reset
+        try:
+            if p.shape != (3,) or not np.all(np.isfinite(p)) or self.picker.distance is None:
+                return  # the double-click hit nothing
+            name = self._nearest_joint(p + self._offset)  # picked point is in scene coordinates
+            if self.skeleton.index(name) not in self.selectable:
+                self._refuse(name)
+                return
+            self.select(name)
+        finally:
+            self.picker.point = list(self.PICK_RESET)
 
     def move_target(self, joint, position):
         """Set one joint's target (creating it if needed) and notify ``on_target_change`` callbacks."""

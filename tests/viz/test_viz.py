@@ -266,6 +266,20 @@ def test_viewer_selection_sliders_and_callbacks(sample):
     assert v.selected == "head"
 
 
+def test_a_second_double_click_on_the_same_pixel_selects_again(sample):
+    """Issue 44: double-click a joint, choose another in the list, double-click the same pixel again: the first
+    joint is selected again (the browser reports a point only when it changes, so the kernel resets it)."""
+    s = sample.skeleton
+    v = SkeletonViewer(s, sample.global_pos[0])
+    v.picker.distance = 2.0
+    at = list(sample.global_pos[0][s.index("head")] - v._offset + 0.01)
+    v.picker.point = at  # what the browser sends
+    assert v.selected == "head"
+    v.joint_select.value = "left_knee"
+    v.picker.point = at
+    assert v.selected == "head"
+
+
 def test_selection_alone_creates_no_target_and_idle_sliders_show_nothing(sample):
     s = sample.skeleton
     v = SkeletonViewer(s, sample.global_pos[0])
