@@ -13,17 +13,20 @@ rebuilding the scene, so playback and live solving stay smooth. The camera keeps
 fitted to the pose (or to a whole clip in :meth:`SkeletonViewer.player`), and follows a pose that leaves
 the framed region.
 
-Interaction: orbit with the mouse (drag to rotate, wheel to zoom, right-drag to pan);
+Interaction: orbit with the mouse (drag to rotate, wheel to zoom, right-drag to pan; **reset view** frames the
+pose from the front again);
 **double-click** a joint to select it (a single-click picker would also fire at the end of every
 orbit drag); the X/Y/Z sliders then move that joint's target, in 1 mm steps within
 :attr:`SkeletonViewer.SLIDER_SPAN` of it (a slider pushed to an end of its range re-centres on the new
 value, so any point can be reached). A joint with both a target and a look-at target gets a choice of
 which one the sliders move. Selecting never moves anything, and a key press moves the joint selected when it
 arrives by exactly its steps, however soon after a selection: the kernel never changes a slider the browser
-shows, it replaces it (:mod:`posekit.viz.sliders`). Helper joints that are not part of the body (Bandai's ``joint_Root``, the world
-point under the feet) cannot be selected. With **drag in 3D** on, orbiting stops and pressing the mouse
+shows, it replaces it (:mod:`posekit.viz.sliders`). Helper joints that are not part of the body (Bandai's
+``joint_Root``, the world point under the feet) cannot be selected, nor joints a view does not offer
+(``selectable``: a panel offers the joints its solvers were given). With **drag in 3D** on, orbiting stops and pressing the mouse
 on a target marker or a joint and moving it drags that target across the plane through it that faces
-the camera. ``on_target_change`` callbacks (an IK solver, in later lessons) receive
+the camera (the camera waits for the mouse to be released before it takes a far target in, so the drag
+keeps its scale). ``on_target_change`` callbacks (an IK solver, in later lessons) receive
 ``(joint_name, position)``; targets are always stored under the joint's own name, whatever name, role
 or index the caller used.
 
