@@ -24,7 +24,8 @@ import pytest
 
 from posekit.bench.studio import QUIET_CONSOLE
 from posekit.viz.websocket import server_flags
-from tests.viz.browser_helpers import foreground as _foreground, pixels as _pixels, wait_for as _wait_for
+from tests.viz.browser_helpers import (foreground as _foreground, pixels as _pixels, presses_right_after_selections,
+                                      wait_for as _wait_for)
 
 pytestmark = pytest.mark.browser
 
@@ -507,5 +508,27 @@ def test_the_studio_fits_jupyterlab_at_1280_px_with_the_sidebar_open(lab, chromi
             page.screenshot(path=str(Path(shots) / "lab_1280_studio_views.png"))
             upload.scroll_into_view_if_needed()
             page.screenshot(path=str(Path(shots) / "lab_1280_studio_controls.png"))
+    finally:
+        page.close()
+
+
+def test_presses_right_after_selections_in_lessons_01_and_02(lab, chromium):
+    """Issue 44, in lesson 01's panel (FABRIK, CCD, DLS) and lesson 02's rig view: 20 times each, choose a joint
+    and press the Y slider's arrow key in the same turn of the page's event loop, a core kept busy: every press
+    moves the joint chosen last by exactly one step and no other target (lessons 00-02 lost every press of some
+    trials, or moved the new joint to the old one's value)."""
+    url, token, work = lab
+    page = _lab_page(chromium, {"width": 1500, "height": 1100})
+    try:
+        cell, labels, canvases, before = _open_panel(page, lab, PANEL_NOTEBOOK, 3, "the solver panel")
+        gaps, on_old = presses_right_after_selections(page, cell, ("right_wrist", "head", "left_ankle", "left_wrist"))
+        assert max(gaps) < 50 and on_old >= 1, (gaps, on_old)
+        _open_and_run_all(page, url, token, work, RIG_NOTEBOOK)
+        status = page.locator(".widget-html-content", has_text="rig at the learned controls")
+        _wait_visible(page, status, 300, url, token, work, "the rig posing view")
+        rig = page.locator(".jp-CodeCell", has=page.locator(".widget-label", has_text="l_elbow_swivel"))
+        rig.scroll_into_view_if_needed()
+        gaps, on_old = presses_right_after_selections(page, rig, ("right_wrist", "left_ankle", "left_wrist"))
+        assert max(gaps) < 50 and on_old >= 1, (gaps, on_old)
     finally:
         page.close()
