@@ -56,7 +56,7 @@ LOOK_COLOUR = "#e67e22"
 """Look-at targets and their rays: orange."""
 SELECTED_COLOUR = "#f1c40f"
 """The selected joint: drawn larger, in yellow."""
-TRIAD_LENGTH = 0.12
+TRIAD_LENGTH = 0.2
 """Length (metres) of each axis of a rotation target's triad."""
 
 
