@@ -168,6 +168,29 @@ def test_a_press_right_after_a_selection_moves_the_new_joint_by_one_step(page):
     assert on_old >= 1, "no press reached the previous joint's slider: the test did not race"
 
 
+def test_reset_view_brings_an_orbited_view_back(page, server):
+    """Issue 44: orbit the first view with the mouse, press *reset view*: the view shows what it showed after an
+    earlier reset (the pose framed from the front), not the orbited picture."""
+    first = _canvases(page)[0]
+    reset = page.locator(VIEWS).get_by_role("button", name="reset view")
+    reset.click()
+    framed = wait_for(lambda: (lambda a: a if (np.abs(a - _pixels(first)).sum(-1) > 60).mean() < 0.001 else None)(
+        _pixels(first)), 30, "the view to stand still after a reset")
+    first.scroll_into_view_if_needed()
+    box = first.bounding_box()
+    cx, cy = box["x"] + box["width"] / 2, box["y"] + box["height"] * 0.8
+    page.mouse.move(cx, cy)
+    page.mouse.down()
+    page.mouse.move(cx + 120, cy - 30, steps=10)
+    page.mouse.up()
+    wait_for(lambda: (np.abs(_pixels(first) - framed).sum(-1) > 60).mean() > 0.01, 30, "the view to orbit")
+    page.screenshot(path=str(server.folder / "studio_orbited.png"))
+    reset.click()
+    wait_for(lambda: (np.abs(_pixels(first) - framed).sum(-1) > 60).mean() < 0.002, 30,
+             "the view to show the framed picture again")
+    page.screenshot(path=str(server.folder / "studio_reset.png"))
+
+
 def _drag_in_3d(page, canvas, at, by):
     """Switch *drag in 3D* on, press at pixel ``at`` (x, y) of ``canvas`` (:func:`press_in_3d`) and move the mouse
     ``by`` (dx, dy) pixels."""
