@@ -31,8 +31,9 @@ def status_line(result, ms: float, joints=None, ignored=()) -> str:
     iterations and time (ms). ``ignored``: effectors the solver was not given because it does not honour
     their kind — the view says so ("look-at ignored") and never calls them reached."""
     it = result.iterations
-    return status_table(f"<b>{reached_mark(result, ignored)}</b>", [("worst effector", worst_errors(result, joints, sep="<br>")),
-                                           (f"iteration{'' if it == 1 else 's'}", str(it)), ("time", f"{ms:.2f} ms")])
+    return status_table(f"<b>{reached_mark(result, ignored)}</b>",
+                        [("worst effector", worst_errors(result, joints, sep="<br>")),
+                         (f"iteration{'' if it == 1 else 's'}", str(it)), ("time", f"{ms:.2f} ms")])
 
 
 def reached_mark(result, ignored=()) -> str:

@@ -23,8 +23,8 @@ which one the sliders move. Selecting never moves anything, and a key press move
 arrives by exactly its steps, however soon after a selection: the kernel never changes a slider the browser
 shows, it replaces it (:mod:`posekit.viz.sliders`). Helper joints that are not part of the body (Bandai's
 ``joint_Root``, the world point under the feet) cannot be selected, nor joints a view does not offer
-(``selectable``: a panel offers the joints its solvers were given). With **drag in 3D** on, orbiting stops and pressing the mouse
-on a target marker or a joint and moving it drags that target across the plane through it that faces
+(``selectable``: a panel offers the joints its solvers were given). With **drag in 3D** on, orbiting stops and
+pressing the mouse on a target marker or a joint and moving it drags that target across the plane through it that faces
 the camera (the camera waits for the mouse to be released before it takes a far target in, so the drag
 keeps its scale). ``on_target_change`` callbacks (an IK solver, in later lessons) receive
 ``(joint_name, position)``; targets are always stored under the joint's own name, whatever name, role

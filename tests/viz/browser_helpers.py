@@ -161,8 +161,8 @@ def presses_right_after_selections(page, scope, joints, presses: int = 20):
             scope.locator(".posekit-target-y .noUi-handle").first.focus()
             page.evaluate("([scope, joint]) => (" + _SELECT_ON_PRESS + ")(scope, joint)", [root, joint])
             page.keyboard.press("ArrowRight")
-            press = wait_for(lambda: page.evaluate("() => window.__press && window.__press.pressed_at && window.__press"),
-                             10, "the key press")
+            press = wait_for(lambda: page.evaluate("() => window.__press?.pressed_at && window.__press"), 10,
+                             "the key press")
             gaps.append(press["pressed_at"] - press["selected_at"])
             on_old += bool(press["on_old"])
             x, y, z = expected[joint]

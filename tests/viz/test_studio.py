@@ -412,8 +412,9 @@ def test_make_lab_and_make_studio_pass_the_websocket_setting():
 
 
 def test_the_summary_names_the_effectors_a_solver_ignored(bandai, tmp_path):
-    """Issue 44: with a look-at and a rotation effector, FABRIK (positions only) reaches its five targets; the "All
-    solvers" summary says so as its view does — "5 of 7 reached · look-at, rotation ignored" — never a plain ✓."""
+    """Issue 44: with a look-at and a rotation effector, FABRIK (positions only) reaches its five targets; the
+    "All solvers" summary says so as its view does ("5 of 7 reached · rotation, look-at ignored"), never a plain
+    ✓."""
     import re
 
     from posekit.viz import PosingStudio

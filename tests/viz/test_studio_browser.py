@@ -89,8 +89,11 @@ def test_studio_loads_and_every_view_shows_a_skeleton(page):
     texts = _texts(page)
     assert len(texts) == 4 and all("worst effector" in t and "ms" in t for t in texts), texts
     # issue 44: the left hand, selected as the app opens, is yellow from the first display (it was blue)
-    yellow = lambda: (lambda im: selected_joint(im) if ((im[..., 0] > 180) & (im[..., 1] > 120) & (im[..., 1] < 215)  # noqa: E731
-                                                        & (im[..., 2] < 90)).sum() > 3 else None)(_pixels(canvases[0]))
+    def yellow():
+        im = _pixels(canvases[0])
+        r, g, b = im[..., 0], im[..., 1], im[..., 2]
+        return ((r > 180) & (g > 120) & (g < 215) & (b < 90)).sum() > 3
+
     wait_for(yellow, 30, "the selected joint's yellow marker in the first view")
     summary = page.locator(".posekit-summary").inner_text()
     assert all(n in summary for n in ("fabrik", "dls", "protores+dls", "latent-opt+dls")), summary

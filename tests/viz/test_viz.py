@@ -409,8 +409,8 @@ def test_effector_editor_edits_every_kind_and_re_solves():
     assert np.allclose(tri[:, 1] - head, TRIAD_LENGTH * v.rotation_targets["Head"].T, atol=1e-5)  # columns: axes
     # issue 44: 20 cm axes, each drawn as five parallel lines 4 mm apart (WebGL lines are one pixel wide)
     strands = v._figure.part("triads").reshape(5, 3, 2, 3)
-    assert TRIAD_LENGTH >= 0.2 and np.allclose(strands[1:, :, 1] - strands[1:, :, 0], strands[:1, :, 1] - strands[:1, :, 0],
-                                                atol=1e-5)
+    lines = strands[:, :, 1] - strands[:, :, 0]
+    assert TRIAD_LENGTH >= 0.2 and np.allclose(lines[1:], lines[:1], atol=1e-5)
     assert 0.003 < np.linalg.norm(strands[1, 0, 0] - strands[0, 0, 0]) < 0.006
     ed.set_tolerance(0, 1.0)
     assert ed.effectors[0].tolerance == pytest.approx(0.1)
