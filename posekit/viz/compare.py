@@ -172,8 +172,10 @@ class SolverPanel:
     truth : ndarray, shape (J, 3), optional
         Shown as the ghost in every viewer.
     selectable : sequence of str, optional
-        The joints the first view offers; default the joints of ``effectors``, so a slider never gives a joint a
-        new effector that a solver of the panel was not made for (a learned solver takes only its joint set).
+        The joints the first view offers; default the joints of ``effectors`` and every joint to which each solver
+        accepts one more position effector (:meth:`usable_joints`): a slider never gives a joint a new effector
+        that a solver of the panel refuses (lesson 03's network takes only the joint sets it was trained for).
+        *remove target* takes the selected joint's effector away again.
 
     Attributes
     ----------
@@ -197,13 +199,18 @@ class SolverPanel:
         self.effectors = {skeleton.names[skeleton.index(e.joint)]: e for e in effectors}
         self.results, self.times = {}, {}
         if selectable is None:
-            selectable = list(self.effectors) or None
+            selectable = self.usable_joints()
         self.viewers, self.labels, boxes = solver_views(skeleton, self.solvers, start.global_pos, truth, width, height,
                                                         selectable)
         first = next(iter(self.viewers.values()))
         first.on_target_change(self._on_target)
         first.on_look_target_change(self._on_target)
-        self.widget = w.VBox([w.HBox(boxes, layout=w.Layout(flex_flow="row wrap")), first.controls])
+        self.remove_button = w.Button(description="remove target", icon="times", layout=w.Layout(width="130px"),
+                                      tooltip="take the selected joint's effector away")
+        self.remove_button.on_click(lambda _: self.remove_effector(first.selected))
+        self.message = w.HTML()
+        self.widget = w.VBox([w.HBox(boxes, layout=w.Layout(flex_flow="row wrap")), first.controls,
+                              w.HBox([self.remove_button, self.message], layout=w.Layout(align_items="center"))])
         self.solve()
 
     def _ipython_display_(self):
@@ -221,6 +228,34 @@ class SolverPanel:
             self.effectors[joint] = Effector(joint, position)
         self.solve()
 
+    def usable_joints(self) -> list:
+        """The body joints every solver of the panel takes: those of the effectors, and each other joint to which
+        every solver accepts one more position effector (each is asked once, on the start pose; a ValueError is a
+        refusal)."""
+        from ..data.metrics import body_joints
+
+        base, P = list(self.effectors.values()), np.asarray(self.start.global_pos, float)
+        usable = []
+        for j in body_joints(self.skeleton):
+            name = self.skeleton.names[int(j)]
+            trial = base + [Effector(name, P[int(j)])]
+            if name in self.effectors or all(_accepts(s, self.start, trial) for s in self.solvers.values()):
+                usable.append(name)
+        return usable
+
+    def remove_effector(self, joint):
+        """Take ``joint``'s effector away (its marker goes) and re-solve; the last effector stays (with a message)."""
+        if joint is None or self.skeleton.names[self.skeleton.index(joint)] not in self.effectors:
+            self.message.value = "select a joint with a target first"
+            return
+        name = self.skeleton.names[self.skeleton.index(joint)]
+        if len(self.effectors) == 1:
+            self.message.value = f"<span style='color:#b03a2e'>{html.escape(name)} holds the only effector</span>"
+            return
+        del self.effectors[name]
+        self.message.value = ""
+        self.solve()
+
     def move_target(self, joint, position):
         """Move (or add) the target of a joint and re-solve, as the sliders do."""
         name = self.skeleton.names[self.skeleton.index(joint)]
@@ -230,3 +265,16 @@ class SolverPanel:
         """Solve with every solver and refresh the views (:func:`solve_views`)."""
         solve_views(self.skeleton, self.solvers, self.viewers, self.labels, self.start,
                     list(self.effectors.values()), self.results, self.times)
+
+
+def _accepts(solver, start, effectors) -> bool:
+    """Whether ``solver`` solves ``effectors`` (those of the kinds it honours) without refusing them."""
+    kinds = getattr(solver, "kinds", ("position",))
+    use = [e for e in effectors if e.kind in kinds]
+    if not use:
+        return True
+    try:
+        solver.solve(start if getattr(solver, "needs_start", True) else None, use)
+    except Exception:  # noqa: BLE001 - a refusal (ValueError) or a failure: either way the view could not solve
+        return False
+    return True

@@ -340,19 +340,32 @@ def test_solver_panel_resolves_on_target_moves(sample):
         assert label.count("<tr>") == 3 and ">iterations<" in label and " ms<" in label
 
 
-def test_a_panel_offers_only_the_joints_its_solvers_were_given(sample):
-    """Issue 44: a panel's first view offers the joints of its effectors only (lesson 03's neural solver refused a
-    new effector on any other joint, and nothing but re-running the cell recovered); a double-click on another
-    joint says why it is not offered and selects nothing; a viewer can offer a chosen few (lesson 02: the rig's
-    handles), and a marker never appears on another joint."""
+def test_a_panel_offers_only_joints_every_solver_takes_and_an_added_target_can_be_removed(sample):
+    """Issue 44: lesson 03's panel gave any joint touched by a slider a new effector, which its network (trained for
+    fixed joint sets) refused, and nothing but re-running the cell recovered. A panel now offers the joints of its
+    effectors and those every solver accepts one more effector on (FABRIK: all; a fixed-set solver: none);
+    a double-click on another joint says why it is not offered and selects nothing; *remove target* takes an added
+    effector away. A viewer can offer a chosen few (lesson 02: the rig's handles)."""
     from posekit.ik import Effector, Pose, make_solver
     from posekit.viz import SolverPanel
 
     s, P = sample.skeleton, sample.global_pos[0]
     hands = ["left_wrist", "right_wrist"]
-    panel = SolverPanel(s, {"fabrik": make_solver("fabrik", s), "ccd": make_solver("ccd", s)}, Pose(P),
-                        [Effector(j, P[s.index(j)]) for j in hands])
-    v = panel.viewers["fabrik"]
+    fabrik = make_solver("fabrik", s)
+
+    class HandsOnly:  # a learned solver made for one joint set (as lesson 03's network)
+        kinds, needs_start = ("position",), True
+
+        def solve(self, start, effectors):
+            if sorted(s.names[s.index(e.joint)] for e in effectors) != sorted(hands):
+                raise ValueError("no network for this joint set")
+            return fabrik.solve(start, effectors)
+
+    effectors = [Effector(j, P[s.index(j)]) for j in hands]
+    free = SolverPanel(s, {"fabrik": fabrik, "again": make_solver("fabrik", s)}, Pose(P), effectors)
+    assert len(free.viewers["fabrik"].joint_select.options) == len(free.viewers["fabrik"].body) + 1
+    panel = SolverPanel(s, {"net": HandsOnly(), "fabrik": fabrik}, Pose(P), effectors)
+    v = panel.viewers["net"]
     assert sorted(o[1] for o in v.joint_select.options) == ["", "left_wrist", "right_wrist"]
     with pytest.raises(ValueError, match="not offered"):
         v.select("left_elbow")
@@ -364,6 +377,13 @@ def test_a_panel_offers_only_the_joints_its_solvers_were_given(sample):
     assert v.dragging is None and set(panel.effectors) == set(hands)
     v._on_pick({"new": list(P[s.index("left_wrist")] - v._offset)})
     assert v.selected == "left_wrist"
+    # in the free panel a slider adds an effector on the elbow; every view solves it, and it can be taken away
+    f = free.viewers["fabrik"]
+    f.select("left_elbow")
+    f.sliders[1].value += 0.05
+    assert "left_elbow" in free.effectors and not isinstance(free.results["again"], Exception)
+    free.remove_button.click()
+    assert set(free.effectors) == set(hands) and "left_elbow" not in f.targets
     rig = SkeletonViewer(s, P, selectable=["left_hand", "right_ankle"])  # roles or names
     assert sorted(o[1] for o in rig.joint_select.options) == ["", "left_wrist", "right_ankle"]
 
