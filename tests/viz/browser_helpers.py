@@ -104,10 +104,9 @@ _SELECT_ON_PRESS = """(scope, joint) => {
   document.addEventListener('keydown', () => {
     const list = [...scope.querySelectorAll('.widget-dropdown')]
       .find(d => d.textContent.includes('selected')).querySelector('select');
-    const t = performance.now();
     list.value = joint;
-    list.dispatchEvent(new Event('change', {bubbles: true}));
-    window.__press = {selected_at: t, on_old: focused.isConnected && focused.classList.contains('noUi-handle')};
+    list.dispatchEvent(new Event('change', {bubbles: true}));  // the list's view sends the selection now
+    window.__press = {selected_at: performance.now(), on_old: focused.isConnected && focused.classList.contains('noUi-handle')};
   }, {capture: true, once: true});
   // on the slider, after its own handler (listeners of one element run in the order they were added): the press
   // has been applied when this runs
