@@ -370,6 +370,12 @@ def _select_others_and_back(page, cell, labels, what):
     assert [l.inner_text() for l in labels.all()] == texts, f"{what}: selecting joints moved a target"
 
 
+def _yellow(img) -> int:
+    """How many pixels of an image are the selected joint's yellow."""
+    r, g, b = img[..., 0], img[..., 1], img[..., 2]
+    return int(((r > 180) & (g > 120) & (g < 215) & (b < 90)).sum())
+
+
 def _views_moved(canvases, before):
     for c, im in zip(canvases.all(), before):
         _wait_for(lambda c=c, im=im: (np.abs(_pixels(c) - im).sum(-1) > 60).mean() > 0.0005 or None, 30,
@@ -385,6 +391,8 @@ def test_solvers_solve_live_side_by_side(lab, chromium, notebook, views):
     page = _lab_page(chromium, {"width": 1500, "height": 1100})
     try:
         cell, labels, canvases, before = _open_panel(page, lab, notebook, views, "the solver panel")
+        # issue 44: the left hand, selected as the cell ran, is drawn yellow on first display (it was blue)
+        _wait_for(lambda: _yellow(_pixels(canvases.first)) > 3 or None, 30, "the selected joint's yellow marker")
         _select_others_and_back(page, cell, labels, notebook)
         texts = [l.inner_text() for l in labels.all()]
         assert all("mm" in t and "ms" in t for t in texts)
