@@ -398,8 +398,9 @@ def test_solvers_solve_live_side_by_side(lab, chromium, notebook, views):
         assert all("mm" in t and "ms" in t for t in texts)
         handle = cell.locator(".widget-slider", has_text="target y").locator(".noUi-handle").first
         _drag(page, handle, 60)
-        _wait_for(lambda: all(l.inner_text() != t for l, t in zip(labels.all(), texts)), 60,
-                  "every solver to re-solve")
+        # every view re-poses (a status line may read as before: FABRIK's 0.0 mm, its iterations and its time to the
+        # hundredth of a ms can all come out the same)
+        _wait_for(lambda: any(l.inner_text() != t for l, t in zip(labels.all(), texts)), 60, "a solver to re-solve")
         _views_moved(canvases, before)
         page.screenshot(path=str(work / f"panel_{notebook[:2]}.png"))
     finally:
