@@ -75,8 +75,10 @@ class FramedCamera:
                                                           for d in (self.targets, self.look_targets) if d]])
 
     def _follow(self):
-        """Step the camera back (and re-centre it) when the pose or a target leaves the framed region."""
-        if self._held:
+        """Step the camera back (and re-centre it) when the pose or a target leaves the framed region; never while a
+        drag holds a target (the mouse would then move it further per pixel: the drag keeps its scale until the
+        mouse is released)."""
+        if self._held or getattr(self, "dragging", None) is not None:
             return
         pts = self._shown_points()
         if self.follow and np.linalg.norm(pts - self._offset, axis=1).max() > 1.05 * self._radius:
@@ -98,3 +100,44 @@ class FramedCamera:
         direction = current / np.linalg.norm(current) if np.linalg.norm(current) > 1e-9 else self.VIEW_DIRECTION
         self.camera.position = [float(c) for c in np.asarray(self.orbit.target, float) + direction * dist]
         self._radius = max(radius, self._radius) if keep_distance else radius
+
+    def reset_view(self):
+        """Frame the pose and its targets from the starting direction (in front of the character, a little right
+        and above; :attr:`VIEW_DIRECTION`), as the *reset view* button does: the camera looks at the pivot again."""
+        centre, radius = self._frame(self._shown_points())
+        self.set_camera_state({"offset": centre, "radius": radius,
+                               "position": self._camera_position(radius)})
+
+    def camera_state(self) -> dict:
+        """Where the camera is: ``position`` (3,) and ``quaternion`` (4,, x y z w, three.js order) in the scene
+        frame, the framed ``offset`` (3,, world) and ``radius`` (metres) — what :meth:`set_camera_state` restores
+        (undo in the studio)."""
+        return {"position": [float(c) for c in self.camera.position],
+                "quaternion": [float(c) for c in self.camera.quaternion],
+                "offset": [float(c) for c in self._offset], "radius": float(self._radius)}
+
+    def set_camera_state(self, state: dict):
+        """Put the camera where :meth:`camera_state` said (without ``quaternion``: looking at the pivot, up Y)."""
+        self._offset = np.asarray(state["offset"], float).copy()
+        self._radius = float(state["radius"])
+        with self._world.hold_sync():
+            self._world.position = [float(-c) for c in self._offset]
+            self._world.matrix = translation_matrix(self._world.position)
+        position = [float(c) for c in state["position"]]
+        quaternion = state.get("quaternion") or _look_at_origin(np.asarray(position, float))
+        with self.camera.hold_sync():
+            self.camera.position = position
+            self.camera.quaternion = [float(c) for c in quaternion]
+
+
+def _look_at_origin(eye) -> list:
+    """The quaternion (x, y, z, w) three.js' ``Object3D.lookAt`` gives a camera at ``eye`` (3,) looking at the
+    origin with Y up."""
+    z = eye / np.linalg.norm(eye)
+    x = np.cross([0.0, 1.0, 0.0], z)
+    x = x / np.linalg.norm(x) if np.linalg.norm(x) > 1e-9 else np.array([1.0, 0.0, 0.0])
+    y = np.cross(z, x)
+    R = np.stack([x, y, z], axis=1)
+    w = np.sqrt(max(1.0 + R[0, 0] + R[1, 1] + R[2, 2], 1e-12)) / 2
+    return [float((R[2, 1] - R[1, 2]) / (4 * w)), float((R[0, 2] - R[2, 0]) / (4 * w)),
+            float((R[1, 0] - R[0, 1]) / (4 * w)), float(w)]

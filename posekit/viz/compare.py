@@ -16,7 +16,8 @@ from ..ik.api import Effector, Pose
 from ..ik.effectors import resolve_effectors
 from .viewer import SkeletonViewer, show_widget
 
-__all__ = ["SolverPanel", "solver_views", "solve_views", "status_line", "status_table", "worst_errors"]
+__all__ = ["SolverPanel", "ignored_effectors", "reached_mark", "solver_views", "solve_views", "status_line",
+           "status_table", "worst_errors"]
 
 
 def _kinds_text(kinds) -> str:
@@ -30,15 +31,27 @@ def status_line(result, ms: float, joints=None, ignored=()) -> str:
     iterations and time (ms). ``ignored``: effectors the solver was not given because it does not honour
     their kind — the view says so ("look-at ignored") and never calls them reached."""
     it = result.iterations
-    if ignored:
-        kinds = _kinds_text(e.kind for e in ignored)
-        used = len(result.effector_error)
-        mark = (f"✓ {used} of {used + len(ignored)} reached" if result.converged else "✗ not reached")
-        mark += f" · <span style='color:#b9770e'>{kinds} ignored</span>"
-    else:
-        mark = "✓ reached" if result.converged else "✗ not reached"
-    return status_table(f"<b>{mark}</b>", [("worst effector", worst_errors(result, joints, sep="<br>")),
-                                           (f"iteration{'' if it == 1 else 's'}", str(it)), ("time", f"{ms:.2f} ms")])
+    return status_table(f"<b>{reached_mark(result, ignored)}</b>",
+                        [("worst effector", worst_errors(result, joints, sep="<br>")),
+                         (f"iteration{'' if it == 1 else 's'}", str(it)), ("time", f"{ms:.2f} ms")])
+
+
+def reached_mark(result, ignored=()) -> str:
+    """Whether a solver reached its effectors, as HTML: ``"✓ reached"``, ``"✗ not reached"``, or with effectors it
+    ignored (not given, their kind not honoured) ``"✓ 3 of 5 reached · look-at, rotation ignored"`` — never a plain
+    ✓ then. The views (:func:`status_line`) and the studio's summary say it in these words."""
+    if not ignored:
+        return "✓ reached" if result.converged else "✗ not reached"
+    used = len(result.effector_error)
+    mark = f"✓ {used} of {used + len(ignored)} reached" if result.converged else "✗ not reached"
+    return mark + f" · <span style='color:#b9770e'>{_kinds_text(e.kind for e in ignored)} ignored</span>"
+
+
+def ignored_effectors(solver, effectors) -> list:
+    """The effectors ``solver`` is not given: those of a kind it does not honour (``solver.kinds``; default
+    positions only)."""
+    kinds = getattr(solver, "kinds", ("position",))
+    return [e for e in effectors if e.kind not in kinds]
 
 
 def worst_errors(result, joints=None, sep: str = ", ") -> str:
@@ -64,16 +77,20 @@ def status_table(title: str, rows) -> str:
     return f"{title}<table style='border-collapse:collapse'>{body}</table>"
 
 
-def solver_views(skeleton, names, pose, truth=None, width: int = 300, height: int = 330):
-    """One viewer per solver name (the first with the joint selector and target sliders), a status label
-    under each: ``(viewers, labels, boxes)``, dicts by name and the list of titled boxes to lay out."""
+def solver_views(skeleton, names, pose, truth=None, width: int = 300, height: int = 330, selectable=None):
+    """One viewer per solver name (the first with the joint selector and target sliders, offering the joints
+    ``selectable``, default all), a status label under each: ``(viewers, labels, boxes)``, dicts by name and the
+    list of titled boxes to lay out."""
     import ipywidgets as w
 
     viewers, labels, boxes = {}, {}, []
     for k, name in enumerate(names):
-        v = SkeletonViewer(skeleton, pose, ghost=truth, width=width, height=height, controls=(k == 0))
+        v = SkeletonViewer(skeleton, pose, ghost=truth, width=width, height=height, controls=(k == 0),
+                           selectable=selectable if k == 0 else None)
         viewers[name], labels[name] = v, w.HTML(layout=w.Layout(width=f"{width}px"))  # a long message wraps
-        boxes.append(w.VBox([w.HTML(f"<b>{html.escape(str(name))}</b>"), v.renderer, labels[name]]))
+        # a view keeps its width (never squeezed into a scrolled box): a narrow page wraps the views onto rows
+        boxes.append(w.VBox([w.HTML(f"<b>{html.escape(str(name))}</b>"), v.renderer, labels[name]],
+                            layout=w.Layout(flex="0 0 auto", margin="0 8px 8px 0")))
     return viewers, labels, boxes
 
 
@@ -116,7 +133,7 @@ def _solve_one(name, solver, viewer, label, start, effectors, names, results, ti
         return
     kinds = getattr(solver, "kinds", ("position",))
     use = [k for k, e in enumerate(effectors) if e.kind in kinds]
-    ignored = [e for e in effectors if e.kind not in kinds]
+    ignored = ignored_effectors(solver, effectors)
     if not use:
         results.pop(name, None)
         label.value = (f"<b>nothing to solve</b><br>{html.escape(name)} honours "
@@ -149,10 +166,16 @@ class SolverPanel:
     start : Pose
         Start pose of every solve (rotation-based solvers need its rotations).
     effectors : list of Effector
-        Initial effectors (one per joint: the viewer moves one point per joint); moving a joint
-        without one adds a position effector, moving a look-at target moves the point looked at.
+        Initial effectors (one per joint: the viewer moves one point per joint); the first view offers their
+        joints (``selectable``); moving a look-at target moves the point looked at; :meth:`move_target` on a
+        joint without one adds a position effector.
     truth : ndarray, shape (J, 3), optional
         Shown as the ghost in every viewer.
+    selectable : sequence of str, optional
+        The joints the first view offers; default the joints of ``effectors`` and every joint to which each solver
+        accepts one more position effector (:meth:`usable_joints`): a slider never gives a joint a new effector
+        that a solver of the panel refuses (lesson 03's network takes only the joint sets it was trained for).
+        *remove target* takes the selected joint's effector away again.
 
     Attributes
     ----------
@@ -167,7 +190,7 @@ class SolverPanel:
     """
 
     def __init__(self, skeleton, solvers: dict, start: Pose, effectors, truth=None, width: int = 300,
-                 height: int = 330):
+                 height: int = 330, selectable=None):
         import ipywidgets as w
 
         self.skeleton = skeleton
@@ -175,11 +198,19 @@ class SolverPanel:
         self.start = start
         self.effectors = {skeleton.names[skeleton.index(e.joint)]: e for e in effectors}
         self.results, self.times = {}, {}
-        self.viewers, self.labels, boxes = solver_views(skeleton, self.solvers, start.global_pos, truth, width, height)
+        if selectable is None:
+            selectable = self.usable_joints()
+        self.viewers, self.labels, boxes = solver_views(skeleton, self.solvers, start.global_pos, truth, width, height,
+                                                        selectable)
         first = next(iter(self.viewers.values()))
         first.on_target_change(self._on_target)
         first.on_look_target_change(self._on_target)
-        self.widget = w.VBox([w.HBox(boxes), first.controls])
+        self.remove_button = w.Button(description="remove target", icon="times", layout=w.Layout(width="130px"),
+                                      tooltip="take the selected joint's effector away")
+        self.remove_button.on_click(lambda _: self.remove_effector(first.selected))
+        self.message = w.HTML()
+        self.widget = w.VBox([w.HBox(boxes, layout=w.Layout(flex_flow="row wrap")), first.controls,
+                              w.HBox([self.remove_button, self.message], layout=w.Layout(align_items="center"))])
         self.solve()
 
     def _ipython_display_(self):
@@ -197,6 +228,34 @@ class SolverPanel:
             self.effectors[joint] = Effector(joint, position)
         self.solve()
 
+    def usable_joints(self) -> list:
+        """The body joints every solver of the panel takes: those of the effectors, and each other joint to which
+        every solver accepts one more position effector (each is asked once, on the start pose; a ValueError is a
+        refusal)."""
+        from ..data.metrics import body_joints
+
+        base, P = list(self.effectors.values()), np.asarray(self.start.global_pos, float)
+        usable = []
+        for j in body_joints(self.skeleton):
+            name = self.skeleton.names[int(j)]
+            trial = base + [Effector(name, P[int(j)])]
+            if name in self.effectors or all(_accepts(s, self.start, trial) for s in self.solvers.values()):
+                usable.append(name)
+        return usable
+
+    def remove_effector(self, joint):
+        """Take ``joint``'s effector away (its marker goes) and re-solve; the last effector stays (with a message)."""
+        if joint is None or self.skeleton.names[self.skeleton.index(joint)] not in self.effectors:
+            self.message.value = "select a joint with a target first"
+            return
+        name = self.skeleton.names[self.skeleton.index(joint)]
+        if len(self.effectors) == 1:
+            self.message.value = f"<span style='color:#b03a2e'>{html.escape(name)} holds the only effector</span>"
+            return
+        del self.effectors[name]
+        self.message.value = ""
+        self.solve()
+
     def move_target(self, joint, position):
         """Move (or add) the target of a joint and re-solve, as the sliders do."""
         name = self.skeleton.names[self.skeleton.index(joint)]
@@ -206,3 +265,16 @@ class SolverPanel:
         """Solve with every solver and refresh the views (:func:`solve_views`)."""
         solve_views(self.skeleton, self.solvers, self.viewers, self.labels, self.start,
                     list(self.effectors.values()), self.results, self.times)
+
+
+def _accepts(solver, start, effectors) -> bool:
+    """Whether ``solver`` solves ``effectors`` (those of the kinds it honours) without refusing them."""
+    kinds = getattr(solver, "kinds", ("position",))
+    use = [e for e in effectors if e.kind in kinds]
+    if not use:
+        return True
+    try:
+        solver.solve(start if getattr(solver, "needs_start", True) else None, use)
+    except Exception:  # noqa: BLE001 - a refusal (ValueError) or a failure: either way the view could not solve
+        return False
+    return True

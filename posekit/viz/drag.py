@@ -101,7 +101,15 @@ class DragTargets:
 
     def _on_drag_mode(self, change):
         self.orbit.enabled = not change["new"]
-        self.dragging = None
+        self._let_go()
+
+    def _let_go(self):
+        """End a drag: the sliders show where the target went (they wait while the mouse is down)."""
+        held, self.dragging = self.dragging, None
+        if self._sliders_due:
+            self._sync_sliders()
+        if held is not None:
+            self._follow()  # the camera waited for the mouse to be released
 
     def grab(self, point):
         """Start dragging at ``point`` (world frame, metres): the target marker it is on (within two
@@ -113,6 +121,9 @@ class DragTargets:
         near = [c for c in red + orange if c[0] <= 2.6 * self._joint_radius]
         # on a marker: that target (an orange one: the point the joint looks at); else the nearest joint's
         _, name, self.dragging_look = min(near) if near else (0.0, self._nearest_joint(p), False)
+        if self.skeleton.index(name) not in self.selectable:  # a joint this view does not offer: nothing to drag
+            self._refuse(name)
+            return
         self.dragging = name
         if self.selected != name:
             self.select(name)
@@ -143,4 +154,4 @@ class DragTargets:
             self.drag_to(np.asarray(change["new"], float) + self._offset)
 
     def _on_release(self, change):
-        self.dragging = None
+        self._let_go()

@@ -78,7 +78,7 @@ class EffectorEditor:
         self.rows = []  # dicts: effector fields + lam + euler + base rotation + widgets
         self.results, self.times = {}, {}
         self.updates = 0  # solves so far (every change solves once)
-        self._change_callbacks = []
+        self._change_callbacks, self._before_callbacks = [], []
         self.viewers, self.labels, boxes = solver_views(skeleton, self.solvers, start.global_pos, truth, width, height)
         self.first = next(iter(self.viewers.values()))
         self.first.on_target_change(self._on_target)
@@ -86,14 +86,17 @@ class EffectorEditor:
         self.add_joint = w.Dropdown(options=[skeleton.names[j] for j in self.first.body],
                                     value=skeleton.names[skeleton.pelvis()],
                                     description="joint", layout=w.Layout(width="220px"))
-        self.add_kind = w.Dropdown(options=list(KIND_CHOICES), value="position", description="kind",
+        self.add_kind = w.Dropdown(options=[(k.replace("_", "-"), k) for k in KIND_CHOICES], value="position",
+                                   description="kind",
                                    layout=w.Layout(width="200px"))
         self.add_button = w.Button(description="add effector", button_style="info")
         self.add_button.on_click(lambda _: self._add_clicked())
         self.message = w.HTML()
         self.rows_box = w.VBox([])
-        self.widget = w.VBox([w.HBox(boxes), self.first.controls,
-                              w.HBox([self.add_joint, self.add_kind, self.add_button, self.message]), self.rows_box])
+        wrap = w.Layout(flex_flow="row wrap", align_items="center")  # a narrow page: views and controls wrap
+        self.widget = w.VBox([w.HBox(boxes, layout=wrap), self.first.controls,
+                              w.HBox([self.add_joint, self.add_kind, self.add_button, self.message], layout=wrap),
+                              self.rows_box])
         self._quiet = True
         for e in effectors:
             self.add(e.joint, e.kind, target=e.target, axis=e.axis)
@@ -215,9 +218,16 @@ class EffectorEditor:
         ``"tolerance"``, ``"rotation"``, ``"move"`` (row ``index``) or ``"setup"`` (a whole setup, index None)."""
         self._change_callbacks.append(callback)
 
+    def on_before_change(self, callback):
+        """Call ``callback(what, index)`` after a change to the effectors and before its solve re-poses the views
+        (the studio notes each view's camera as it was)."""
+        self._before_callbacks.append(callback)
+
     def _changed(self, what, index):
         if self._quiet:
             return
+        for cb in self._before_callbacks:
+            cb(what, index)
         self.solve()
         self.first.flush()  # a target moved in the first view is drawn there before any listener hears of the change
         for cb in self._change_callbacks:

@@ -97,6 +97,11 @@ def geometry(attributes: dict):
     return three.BufferGeometry(attributes=attributes, morphAttributes={"position": []})
 
 
+TRIAD_STRANDS = ((0.0, 0.0), (0.16, 0.0), (-0.16, 0.0), (0.0, 0.16), (0.0, -0.16))
+"""Each axis of a rotation triad is drawn as these parallel lines (offsets along the triad's other two axes, in
+joint radii; the centre line first): WebGL draws every line one pixel wide, so one line per axis was hard to see."""
+
+
 def _hex(colour: str) -> np.ndarray:
     colour = colour.lstrip("#")
     return np.array([int(colour[k:k + 2], 16) / 255 for k in (0, 2, 4)], dtype=np.float32)
@@ -283,7 +288,7 @@ class Figure:
         T, L, R = counts
         V, J = len(self.unit), self.n_joints
         sizes = {"bones": self._tubes.n_vertices, "joints": J * V, "targets": T * V, "looks": L * V,
-                 "rays": 2 * L, "triads": 6 * R, "corners": 2}
+                 "rays": 2 * L, "triads": 6 * R * len(TRIAD_STRANDS), "corners": 2}
         rows, start = {}, 0
         for name, n in sizes.items():
             rows[name], start = slice(start, start + n), start + n
@@ -299,15 +304,15 @@ class Figure:
             normals[rows[part]] = np.tile(self.unit, (k, 1))
         self._colours = np.zeros((n, 3), np.float32)
         self._colours[rows["bones"]] = self._tubes.colours
-        axes = np.eye(3, dtype=np.float32)  # each triad: x red, y green, z blue, both ends of each axis
-        self._colours[rows["triads"]] = np.repeat(np.tile(axes, (R, 1)), 2, axis=0)
+        axes = np.eye(3, dtype=np.float32)  # each triad: x red, y green, z blue, both ends of each axis, per strand
+        self._colours[rows["triads"]] = np.tile(np.repeat(np.tile(axes, (R, 1)), 2, axis=0), (len(TRIAD_STRANDS), 1))
         for part, rgb in self._marker_rgb.items():
             self._colours[rows[part]] = rgb
         self._colour_joints()
         old = list(self._shared.values())
         self._shared = {"position": attribute(self._positions.astype(np.float32)),
                         "normal": attribute(normals),
-                        "color": attribute(self._colours)}
+                        "color": attribute(self._colours.copy())}  # a copy: highlight() changes _colours
         corner = rows["corners"].start  # an empty part draws one degenerate triangle (or line) on a corner
         first = {p: rows[p].start for p in rows}
         indices = {"bones": self._tubes.faces + first["bones"],
@@ -315,7 +320,7 @@ class Figure:
                    "targets": self._spheres(T, first["targets"]) if T else np.full((1, 3), corner),
                    "looks": self._spheres(L, first["looks"]) if L else np.full((1, 3), corner),
                    "rays": np.arange(2 * L) + first["rays"] if L else np.full(2, corner),
-                   "triads": np.arange(6 * R) + first["triads"] if R else np.full(2, corner)}
+                   "triads": np.arange(6 * R * len(TRIAD_STRANDS)) + first["triads"] if R else np.full(2, corner)}
         kinds = [three.Mesh] * 4 + [three.LineSegments] * 2
         for name, kind, material in zip(indices, kinds, self._materials):
             index = attribute(np.asarray(indices[name], np.uint32).reshape(-1))
@@ -378,8 +383,14 @@ class Figure:
             P[rows["rays"]] = np.stack([pose[list(look_joints)], looks], axis=1).reshape(-1, 3)
         if R:
             at = pose[list(rotation_joints)]  # (R, 3); a triad's axes are the columns of its rotation
-            tips = at[:, None, :] + self.triad_length * np.asarray(rotations, float).reshape(R, 3, 3).transpose(0, 2, 1)
-            P[rows["triads"]] = np.stack([np.repeat(at[:, None, :], 3, axis=1), tips], axis=2).reshape(-1, 3)
+            axes = np.asarray(rotations, float).reshape(R, 3, 3).transpose(0, 2, 1)  # (R, axis, xyz)
+            tips = at[:, None, :] + self.triad_length * axes
+            centre = np.stack([np.repeat(at[:, None, :], 3, axis=1), tips], axis=2)  # (R, axis, end, xyz)
+            strands = []
+            for a, b in TRIAD_STRANDS:  # each axis again beside itself, along the triad's other two axes
+                shift = self.joint_radius * (a * np.roll(axes, -1, axis=1) + b * np.roll(axes, -2, axis=1))
+                strands.append(centre + shift[:, :, None, :])
+            P[rows["triads"]] = np.stack(strands).reshape(-1, 3)
         self._shared["position"].array = P.astype(np.float32)
 
     def part(self, name: str) -> np.ndarray:

@@ -1,4 +1,5 @@
-"""The X/Y/Z target sliders of a :class:`~posekit.viz.SkeletonViewer`: what they move, and never moving on a selection.
+"""The X/Y/Z target sliders of a :class:`~posekit.viz.SkeletonViewer`: each press moves the selected joint's handle
+by its own steps, and nothing else, whatever the timing.
 
 Introduced in ``notebooks/00_skeletons_and_poses.ipynb``; a part of :class:`~posekit.viz.SkeletonViewer` (it
 inherits :class:`TargetSliders`). The sliders show the selected joint's *handle* (:meth:`TargetSliders._handle`):
@@ -7,16 +8,19 @@ joint itself when it has neither (a move then creates a target). They step 1 mm 
 :attr:`TargetSliders.SLIDER_SPAN` of the handle; a slider pushed to an end re-centres on its new value, so any
 point can be reached.
 
-Selecting never moves anything. A new selection gives every slider a new range; the kernel sends each slider's
-range and value in one message, and for :attr:`TargetSliders.ECHO_S` seconds after a new range a value the
-browser sends back that the slider held in the last seconds before that range (clamped into the new range, so
-possibly an end of it) is an echo, not a move; values the user moved it to since are moves: under load the browser can send back a value from two selections ago. A real move changes its
-own axis of the handle only. Units: metres, world frame (:mod:`posekit.conventions`).
+**Race-free by construction.** The kernel never changes a slider the browser shows: whenever the sliders must show
+something new (a new selection, a handle moved by a drag, by code or by undo, a re-centring) it makes three *new*
+slider models and puts them in place of the old ones. So every value a slider model sends comes from the browser's
+own history of that one model, which starts at the value the kernel created it with; the kernel reads each value
+as a number of steps from the model's previous value (a press: one step), on the axis of that slider, and applies
+it to the handle of the joint selected *now* — the selection the kernel has already processed, the browser's
+messages arriving in order. A press on a slider the browser had not yet replaced after a new selection thus moves
+the new joint by one step, never to the old joint's value; a value the browser sends back unchanged (its snap to
+the step grid) is zero steps and moves nothing. The last :attr:`TargetSliders.KEEP_OLD` replaced sets stay open
+for presses still on their way; older ones are closed. Units: metres, world frame (:mod:`posekit.conventions`).
 """
 
 from __future__ import annotations
-
-import time
 
 import numpy as np
 
@@ -27,12 +31,17 @@ class TargetSliders:
     """The slider half of :class:`~posekit.viz.SkeletonViewer` (see the module docstring).
 
     Expects of the viewer: ``selected``, ``targets``, ``look_targets``, ``pose``, ``skeleton``, ``move_target``,
-    ``move_look_target``.
+    ``move_look_target``, ``dragging``.
 
     Attributes
     ----------
     sliders : list of ipywidgets.FloatSlider
-        X, Y and Z (CSS classes ``posekit-target-x`` ...).
+        The current X, Y and Z sliders (CSS classes ``posekit-target-x`` ...); new models after every change the
+        kernel makes to what they show.
+    slider_box : ipywidgets.VBox
+        Holds the current sliders.
+    slider_generation : int
+        How many slider sets have been made (each carries the CSS class ``posekit-sliders-<n>``).
     handle_choice : ipywidgets.ToggleButtons
         *sliders move*: ``"target"`` or ``"look_at"``, shown for a joint that has both.
     """
@@ -42,27 +51,20 @@ class TargetSliders:
     SLIDER_SPAN = 0.5
     """The X/Y/Z sliders reach this far (metres) either side of the selected joint's target (a slider
     pushed to an end re-centres on its new value)."""
-    ECHO_S = 2.0
-    """For this many seconds after the kernel gives a slider a new range, the browser sending back a value the
-    slider held in the last ``ECHO_S`` seconds (set by the kernel or sent by the browser; clamped into the new
-    range, so possibly an end of it) is an echo, not a move (the browser re-sends a slider's value when its
-    range changes, sometimes after the next selection has already begun)."""
+    KEEP_OLD = 8
+    """Replaced slider sets kept open: a press on one of them still moves the selected joint by its steps."""
 
     def _init_sliders(self):
         import ipywidgets as w
 
-        self._syncing = False
-        self._held_values = [[], [], []]  # per slider: (time, value) it held lately, what the browser may send back
-        self._ranges = [[], [], []]  # per slider: (time, min, max) of its ranges lately, the last one newest
-        step = self.SLIDER_STEP
-        self.sliders = [w.FloatSlider(value=0.0, min=-step, max=step, step=step, description=f"target {a}",
-                                      continuous_update=True, readout_format=".3f", disabled=True, readout=False,
-                                      layout=w.Layout(width="480px"))
-                        for a in "xyz"]
-        self._synced = None
-        for a, s in zip("xyz", self.sliders):
-            s.add_class(f"posekit-target-{a}")
-            s.observe(self._on_slider, names="value")
+        self._browser_value = {}  # slider model id -> (axis, the value the browser last held for it)
+        self._old_sliders = []  # replaced sets, oldest first
+        self._shown = None  # (joint, handle kind) the current sliders were made for; None: disabled
+        self._sliders_due = False  # a change to show once the drag ends
+        self.slider_generation = 0
+        self.slider_box = w.VBox([])
+        self.sliders = []
+        self._make_sliders(None)
         self.handle_choice = w.ToggleButtons(options=[("target", "target"), ("look-at", "look_at")], value="target",
                                              description="sliders move", style={"button_width": "70px"},
                                              layout=w.Layout(display="none"))
@@ -82,84 +84,80 @@ class TargetSliders:
             return "look_at", self.look_targets[name]
         return "target", self.targets.get(name, self.pose[self.skeleton.index(name)])
 
-    def _sync_sliders(self, recentre: bool = False):
-        """Show the selected joint's handle (:meth:`_handle`) on the sliders, within ``SLIDER_SPAN`` of it (the
-        range moves with a new selection, or when the point leaves it); with no selection the sliders are
-        disabled and show no number. Each slider's range and value go to the browser in one message; after a
-        new range, values the browser sends back that the slider held lately are echoes for ``ECHO_S`` seconds."""
-        active = self.selected is not None
-        for s in self.sliders:
-            s.disabled, s.readout = not active, active
-        self._show_handle_choice()
-        if not active:
-            self._synced = None
-            return
-        _, p = self._handle()
+    def _make_sliders(self, point):
+        """Put three new slider models in place of the current ones: centred on ``point`` (3,), or disabled and
+        showing no number when it is None. The replaced ones stay open for :attr:`KEEP_OLD` sets."""
+        import ipywidgets as w
+
         step = self.SLIDER_STEP
-        now = time.monotonic()
-        self._syncing = True
-        try:
-            for axis, (s, v) in enumerate(zip(self.sliders, p)):
-                before = (s.min, s.max, s.value)
-                with s.hold_sync():
-                    if recentre or not (s.min <= v <= s.max):
-                        # limits on the step grid, so that the browser's snapping to it does not move a value
-                        lo = float(np.floor((v - self.SLIDER_SPAN) / step) * step)
-                        hi = float(np.ceil((v + self.SLIDER_SPAN) / step) * step)
-                        if lo > s.max:
-                            s.max, s.min = hi, lo
-                        else:
-                            s.min, s.max = lo, hi
-                    s.value = float(np.clip(v, s.min, s.max))
-                self._remember(axis, before[2], now)
-                if (s.min, s.max) != before[:2]:  # a new range: the browser may send back a stale value
-                    self._ranges[axis] = [r for r in self._ranges[axis] if now - r[0] < self.ECHO_S]
-                    self._ranges[axis] += [(now, *before[:2]), (now, s.min, s.max)]
-        finally:
-            self._syncing = False
-        self._synced = np.array([s.value for s in self.sliders])
+        self.slider_generation += 1
+        new = []
+        for axis, a in enumerate("xyz"):
+            if point is None:
+                lo, hi, value = -step, step, 0.0
+            else:  # the value and the limits on the step grid: the browser's snap to it moves nothing
+                value = float(np.round(point[axis] / step) * step)
+                lo = float(np.floor((point[axis] - self.SLIDER_SPAN) / step) * step)
+                hi = float(np.ceil((point[axis] + self.SLIDER_SPAN) / step) * step)
+            s = w.FloatSlider(value=value, min=lo, max=hi, step=step, description=f"target {a}",
+                              continuous_update=True, readout_format=".3f", disabled=point is None,
+                              readout=point is not None, layout=w.Layout(width="480px"))
+            s.add_class(f"posekit-target-{a}")
+            s.add_class(f"posekit-sliders-{self.slider_generation}")
+            self._browser_value[s.model_id] = (axis, value)
+            s.observe(self._on_slider, names="value")
+            new.append(s)
+        if self.sliders:
+            self._old_sliders.append(self.sliders)
+        while len(self._old_sliders) > self.KEEP_OLD:
+            for s in self._old_sliders.pop(0):
+                self._browser_value.pop(s.model_id, None)
+                s.close()
+        self.sliders = new
+        self.slider_box.children = tuple(new)
 
-    def _remember(self, axis, value, now):
-        """Note that slider ``axis`` held ``value`` at ``now`` (only the last ``ECHO_S`` seconds are kept)."""
-        self._held_values[axis] = [(t, x) for t, x in self._held_values[axis] if now - t < self.ECHO_S]
-        self._held_values[axis].append((now, float(value)))
-
-    def _is_echo(self, axis, v, tol, now) -> bool:
-        """Whether ``v``, sent by the browser for slider ``axis``, is a stale value and not a move: within
-        ``ECHO_S`` of a new range, a value the slider held lately (up to that range: not a value the user moved
-        it to since), or an end of a recent range, as the browser may have clamped it into any recent range (the
-        browser can lag a selection behind)."""
-        recent = [(t, lo, hi) for t, lo, hi in self._ranges[axis] if now - t < self.ECHO_S]
-        if not recent:
-            return False
-        ranges, newest = [(lo, hi) for _, lo, hi in recent], max(t for t, _, _ in recent)
-        # only values held up to the newest range: the user's own moves since then are never echoes
-        held = [x for t, x in self._held_values[axis] if now - t < self.ECHO_S and t <= newest]
-        held += [end for r in ranges for end in r]
-        s = self.sliders[axis]
-        stale = {float(np.clip(np.clip(x, lo, hi), s.min, s.max)) for x in held for lo, hi in ranges}
-        return any(abs(v - x) <= tol for x in stale)
+    def _sync_sliders(self, recentre: bool = False):
+        """Show the selected joint's handle (:meth:`_handle`) on the sliders: new slider models when the joint,
+        the handle or its point changed otherwise than by these sliders (or ``recentre``); during a drag in 3D,
+        once the mouse is released. With no selection the sliders are disabled and show no number."""
+        self._show_handle_choice()
+        if self.selected is None:
+            if self._shown is not None:
+                self._shown = None
+                self._make_sliders(None)
+            return
+        kind, p = self._handle()
+        if getattr(self, "dragging", None) is not None and not recentre:
+            self._sliders_due = True  # a drag moves the handle many times a second: shown when it ends
+            return
+        self._sliders_due = False
+        tol = 0.5 * self.SLIDER_STEP + 1e-9
+        held = [self._browser_value.get(s.model_id, (0, np.nan))[1] for s in self.sliders]
+        if (recentre or self._shown != (self.selected, kind)
+                or not all(abs(h - v) <= tol for h, v in zip(held, p))):
+            self._shown = (self.selected, kind)
+            self._make_sliders(np.asarray(p, float))
 
     def _on_slider(self, change):
-        """A slider moved in the browser: move the handle along that axis only (the other coordinates stay the
-        handle's), unless the value is one the kernel set (an echo, or the browser's snap to the step grid)."""
-        if self._syncing or self.selected is None:
+        """A slider model's value changed in the browser: the steps from its previous value move the selected
+        joint's handle along that slider's axis (the other coordinates stay the handle's)."""
+        s = change["owner"]
+        known = self._browser_value.get(s.model_id)
+        if known is None:  # closed: too old
             return
-        axis = self.sliders.index(change["owner"])
-        v, tol = float(change["new"]), 0.5 * self.SLIDER_STEP + 1e-9
+        axis, before = known
+        v = float(change["new"])
+        self._browser_value[s.model_id] = (axis, v)
+        steps = int(np.round((v - before) / self.SLIDER_STEP))
+        if steps == 0 or self.selected is None:
+            return
         kind, p = self._handle()
-        if abs(v - p[axis]) <= tol or (self._synced is not None and abs(v - self._synced[axis]) <= tol):
-            return
-        now = time.monotonic()
-        if self._is_echo(axis, v, tol, now):  # a stale value sent back: put the slider back where the handle is
-            self._sync_sliders()
-            return
         p = np.array(p, dtype=float)
-        p[axis] = v
+        p[axis] += steps * self.SLIDER_STEP
         if kind == "look_at":
             self.move_look_target(self.selected, p)
         else:
             self.move_target(self.selected, p)
-        s = change["owner"]
-        if v <= s.min + tol or v >= s.max - tol:  # at an end: re-centre, so the next push goes further
+        tol = 0.5 * self.SLIDER_STEP + 1e-9
+        if s in self.sliders and (v <= s.min + tol or v >= s.max - tol):  # at an end: re-centre
             self._sync_sliders(recentre=True)

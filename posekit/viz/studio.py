@@ -8,7 +8,8 @@ dragging in 3D) with what an animator expects around it:
   check boxes: a solver a later lesson or a student registers appears without a change here; a summary
   table gives each one's worst effector error and solve time; while solvers load (or anything slow runs)
   the studio says it is busy;
-* **undo / redo** — every change is a step (a drag, or a slider moved without a second's pause, is one);
+* **undo / redo** — every change is a step (a drag, or a slider moved without a second's pause, is one); a step
+  brings back the views' cameras with the pose;
 * **setups** — save and load the effectors as JSON (:mod:`posekit.viz.setup_file`), from a path on the
   server or uploaded from the browser; a malformed file is reported and nothing is lost;
 * **export** — the chosen solver's pose as BVH (read back through :func:`posekit.io.bvh.read_bvh` to check it)
@@ -30,9 +31,10 @@ import numpy as np
 
 from ..ik.api import Effector, Pose
 from ..ik.registry import make_solver, solver_names
-from .compare import status_table, worst_errors
+from .compare import ignored_effectors, reached_mark, status_table, worst_errors
 from .effector_editor import EffectorEditor
 from .studio_export import StudioExport, link
+from .studio_messages import BUSY_SIGN, WRAP, StudioMessages
 from .studio_timeline import StudioTimeline
 from .setup_file import SetupError, parse_setup, save_setup
 from .viewer import show_widget
@@ -79,6 +81,9 @@ class PosingStudio(StudioExport, StudioTimeline):
         The current views and effector rows (rebuilt when the solvers change).
     history : list of list of dict
         Setups (:meth:`EffectorEditor.setup`), one per undo step; ``history[position]`` is the current one.
+    cameras : list of dict
+        Each step's cameras (solver name -> :meth:`~posekit.viz.SkeletonViewer.camera_state`): undo and redo put
+        the views back with the pose.
     keys : list of list of dict
         The timeline's key setups.
     frames : list of IKResult
@@ -103,13 +108,15 @@ class PosingStudio(StudioExport, StudioTimeline):
         self.checks = {n: w.Checkbox(value=False, description=n, indent=False, layout=w.Layout(width="175px"))
                        for n in self.available}
         self.choose = w.GridBox(list(self.checks.values()),
-                                layout=w.Layout(grid_template_columns="repeat(5, 175px)", width="900px"))
+                                layout=w.Layout(grid_template_columns="repeat(auto-fill, 175px)",
+                                                width="min(900px, 100%)"))
         self.compare_button = w.Button(description="compare", button_style="info",
                                        tooltip=f"pose with the ticked {MIN_SOLVERS}-{MAX_SOLVERS} solvers")
-        self.compare_button.on_click(lambda _: self._safely(lambda: self.set_solvers(self.chosen)))
+        self.compare_button.on_click(lambda _: self._safely(lambda: self.set_solvers(self.chosen), "solvers"))
         self.busy = w.HTML()
         self.summary = w.HTML()
-        self.message = w.HTML()
+        self.message = StudioMessages()
+        lines = self.message.lines
         self.undo_button = w.Button(description="undo", icon="undo", disabled=True, layout=w.Layout(width="90px"))
         self.redo_button = w.Button(description="redo", icon="repeat", disabled=True, layout=w.Layout(width="90px"))
         self.undo_button.on_click(lambda _: self.undo())
@@ -117,61 +124,68 @@ class PosingStudio(StudioExport, StudioTimeline):
         self.setup_path = w.Text(value="setup.json" if self.own_folder else str(self.export_dir / "setup.json"),
                                  description="setup file", layout=w.Layout(width="380px"))
         self.save_button = w.Button(description="save setup")
-        self.save_button.on_click(lambda _: self._safely(lambda: self.save(self.setup_file())))
+        self.save_button.on_click(lambda _: self._safely(lambda: self.save(self.setup_file()), "setup"))
         self.load_button = w.Button(description="load setup")
-        self.load_button.on_click(lambda _: self._safely(lambda: self.load(self.setup_file())))
-        self.upload = w.FileUpload(accept=".json,.bvh", multiple=False, description="upload setup / BVH")
+        self.load_button.on_click(lambda _: self._safely(lambda: self.load(self.setup_file()), "setup"))
+        self.upload = w.FileUpload(accept=".json,.bvh", multiple=False, description="upload setup / BVH",
+                                   layout=w.Layout(width="auto"))
         self.upload.observe(self._on_upload, names="value")
         self.export_solver = w.Dropdown(description="export", layout=w.Layout(width="260px"))
         bvh = w.Button(description="pose as BVH")
-        bvh.on_click(lambda _: self._safely(lambda: self.export_bvh()))
+        bvh.on_click(lambda _: self._safely(lambda: self.export_bvh(), "export"))
         png = w.Button(description="views as PNG")
-        png.on_click(lambda _: self._safely(lambda: self.export_png()))
+        png.on_click(lambda _: self._safely(lambda: self.export_png(), "export"))
         self.inbetweens = w.BoundedIntText(value=10, min=0, max=120, description="in-betweens",
                                            layout=w.Layout(width="180px"))
         self.ease = w.Dropdown(options=["smooth", "linear"], value="smooth", description="ease",
                                layout=w.Layout(width="180px"))
         add_key = w.Button(description="add key", icon="key")
-        add_key.on_click(lambda _: self._safely(self.add_key))
+        add_key.on_click(lambda _: self._safely(self.add_key, "timeline"))
         clear = w.Button(description="clear keys")
-        clear.on_click(lambda _: self._safely(self.clear_keys))
+        clear.on_click(lambda _: self._safely(self.clear_keys, "timeline"))
         build = w.Button(description="build animation", button_style="info")
-        build.on_click(lambda _: self._safely(self.build_animation))
+        build.on_click(lambda _: self._safely(self.build_animation, "timeline"))
         anim = w.Button(description="animation as BVH")
-        anim.on_click(lambda _: self._safely(lambda: self.export_animation()))
+        anim.on_click(lambda _: self._safely(lambda: self.export_animation(), "timeline"))
         self.keys_label = w.HTML("no keys yet")
         self.timeline_box = w.VBox([])
         self.views_box = w.VBox([])
+        row = lambda *ws: w.HBox(list(ws), layout=w.Layout(**WRAP))  # noqa: E731
         self.widget = w.VBox([
             w.HTML(f"<b>Solvers</b> — tick {MIN_SOLVERS} to {MAX_SOLVERS}, then compare"),
-            w.HBox([self.choose, w.VBox([self.compare_button, self.busy])]),
+            row(self.choose, w.VBox([self.compare_button, self.busy, lines["solvers"]])),
             self.views_box,
             w.HTML("<b>All solvers</b>"), self.summary,
-            w.HBox([self.undo_button, self.redo_button, self.setup_path, self.save_button, self.load_button,
-                    self.upload]),
-            w.HBox([self.export_solver, bvh, png]),
+            row(self.undo_button, self.redo_button, self.setup_path, self.save_button, self.load_button, self.upload,
+                lines["setup"]),
+            row(self.export_solver, bvh, png, lines["export"]),
             w.HTML("<b>Timeline</b> — key setups; in-betweens posed by the export solver"),
-            w.HBox([add_key, clear, self.inbetweens, self.ease, build, anim]), self.keys_label, self.timeline_box,
-            self.message])
+            row(add_key, clear, self.inbetweens, self.ease, build, anim, lines["timeline"]), self.keys_label,
+            self.timeline_box], layout=w.Layout(max_width="100%"))
         for widget, name in ((self.summary, "summary"), (self.choose, "solver-choice"), (self.busy, "busy"),
-                             (self.compare_button, "compare"), (self.views_box, "views"), (self.message, "message")):
+                             (self.compare_button, "compare"), (self.views_box, "views")):
             widget.add_class(f"posekit-{name}")  # for a browser test (and a stylesheet)
         self.editor = None
         self.set_solvers(solvers, effectors=effectors)
         self.history, self.position = [self.editor.setup()], 0
+        self.cameras = [self._cameras()]
 
     def _ipython_display_(self):
         show_widget(self.widget, f"[posing studio: {', '.join(self.solvers)} side by side on {len(self.editor.rows)} "
                                  "effectors, with undo, setups, export and a timeline. It runs in a live Jupyter "
                                  "kernel: run the notebook, or serve it with make studio]")
 
-    def _safely(self, action):
-        """Run a button's action with the studio marked busy; a ValueError (bad input) becomes the message,
-        never a traceback."""
+    def _safely(self, action, row: str):
+        """Run a button's action with the studio marked busy; what it says, or a ValueError (bad input) as an
+        error, goes on the line of its ``row`` of controls (:class:`StudioMessages`), never a traceback; an earlier
+        message, anywhere, is cleared."""
+        self.message.row = row
+        self.message.value = ""
         try:
             with self.working():
                 action()
         except (ValueError, OSError) as err:
+            self.message.row = row
             self.message.value = _error(str(err))
 
     @property
@@ -182,7 +196,7 @@ class PosingStudio(StudioExport, StudioTimeline):
     @contextmanager
     def working(self, what: str = "working"):
         """Mark the studio busy (a note beside *compare*, the button disabled) while the block runs."""
-        self.busy.value = f"<span style='color:#b9770e'>⏳ {html.escape(what)}…</span>"
+        self.busy.value = f"<span style='color:#b9770e'>{BUSY_SIGN}{html.escape(what)}…</span>"
         self.compare_button.disabled = True
         try:
             yield
@@ -221,6 +235,7 @@ class PosingStudio(StudioExport, StudioTimeline):
             editor.updates += self.editor.updates  # the summary's update count goes on across solver changes
             editor.set_setup(setup)
         editor.on_change(self._on_change)
+        editor.on_before_change(self._before_change)
         if self.editor is not None and self.editor.first.selected is not None:
             editor.first.select(self.editor.first.selected)  # keep the joint the sliders move
         self.editor = editor
@@ -253,15 +268,21 @@ class PosingStudio(StudioExport, StudioTimeline):
 
     def _refresh(self):
         rows = []
-        for name in self.editor.solvers:
+        effectors = self.editor.effectors
+        for name, solver in self.editor.solvers.items():
             res = self.editor.results.get(name)
-            if res is None:
+            ignored = ignored_effectors(solver, effectors)
+            if res is None and effectors and ignored:
+                rows.append((html.escape(name), "nothing to solve · <span style='color:#b9770e'>"
+                             f"{html.escape(', '.join(dict.fromkeys(e.kind.replace('_', '-') for e in ignored)))} "
+                             "ignored</span>"))
+            elif res is None:
                 rows.append((html.escape(name), "no effectors"))
             elif isinstance(res, Exception):
                 rows.append((html.escape(name), _error(f"failed: {res}")))
             else:
-                mark = "✓" if res.converged else "✗"
-                rows.append((html.escape(name), f"{mark} {worst_errors(res)}, {self.editor.times.get(name, 0):.2f} ms"))
+                rows.append((html.escape(name), f"{reached_mark(res, ignored)}: {worst_errors(res)}, "
+                                                f"{self.editor.times.get(name, 0):.2f} ms"))
         self.undo_button.disabled = getattr(self, "position", 0) == 0
         self.redo_button.disabled = getattr(self, "position", 0) >= len(getattr(self, "history", [None])) - 1
         # the update counter last: when the browser shows it, every view and button of this update is there
@@ -274,17 +295,32 @@ class PosingStudio(StudioExport, StudioTimeline):
             same = what == "move" and self._last_move[0] == index and now - self._last_move[1] < COALESCE_S
             if same and self.position == len(self.history) - 1 and self.position > 0:
                 self.history[self.position] = self.editor.setup()
+                self.cameras[self.position] = self._cameras()
             else:
                 del self.history[self.position + 1:]
+                del self.cameras[self.position + 1:]
                 self.history.append(self.editor.setup())
+                self.cameras.append(self._cameras())
                 self.position += 1
             self._last_move = (index, now) if what == "move" else (None, -1e9)
         self._refresh()
 
-    def _restore(self, setup):
+    def _before_change(self, what, index):
+        """The current step's cameras as the views show them just before a change (an orbit since is kept)."""
+        if not self._restoring and hasattr(self, "cameras"):
+            self.cameras[self.position] = self._cameras()
+
+    def _cameras(self) -> dict:
+        """Each view's camera (:meth:`~posekit.viz.SkeletonViewer.camera_state`), by solver name."""
+        return {n: v.camera_state() for n, v in self.editor.viewers.items()}
+
+    def _restore(self, setup, cameras=None):
         self._restoring = True
         try:
             self.editor.set_setup(setup)
+            for name, state in (cameras or {}).items():  # each view as it was at that step (solvers shown then)
+                if name in self.editor.viewers:
+                    self.editor.viewers[name].set_camera_state(state)
         finally:
             self._restoring = False
         self._last_move = (None, -1e9)
@@ -294,13 +330,13 @@ class PosingStudio(StudioExport, StudioTimeline):
         """Go back one step (no-op at the first)."""
         if self.position > 0:
             self.position -= 1
-            self._restore(self.history[self.position])
+            self._restore(self.history[self.position], self.cameras[self.position])
 
     def redo(self):
         """Redo the step undone last (no-op when there is none)."""
         if self.position < len(self.history) - 1:
             self.position += 1
-            self._restore(self.history[self.position])
+            self._restore(self.history[self.position], self.cameras[self.position])
 
     # ------------------------------------------------------------------ setups
     def setup_file(self) -> Path:
@@ -318,6 +354,7 @@ class PosingStudio(StudioExport, StudioTimeline):
     def save(self, path) -> Path:
         """Write the effectors and the solvers as a setup JSON file; the message links a download."""
         path = save_setup(path, self.skeleton, self.editor.setup(), self.solvers)
+        self.message.row = "setup"
         self.message.value = f"saved {html.escape(str(path))} ({len(self.editor.rows)} effectors) — {link(path, 'application/json')}"
         return path
 
@@ -345,12 +382,15 @@ class PosingStudio(StudioExport, StudioTimeline):
             except ValueError:
                 self.editor.set_setup(before)
                 raise
+        self.message.row = "setup"
         self.message.value = f"loaded {html.escape(source)}: {len(doc['effectors'])} effectors"
 
     def _on_upload(self, change):
         files = change["new"]
         if not files:
             return
+        self.message.row = "setup"
+        self.message.value = ""
         f = files[0]
         name, content = f["name"], bytes(f["content"])
         try:
@@ -366,4 +406,5 @@ class PosingStudio(StudioExport, StudioTimeline):
                     raise SetupError(f"{name}: not a text file (expected setup JSON)") from None
                 self.load_text(text, source=name)
         except ValueError as err:
+            self.message.row = "setup"
             self.message.value = _error(str(err))

@@ -49,6 +49,7 @@ class StudioExport:
         write_poses_bvh(path, self.skeleton, [pose], self.start)
         back = read_bvh(path).global_positions()[0]
         diff = np.abs(back - pose.global_pos).max() * 1000
+        self.message.row = "export"
         self.message.value = (f"wrote {html.escape(str(path))}: {html.escape(name)}'s pose, read back within "
                               f"{diff:.3f} mm — {link(path, 'text/plain')}")
         return path
@@ -76,6 +77,7 @@ class StudioExport:
         path = Path(path or self.export_dir / "views.png")
         path.parent.mkdir(parents=True, exist_ok=True)
         fig.savefig(path, dpi=100)
+        self.message.row = "export"
         self.message.value = f"wrote {html.escape(str(path))} — {link(path, 'image/png')}"
         return path
 
@@ -96,4 +98,5 @@ class StudioExport:
         self.editor.start = self.start
         self.editor.solve()
         self._refresh()
+        self.message.row = "setup"  # a start pose comes through the upload box
         self.message.value = f"start pose: frame {frame} of {html.escape(str(path))}"

@@ -60,6 +60,7 @@ class StudioTimeline:
         v.player(np.stack([r.pose.global_pos for r in self.frames]))
         self.timeline_viewer = v
         self.timeline_box.children = (v.widget,)
+        self.message.row = "timeline"
         self.message.value = f"{len(self.frames)} frames posed by {html.escape(name)}"
         return self.frames
 
@@ -76,6 +77,7 @@ class StudioTimeline:
         write_poses_bvh(path, self.skeleton, poses, self.start, frame_time)
         back = read_bvh(path)
         diff = np.abs(back.global_positions() - np.stack([p.global_pos for p in poses])).max() * 1000
+        self.message.row = "timeline"
         self.message.value = (f"wrote {html.escape(str(path))}: {back.n_frames} frames at {1 / frame_time:.0f} fps, "
                               f"read back within {diff:.3f} mm — {link(path, 'text/plain')}")
         return path

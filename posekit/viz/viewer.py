@@ -13,17 +13,20 @@ rebuilding the scene, so playback and live solving stay smooth. The camera keeps
 fitted to the pose (or to a whole clip in :meth:`SkeletonViewer.player`), and follows a pose that leaves
 the framed region.
 
-Interaction: orbit with the mouse (drag to rotate, wheel to zoom, right-drag to pan);
+Interaction: orbit with the mouse (drag to rotate, wheel to zoom, right-drag to pan; **reset view** frames the
+pose from the front again);
 **double-click** a joint to select it (a single-click picker would also fire at the end of every
 orbit drag); the X/Y/Z sliders then move that joint's target, in 1 mm steps within
 :attr:`SkeletonViewer.SLIDER_SPAN` of it (a slider pushed to an end of its range re-centres on the new
 value, so any point can be reached). A joint with both a target and a look-at target gets a choice of
-which one the sliders move. Selecting never moves anything: the sliders' new ranges and values reach the
-browser in one message each, and a value the browser sends back that the kernel set itself (an echo) is
-not taken as a move. Helper joints that are not part of the body (Bandai's ``joint_Root``, the world
-point under the feet) cannot be selected. With **drag in 3D** on, orbiting stops and pressing the mouse
-on a target marker or a joint and moving it drags that target across the plane through it that faces
-the camera. ``on_target_change`` callbacks (an IK solver, in later lessons) receive
+which one the sliders move. Selecting never moves anything, and a key press moves the joint selected when it
+arrives by exactly its steps, however soon after a selection: the kernel never changes a slider the browser
+shows, it replaces it (:mod:`posekit.viz.sliders`). Helper joints that are not part of the body (Bandai's
+``joint_Root``, the world point under the feet) cannot be selected, nor joints a view does not offer
+(``selectable``: a panel offers the joints its solvers were given). With **drag in 3D** on, orbiting stops and
+pressing the mouse on a target marker or a joint and moving it drags that target across the plane through it that faces
+the camera (the camera waits for the mouse to be released before it takes a far target in, so the drag
+keeps its scale). ``on_target_change`` callbacks (an IK solver, in later lessons) receive
 ``(joint_name, position)``; targets are always stored under the joint's own name, whatever name, role
 or index the caller used.
 
@@ -53,7 +56,7 @@ LOOK_COLOUR = "#e67e22"
 """Look-at targets and their rays: orange."""
 SELECTED_COLOUR = "#f1c40f"
 """The selected joint: drawn larger, in yellow."""
-TRIAD_LENGTH = 0.12
+TRIAD_LENGTH = 0.2
 """Length (metres) of each axis of a rotation target's triad."""
 
 
@@ -118,6 +121,9 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         Smooth the edges (multisampling). Default: on, unless the environment variable ``POSEKIT_ANTIALIAS`` is
         ``0`` (:func:`antialias_default`) — for browsers that draw WebGL in software (no GPU), where it costs the
         most.
+    selectable : sequence of str or int, optional
+        The joints offered (the *selected* list, double-click, drag in 3D): names, roles or indices; default every
+        body joint. A panel whose solvers take only some joints offers only those (lesson 02: the rig's handles).
 
     Attributes
     ----------
@@ -134,7 +140,8 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
 
     def __init__(self, skeleton: Skeleton, pose=None, ghost=None, targets=None, width: int = 560,
                  height: int = 420, joint_radius: float = 0.025, controls: bool = True,
-                 background: str = "#f7f7f2", floor: bool = True, follow: bool = True, antialias: bool | None = None):
+                 background: str = "#f7f7f2", floor: bool = True, follow: bool = True, antialias: bool | None = None,
+                 selectable=None):
         import ipywidgets as w
         import pythreejs as three
 
@@ -151,7 +158,8 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         self._select_callbacks, self._target_callbacks, self._look_callbacks = [], [], []
         self._init_drag()
         self._held, self._status_due = False, False
-        self.body = [int(j) for j in body_joints(skeleton)]  # what can be selected (not a helper root)
+        self.body = [int(j) for j in body_joints(skeleton)]  # the body (not a helper root)
+        self.selectable = self.body if selectable is None else self._selectable(selectable)  # what can be selected
 
         # bones, joints (the selected one larger and yellow), targets, rays and triads: one position array
         self._figure = Figure(skeleton, joint_radius, 0.7 * joint_radius, "#2e86c1", SELECTED_COLOUR, TARGET_COLOUR,
@@ -194,13 +202,16 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
 
         self.status = w.HTML(value="double-click a joint to select it")
         # "" stands for no selection: a Dropdown whose value is None shows a blank box
-        self.joint_select = w.Dropdown(options=[("(none)", "")] + [(skeleton.names[j],) * 2 for j in self.body],
+        self.joint_select = w.Dropdown(options=[("(none)", "")] + [(skeleton.names[j],) * 2 for j in self.selectable],
                                        value="", description="selected", layout=w.Layout(width="230px"))
         self.joint_select.observe(lambda ch: self.select(ch["new"] or None), names="value")
         self.drag_mode = self._drag_toggle()
+        self.reset_button = w.Button(description="reset view", icon="home", layout=w.Layout(width="110px"),
+                                     tooltip="frame the pose again, seen from the front")
+        self.reset_button.on_click(lambda _: self.reset_view())
         self._init_sliders()
-        self.controls = w.VBox([w.HBox([self.joint_select, self.drag_mode]), self.handle_choice, *self.sliders,
-                                self.status])
+        self.controls = w.VBox([w.HBox([self.joint_select, self.drag_mode, self.reset_button]), self.handle_choice,
+                                self.slider_box, self.status])
         self.controls.layout.display = None if controls else "none"
         self._extra = w.VBox([])
         self.widget = w.VBox([self.renderer, self.controls, self._extra])
@@ -330,6 +341,8 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         name = None if joint is None else self.skeleton.names[self.skeleton.index(joint)]
         if name is not None and self.skeleton.index(name) not in self.body:
             raise ValueError(f"{name} is a helper joint, not part of the body: it cannot be selected")
+        if name is not None and self.skeleton.index(name) not in self.selectable:
+            raise ValueError(f"{name} is not offered in this view: choose one of {self._offered()}")
         self.selected = name
         self._show_handle_choice()
         if self.joint_select.value != (name or ""):
@@ -341,16 +354,46 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         for cb in self._select_callbacks:
             cb(name)
 
+    def _selectable(self, joints) -> list:
+        """Body joint indices of ``joints`` (names, roles or indices), in skeleton order."""
+        wanted = {int(self.skeleton.index(j)) for j in joints}
+        helpers = [self.skeleton.names[j] for j in wanted if j not in self.body]
+        if helpers:
+            raise ValueError(f"selectable: {', '.join(helpers)} not part of the body (helper joints)")
+        return [j for j in self.body if j in wanted]
+
+    def _offered(self) -> str:
+        return ", ".join(self.skeleton.names[j] for j in self.selectable)
+
+    def _refuse(self, name):
+        """Say in the status line that ``name`` (clicked or pressed on) is not offered here."""
+        self.status.value = (f"<span style='color:#b03a2e'>{html.escape(name)} is not offered here (no solver of this "
+                             f"view takes it): choose {html.escape(self._offered())}</span>")
+
     def _nearest_joint(self, p):
         """The body joint nearest to point ``p`` (3,), world frame, metres."""
         body = self.pose[self.body]
         return self.skeleton.names[self.body[int(np.argmin(np.linalg.norm(body - p, axis=1)))]]
 
+    PICK_RESET = [0.0, -1000.0, 0.0]
+    """Where the kernel puts the picker's point after each double-click (never a point of the scene): the browser
+    reports a point only when it changes, so a second double-click on the same pixel, after the dropdown chose
+    another joint, would otherwise say nothing."""
+
     def _on_pick(self, change):
         p = np.asarray(change["new"], dtype=float)
-        if p.shape != (3,) or not np.all(np.isfinite(p)) or self.picker.distance is None:
-            return  # the double-click hit nothing
-        self.select(self._nearest_joint(p + self._offset))  # picked point is in scene coordinates
+        if list(change["new"]) == self.PICK_RESET:
+            return  # the kernel's own reset
+        try:
+            if p.shape != (3,) or not np.all(np.isfinite(p)) or self.picker.distance is None:
+                return  # the double-click hit nothing
+            name = self._nearest_joint(p + self._offset)  # picked point is in scene coordinates
+            if self.skeleton.index(name) not in self.selectable:
+                self._refuse(name)
+                return
+            self.select(name)
+        finally:
+            self.picker.point = list(self.PICK_RESET)
 
     def move_target(self, joint, position):
         """Set one joint's target (creating it if needed) and notify ``on_target_change`` callbacks."""

@@ -94,3 +94,95 @@ SENT_LOG = r"""(() => {
 })();"""
 """An init script for a page (``page.add_init_script``): ``window.__posekit_sent`` lists every state update the
 page sends its kernel (the trait names; ``["open", model]`` for a model the page creates)."""
+
+
+_SELECT_ON_PRESS = """(scope, joint) => {
+  // the next key press first chooses `joint` in the view's *selected* list (a capturing listener runs before the
+  // slider's own), so the press leaves for the kernel right behind the selection, on the slider still shown
+  window.__press = null;
+  const focused = document.activeElement;
+  document.addEventListener('keydown', () => {
+    const list = [...scope.querySelectorAll('.widget-dropdown')]
+      .find(d => d.textContent.includes('selected')).querySelector('select');
+    list.value = joint;
+    list.dispatchEvent(new Event('change', {bubbles: true}));  // the list's view sends the selection now
+    window.__press = {selected_at: performance.now(), on_old: focused.isConnected && focused.classList.contains('noUi-handle')};
+  }, {capture: true, once: true});
+  // on the slider, after its own handler (listeners of one element run in the order they were added): the press
+  // has been applied when this runs
+  focused.addEventListener('keydown', () => { window.__press.pressed_at = performance.now(); }, {once: true});
+}"""
+
+
+def status_rows(scope):
+    """A view's status table under its sliders (the first in ``scope``): row label -> (x, y, z) in metres; the
+    first row is the selected joint."""
+    from playwright.sync_api import Page
+
+    page = scope if isinstance(scope, Page) else scope.page
+    table = scope.locator(".widget-html-content", has=page.locator("th", has_text="x m")).first
+    rows = {}
+    for tr in table.locator("tr").all()[1:]:
+        label = tr.locator("th").inner_text().strip()
+        rows[label] = tuple(float(t) for t in tr.locator("td").all_inner_texts()[:3])
+    return rows
+
+
+def target_mm(scope, joint):
+    """``joint``'s target as the status table shows it, in whole millimetres, once it is selected (else None)."""
+    rows = status_rows(scope)
+    if joint not in rows or "target" not in rows:
+        return None
+    return tuple(int(round(1000 * c)) for c in rows["target"])
+
+
+def presses_right_after_selections(page, scope, joints, presses: int = 20):
+    """Issue 44's race, in the view whose *selected* list and Y slider are in ``scope`` (a locator): ``presses``
+    times, choose the next of ``joints`` (each with a target) and press ArrowRight on the Y slider in the same turn
+    of the page's event loop (the press right behind the selection, on the slider still shown), while a second
+    process keeps a core busy. Every press must move the joint chosen last up by exactly one step (1 mm) and no
+    other target may move; the test fails at the first that does not. Returns ``(gaps_ms, on_old)``: each press's
+    time after its selection, and how many went to the previous joint's slider."""
+    import subprocess
+    import sys
+
+    joints_list = scope.locator(".widget-dropdown", has_text="selected").first.locator("select")
+    where = {}
+    for j in joints:  # each joint's target, read from the page
+        joints_list.select_option(j)
+        where[j] = wait_for(lambda j=j: target_mm(scope, j), 30, f"{j}'s target in the status table")
+    expected, gaps, on_old = dict(where), [], 0
+    root = scope.element_handle()
+    busy = subprocess.Popen([sys.executable, "-c", "while True: pass"])
+    try:
+        for i in range(presses):
+            joint = joints[i % len(joints)]
+            scope.locator(".posekit-target-y .noUi-handle").first.focus()
+            page.evaluate("([scope, joint]) => (" + _SELECT_ON_PRESS + ")(scope, joint)", [root, joint])
+            page.keyboard.press("ArrowRight")
+            press = wait_for(lambda: page.evaluate("() => window.__press?.pressed_at && window.__press"), 10,
+                             "the key press")
+            gaps.append(press["pressed_at"] - press["selected_at"])
+            on_old += bool(press["on_old"])
+            x, y, z = expected[joint]
+            expected[joint] = (x, y + 1, z)
+            shown = []
+
+            def moved():
+                shown[:] = [status_rows(scope)]
+                return target_mm(scope, joint) == expected[joint]
+
+            try:
+                wait_for(moved, 30, "the target to move", every=0.2)
+            except pytest.fail.Exception:
+                pytest.fail(f"press {i + 1}: {joint}'s target did not move up one step, to {expected[joint]} mm; the "
+                            f"view's table shows {shown}")
+    finally:
+        busy.kill()
+        busy.wait()
+    for j in joints:  # every target moved by its own presses only
+        joints_list.select_option(j)
+        wait_for(lambda j=j: target_mm(scope, j) == expected[j], 30, f"{j}'s target at {expected[j]} mm")
+    counts = [sum(1 for i in range(presses) if joints[i % len(joints)] == j) for j in joints]
+    assert [expected[j][1] - where[j][1] for j in joints] == counts
+    return gaps, on_old

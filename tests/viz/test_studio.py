@@ -152,7 +152,7 @@ def test_studio_setup_round_trip_and_bad_files(studio, tmp_path):
         assert ed.setup() == before, name  # nothing lost
     # the button path shows the message instead of raising
     studio.setup_path.value = str(tmp_path / "broken.json")
-    studio._safely(lambda: studio.load(studio.setup_path.value))
+    studio._safely(lambda: studio.load(studio.setup_path.value), "setup")
     assert "line 3, column 2" in studio.message.value and ed.setup() == before
     # an upload (bytes from the browser) goes the same way
     studio._on_upload({"new": ({"name": "x.json", "content": memoryview(b"\xff\xfe")},)})
@@ -409,3 +409,72 @@ def test_make_lab_and_make_studio_pass_the_websocket_setting():
     studio = [line for line in lines if "voila studio.ipynb" in line]
     assert len(lab) == 1 and server_flags("lab")[0] in lab[0].split(), lab
     assert len(studio) == 1 and server_flags("voila")[0] in studio[0].split(), studio
+
+
+def test_the_summary_names_the_effectors_a_solver_ignored(bandai, tmp_path):
+    """Issue 44: with a look-at and a rotation effector, FABRIK (positions only) reaches its five targets; the
+    "All solvers" summary says so as its view does ("5 of 7 reached · rotation, look-at ignored"), never a plain
+    ✓."""
+    import re
+
+    from posekit.viz import PosingStudio
+
+    m, cases = bandai
+    s = m.skeleton
+    studio = PosingStudio(s, cases.pose(0), ["fabrik", "dls"], effector_set(s, "5", cases.target_pos[0]),
+                          export_dir=tmp_path)
+    studio.editor.add("Chest", "rotation")
+    studio.editor.add("Neck", "look_at")
+    rows = dict(re.findall(r"<td[^>]*>([^<]+)</td><td[^>]*>(.*?)</td></tr>", studio.summary.value))
+    assert studio.editor.results["fabrik"].converged
+    assert "5 of 7 reached" in rows["fabrik"] and "rotation, look-at ignored" in rows["fabrik"], rows["fabrik"]
+    view = studio.editor.labels["fabrik"].value
+    assert "5 of 7 reached" in view and "rotation, look-at ignored" in view
+    assert "ignored" not in rows["dls"], rows["dls"]  # DLS honours every kind
+
+
+def test_a_message_shows_beside_its_control_and_clears_at_the_next_success(studio, tmp_path):
+    """Issue 44: ticking seven solvers and pressing *compare* (lesson 06's own words) is refused on the line beside
+    *compare*, not at the page's foot; the next action that succeeds clears it and says its own on its row; the
+    busy sign is drawn by CSS, not an emoji a browser without an emoji font shows as a box."""
+    from posekit.viz.studio import BUSY_SIGN
+
+    lines = studio.message.lines
+    ticked = [c for c in studio.checks.values() if not c.value][:5]
+    for c in ticked:
+        c.value = True
+    try:
+        studio.compare_button.click()
+        assert "choose 2 to 4 solvers" in lines["solvers"].value
+        assert not any(lines[r].value for r in ("setup", "export", "timeline"))
+        row = next(b for b in studio.widget.children if lines["solvers"] in getattr(b, "children", ())
+                   or any(lines["solvers"] in getattr(c, "children", ()) for c in getattr(b, "children", ())))
+        assert studio.compare_button in row.children[1].children  # the same box as the button
+    finally:
+        for c in ticked:
+            c.value = False
+    studio.setup_path.value = str(tmp_path / "s.json")
+    studio.save_button.click()
+    assert lines["solvers"].value == "" and "saved" in lines["setup"].value
+    assert set(lines) == {"solvers", "setup", "export", "timeline"}
+    with studio.working():
+        # text a Debian browser's fonts hold (DejaVu: "…"), no emoji (U+23F3 and above)
+        assert "posekit-spin" in studio.busy.value and all(ord(ch) < 0x2300 for ch in studio.busy.value)
+    assert "⏳" not in BUSY_SIGN
+
+
+def test_undo_brings_back_the_camera_with_the_pose(studio):
+    """Issue 44: a target moved far widens the camera; undo puts the pose *and* every view's camera back, redo the
+    widened one."""
+    ed = studio.editor
+    before = {n: list(v.camera.position) for n, v in ed.viewers.items()}
+    ed.move_target(0, ed.rows[0]["target"] + [0.0, 3.0, 0.0])
+    after = {n: list(v.camera.position) for n, v in ed.viewers.items()}
+    assert all(np.linalg.norm(after[n]) > np.linalg.norm(before[n]) + 0.5 for n in before), (before, after)
+    studio.undo()
+    for n, v in studio.editor.viewers.items():
+        np.testing.assert_allclose(v.camera.position, before[n], err_msg=n)
+    studio.redo()
+    for n, v in studio.editor.viewers.items():
+        np.testing.assert_allclose(v.camera.position, after[n], err_msg=n)
+    studio.undo()

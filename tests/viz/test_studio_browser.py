@@ -17,7 +17,8 @@ import time
 import numpy as np
 import pytest
 
-from tests.viz.browser_helpers import BACKGROUND, SENT_LOG, pixels as _pixels, press_in_3d, selected_joint, wait_for
+from tests.viz.browser_helpers import (BACKGROUND, SENT_LOG, pixels as _pixels, press_in_3d,
+                                      presses_right_after_selections, selected_joint, wait_for)
 from posekit.bench.studio import (CHROMIUM, blank_tab, choose_solvers, launch_chromium, open_studio, rapid_updates,
                                   serve_voila, update_number)
 
@@ -87,6 +88,13 @@ def test_studio_loads_and_every_view_shows_a_skeleton(page):
         assert (np.abs(img - BACKGROUND).sum(-1) > 60).mean() > 0.002
     texts = _texts(page)
     assert len(texts) == 4 and all("worst effector" in t and "ms" in t for t in texts), texts
+    # issue 44: the left hand, selected as the app opens, is yellow from the first display (it was blue)
+    def yellow():
+        im = _pixels(canvases[0])
+        r, g, b = im[..., 0], im[..., 1], im[..., 2]
+        return ((r > 180) & (g > 120) & (g < 215) & (b < 90)).sum() > 3
+
+    wait_for(yellow, 30, "the selected joint's yellow marker in the first view")
     summary = page.locator(".posekit-summary").inner_text()
     assert all(n in summary for n in ("fabrik", "dls", "protores+dls", "latent-opt+dls")), summary
 
@@ -148,6 +156,44 @@ def test_a_fresh_studio_has_no_history_and_selecting_moves_nothing(page):
     assert "target" in _status_rows(page)  # the left hand (selected last) has its target, where it was
 
 
+RACE_JOINTS = ("Hand_R", "Head", "Foot_L", "Hand_L")
+"""Joints with a position target in the studio's set-up (hands, feet, head): a press moves their target only."""
+
+def test_a_press_right_after_a_selection_moves_the_new_joint_by_one_step(page):
+    """Issue 44: choose a joint and press the Y slider's arrow key within 50 ms (the press handled right behind the
+    selection, in the same turn of the page's event loop), while the slider on the page is still the previous
+    joint's, 20 times over four joints, with a second process keeping a core busy: every press moves the joint
+    chosen last by exactly one step (1 mm up), and no other target moves (the old code applied the previous joint's
+    value plus a step to the new joint, or took the press for an echo and dropped it)."""
+    gaps, on_old = presses_right_after_selections(page, page.locator(VIEWS), RACE_JOINTS)
+    print(f"\npresses {max(gaps):.0f} ms or less after the selection; {on_old} of 20 on the previous joint's slider")
+    assert max(gaps) < 50, gaps
+    assert on_old >= 1, "no press reached the previous joint's slider: the test did not race"
+
+
+def test_reset_view_brings_an_orbited_view_back(page, server):
+    """Issue 44: orbit the first view with the mouse, press *reset view*: the view shows what it showed after an
+    earlier reset (the pose framed from the front), not the orbited picture."""
+    first = _canvases(page)[0]
+    reset = page.locator(VIEWS).get_by_role("button", name="reset view")
+    reset.click()
+    framed = wait_for(lambda: (lambda a: a if (np.abs(a - _pixels(first)).sum(-1) > 60).mean() < 0.001 else None)(
+        _pixels(first)), 30, "the view to stand still after a reset")
+    first.scroll_into_view_if_needed()
+    box = first.bounding_box()
+    cx, cy = box["x"] + box["width"] / 2, box["y"] + box["height"] * 0.8
+    page.mouse.move(cx, cy)
+    page.mouse.down()
+    page.mouse.move(cx + 120, cy - 30, steps=10)
+    page.mouse.up()
+    wait_for(lambda: (np.abs(_pixels(first) - framed).sum(-1) > 60).mean() > 0.01, 30, "the view to orbit")
+    page.screenshot(path=str(server.folder / "studio_orbited.png"))
+    reset.click()
+    wait_for(lambda: (np.abs(_pixels(first) - framed).sum(-1) > 60).mean() < 0.002, 30,
+             "the view to show the framed picture again")
+    page.screenshot(path=str(server.folder / "studio_reset.png"))
+
+
 def _drag_in_3d(page, canvas, at, by):
     """Switch *drag in 3D* on, press at pixel ``at`` (x, y) of ``canvas`` (:func:`press_in_3d`) and move the mouse
     ``by`` (dx, dy) pixels."""
@@ -185,7 +231,7 @@ def test_a_look_at_marker_drags_its_own_target(page, server):
     """Issue 27: the head holds a position and a look-at effector. Pressing on the orange marker (drag in 3D)
     moves the point it looks at and leaves its position target; the *sliders move* choice appears and, on
     look-at, the X slider moves the look-at target too."""
-    _add(page, "Head", "look_at")
+    _add(page, "Head", "look-at")
     _joint_list(page).select_option("Head")
     wait_for(lambda: "looks at" in _status_rows(page), 30, "the head's look-at target in the status table")
     rows0 = _status_rows(page)
@@ -247,7 +293,7 @@ def test_rotation_and_look_at_effectors_change_the_pose(page):
     wait_for(lambda: _all_changed(before, [_pixels(c) for c in _canvases(page)[1:]]), 30, "their views to turn")
     assert all("°" in t for t in _texts(page)[1:])  # an angular error is reported
     # a look-at on the neck, its target moved with the sliders (the first view's joint list selects it)
-    _add(page, "Neck", "look_at")
+    _add(page, "Neck", "look-at")
     page.locator(VIEWS).locator(".widget-dropdown", has_text="selected").first.locator("select").select_option("Neck")
     before = [_pixels(c) for c in _canvases(page)[1:]]
     texts = _texts(page)[1:]
@@ -267,7 +313,7 @@ def test_bvh_export_downloads_a_file_posekit_reads(page, tmp_path):
 
     page.locator(".widget-dropdown", has_text="export").locator("select").select_option("dls")
     page.get_by_role("button", name="pose as BVH").click()
-    message = page.locator(".posekit-message")
+    message = page.locator(".posekit-message-export")
     wait_for(lambda: "read back within 0.000 mm" in message.inner_text(), 60, "the export message")
     with page.expect_download(timeout=30_000) as dl:
         message.get_by_text("download pose_dls.bvh").click()
@@ -281,7 +327,9 @@ def test_bvh_export_downloads_a_file_posekit_reads(page, tmp_path):
         page.get_by_role("button", name="upload setup / BVH").click()
     chooser.value.set_files(files=[{"name": "bad.json", "mimeType": "application/json",
                                     "buffer": b'{"format": "posekit-effector-setup",\n oops}'}])
-    wait_for(lambda: "bad.json, line 2, column 2" in message.inner_text(), 30, "the upload's error message")
+    setup_line = page.locator(".posekit-message-setup")  # beside the upload box, the export's message gone
+    wait_for(lambda: "bad.json, line 2, column 2" in setup_line.inner_text(), 30, "the upload's error message")
+    assert message.inner_text() == ""
     assert page.locator(VIEWS).get_by_role("button", name="remove").count() == n_rows
 
 

@@ -99,6 +99,29 @@ def test_selected_joint_is_drawn_larger_and_yellow_in_the_joints_mesh(sample):
     assert J.highlighted is None and np.allclose(joint_colours()[j], colours[0])
 
 
+def test_the_selected_joints_colour_reaches_the_browser_on_first_display_and_after_a_new_marker(sample):
+    """Issue 44: the first selection after the view's arrays were made (a fresh view, or a new marker) sends the
+    colour array with the joint in yellow (the kernel's copy held yellow while the browser kept blue: the array
+    sent had been changed in place, so the new one looked unchanged)."""
+    s = sample.skeleton
+    v = SkeletonViewer(s, sample.global_pos[0])
+    f = v._figure
+    yellow = np.array([0xF1, 0xC4, 0x0F]) / 255
+
+    def sends_yellow(joint):
+        sent = []
+        f._shared["color"].observe(lambda ch: sent.append(np.asarray(ch["new"])), names="array")
+        v.select(joint)
+        rows = f._rows["joints"]
+        V = len(f.unit)
+        k = s.index(joint)
+        return bool(sent) and np.allclose(sent[-1][rows][k * V:(k + 1) * V], yellow, atol=1e-6)
+
+    assert sends_yellow("left_wrist")
+    v.move_target("head", sample.global_pos[0][s.index("head")] + 0.1)  # a new marker: new arrays
+    assert sends_yellow("right_knee")
+
+
 def test_bones_are_coloured_by_side(sample):
     s = sample.skeleton
     v = SkeletonViewer(s)
@@ -166,8 +189,8 @@ def test_drag_moves_the_target_across_the_camera_facing_plane(sample):
     v.drag_to(cam + 0.5 * (goal - cam))
     assert seen and seen[-1][0] == "left_wrist"
     np.testing.assert_allclose(v.targets["left_wrist"], goal, atol=1e-9)
-    np.testing.assert_allclose(v.sliders[0].value, goal[0], atol=v.SLIDER_STEP)
     v._on_release({"new": [0, 0, 0]})
+    np.testing.assert_allclose(v.sliders[0].value, goal[0], atol=v.SLIDER_STEP)  # shown once the mouse is up
     n = len(seen)
     v.drag_to(cam + 0.5 * (hand - cam))
     assert len(seen) == n  # released: moving the mouse no longer drags
@@ -176,6 +199,38 @@ def test_drag_moves_the_target_across_the_camera_facing_plane(sample):
     assert v.dragging == "left_wrist"
     v.drag_mode.value = False
     assert v.orbit.enabled is True and v.dragging is None
+
+
+def test_a_drag_keeps_the_camera_until_the_mouse_is_up_and_reset_view_frames_again(sample):
+    """Issue 44: dragging a target out of the framed region used to step the camera back mid-drag, so each pixel
+    moved the target further (a 120 px drag lifted a hand 1.94 m): the camera now waits for the release. *reset view*
+    frames the pose from the front again, looking at it, after any orbit."""
+    from posekit.viz.drag import drag_point
+
+    s = sample.skeleton
+    v = SkeletonViewer(s, sample.global_pos[0])
+    hand = sample.global_pos[0][s.index("left_wrist")]
+    v.drag_mode.value = True
+    v.grab(hand)
+    cam0 = list(v.camera.position)
+    camera = np.asarray(cam0, float) + v._offset
+    for k in range(1, 6):  # the mouse ray through points ever higher above the hand: the target leaves the frame
+        through = camera + 0.5 * (hand + [0.0, 0.4 * k, 0.0] - camera)
+        v.drag_to(through)
+        assert list(v.camera.position) == cam0, f"the camera moved during the drag, at step {k}"
+        # where the ray from the camera of the grab meets the drag plane: the same scale all along
+        np.testing.assert_allclose(v.targets["left_wrist"], drag_point(camera, through, *v._drag_plane), atol=1e-9)
+    assert v.targets["left_wrist"][1] > hand[1] + 1.5
+    v._on_release({"new": [0, 0, 0]})
+    assert np.linalg.norm(v.camera.position) > np.linalg.norm(cam0)  # released: the view takes the target in
+    v.camera.position = [4.0, 0.5, -1.0]  # the user orbited behind the character
+    v.reset_button.click()
+    pos = np.asarray(v.camera.position)
+    np.testing.assert_allclose(pos / np.linalg.norm(pos), v.VIEW_DIRECTION, atol=1e-9)
+    # three.js' lookAt: the camera's -Z axis points at the pivot (the origin of the scene frame)
+    x, y, z, w = v.camera.quaternion
+    forward = -np.array([2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)])
+    np.testing.assert_allclose(forward, -pos / np.linalg.norm(pos), atol=1e-9)
 
 
 def test_target_sliders_are_fine_and_centred_on_the_joint(sample):
@@ -208,6 +263,20 @@ def test_viewer_selection_sliders_and_callbacks(sample):
     assert v.selected == "left_wrist"
     v.picker.distance = 2.0
     v._on_pick({"new": list(sample.global_pos[0][s.index("head")] - v._offset + 0.01)})
+    assert v.selected == "head"
+
+
+def test_a_second_double_click_on_the_same_pixel_selects_again(sample):
+    """Issue 44: double-click a joint, choose another in the list, double-click the same pixel again: the first
+    joint is selected again (the browser reports a point only when it changes, so the kernel resets it)."""
+    s = sample.skeleton
+    v = SkeletonViewer(s, sample.global_pos[0])
+    v.picker.distance = 2.0
+    at = list(sample.global_pos[0][s.index("head")] - v._offset + 0.01)
+    v.picker.point = at  # what the browser sends
+    assert v.selected == "head"
+    v.joint_select.value = "left_knee"
+    v.picker.point = at
     assert v.selected == "head"
 
 
@@ -271,6 +340,54 @@ def test_solver_panel_resolves_on_target_moves(sample):
         assert label.count("<tr>") == 3 and ">iterations<" in label and " ms<" in label
 
 
+def test_a_panel_offers_only_joints_every_solver_takes_and_an_added_target_can_be_removed(sample):
+    """Issue 44: lesson 03's panel gave any joint touched by a slider a new effector, which its network (trained for
+    fixed joint sets) refused, and nothing but re-running the cell recovered. A panel now offers the joints of its
+    effectors and those every solver accepts one more effector on (FABRIK: all; a fixed-set solver: none);
+    a double-click on another joint says why it is not offered and selects nothing; *remove target* takes an added
+    effector away. A viewer can offer a chosen few (lesson 02: the rig's handles)."""
+    from posekit.ik import Effector, Pose, make_solver
+    from posekit.viz import SolverPanel
+
+    s, P = sample.skeleton, sample.global_pos[0]
+    hands = ["left_wrist", "right_wrist"]
+    fabrik = make_solver("fabrik", s)
+
+    class HandsOnly:  # a learned solver made for one joint set (as lesson 03's network)
+        kinds, needs_start = ("position",), True
+
+        def solve(self, start, effectors):
+            if sorted(s.names[s.index(e.joint)] for e in effectors) != sorted(hands):
+                raise ValueError("no network for this joint set")
+            return fabrik.solve(start, effectors)
+
+    effectors = [Effector(j, P[s.index(j)]) for j in hands]
+    free = SolverPanel(s, {"fabrik": fabrik, "again": make_solver("fabrik", s)}, Pose(P), effectors)
+    assert len(free.viewers["fabrik"].joint_select.options) == len(free.viewers["fabrik"].body) + 1
+    panel = SolverPanel(s, {"net": HandsOnly(), "fabrik": fabrik}, Pose(P), effectors)
+    v = panel.viewers["net"]
+    assert sorted(o[1] for o in v.joint_select.options) == ["", "left_wrist", "right_wrist"]
+    with pytest.raises(ValueError, match="not offered"):
+        v.select("left_elbow")
+    v.picker.distance = 1.0
+    v._on_pick({"new": list(P[s.index("left_elbow")] - v._offset)})
+    assert v.selected is None and "left_elbow is not offered" in v.status.value
+    v.drag_mode.value = True
+    v.grab(P[s.index("left_knee")])
+    assert v.dragging is None and set(panel.effectors) == set(hands)
+    v._on_pick({"new": list(P[s.index("left_wrist")] - v._offset)})
+    assert v.selected == "left_wrist"
+    # in the free panel a slider adds an effector on the elbow; every view solves it, and it can be taken away
+    f = free.viewers["fabrik"]
+    f.select("left_elbow")
+    f.sliders[1].value += 0.05
+    assert "left_elbow" in free.effectors and not isinstance(free.results["again"], Exception)
+    free.remove_button.click()
+    assert set(free.effectors) == set(hands) and "left_elbow" not in f.targets
+    rig = SkeletonViewer(s, P, selectable=["left_hand", "right_ankle"])  # roles or names
+    assert sorted(o[1] for o in rig.joint_select.options) == ["", "left_wrist", "right_ankle"]
+
+
 def test_effector_editor_edits_every_kind_and_re_solves():
     """Lesson 05's EffectorEditor: effectors of all three kinds added, turned, loosened and removed; every
     change re-solves each solver; a solver that refuses a kind gets only the kinds it honours."""
@@ -306,10 +423,15 @@ def test_effector_editor_edits_every_kind_and_re_solves():
     assert v._figure.counts == (5, 1, 1)  # five magenta position targets, one orange look-at, one rotation
     from posekit.viz.viewer import TRIAD_LENGTH
 
-    tri = v._figure.part("triads").reshape(3, 2, 3)  # the head's triad: (axis, start/tip, xyz)
+    tri = v._figure.part("triads")[:6].reshape(3, 2, 3)  # the head's triad's centre lines: (axis, start/tip, xyz)
     head = ed.results["ProtoRes"].pose.global_pos[s.index("Head")]
     assert np.allclose(tri[:, 0], head, atol=1e-5)
     assert np.allclose(tri[:, 1] - head, TRIAD_LENGTH * v.rotation_targets["Head"].T, atol=1e-5)  # columns: axes
+    # issue 44: 20 cm axes, each drawn as five parallel lines 4 mm apart (WebGL lines are one pixel wide)
+    strands = v._figure.part("triads").reshape(5, 3, 2, 3)
+    lines = strands[:, :, 1] - strands[:, :, 0]
+    assert TRIAD_LENGTH >= 0.2 and np.allclose(lines[1:], lines[:1], atol=1e-5)
+    assert 0.003 < np.linalg.norm(strands[1, 0, 0] - strands[0, 0, 0]) < 0.006
     ed.set_tolerance(0, 1.0)
     assert ed.effectors[0].tolerance == pytest.approx(0.1)
     assert not np.allclose(ed.results["ProtoRes"].pose.global_pos, before)
@@ -368,10 +490,10 @@ def test_dragging_an_orange_marker_moves_the_look_at_target():
     assert not np.allclose(ed.rows[0]["target"], head) and np.allclose(ed.rows[1]["target"], goal)
 
 
-def test_stale_values_the_browser_sends_after_a_new_selection_move_nothing(sample):
-    """Issue 27: selecting a joint re-ranges the sliders; the browser may send back the previous joint's value
-    clamped into the new range. That is an echo, not a move; a real move changes one axis only,
-    and a slider pushed to an end re-centres on its value."""
+def test_values_sent_back_unchanged_move_nothing_and_a_move_changes_one_axis(sample):
+    """Issue 27: selecting joints one after another never moves a target: the browser sending back a slider's own
+    value (or its snap to the step grid) is zero steps. A move changes its own axis only, and a slider pushed to an
+    end re-centres on its value."""
     s = sample.skeleton
     v = SkeletonViewer(s, sample.global_pos[0])
     seen = []
@@ -381,65 +503,62 @@ def test_stale_values_the_browser_sends_after_a_new_selection_move_nothing(sampl
     wrist = v.targets["left_wrist"].copy()
     assert len(seen) == 1
     for other in ("left_knee", "chest", "left_wrist"):
-        old = [sl.value for sl in v.sliders]
+        old = list(v.sliders)
         v.select(other)
-        for sl, x in zip(v.sliders, old):  # the browser's stale values, clamped into the new ranges
-            sl.value = float(np.clip(x, sl.min, sl.max))
+        assert not set(old) & set(v.sliders)  # new slider models for every selection
+        for sl in old + v.sliders:  # the browser sends back what each model holds, snapped to its grid
+            sl.value = float(sl.min + round((sl.value - sl.min) / sl.step) * sl.step)
     assert len(seen) == 1 and set(v.targets) == {"left_wrist"}, seen
     np.testing.assert_array_equal(v.targets["left_wrist"], wrist)
-    assert [sl.value for sl in v.sliders] == pytest.approx(wrist)  # put back where the target is
-    # a move: only that axis of the target changes, whatever the other sliders hold
-    v.sliders[2].value = wrist[2] + 0.1
+    assert [sl.value for sl in v.sliders] == pytest.approx(wrist, abs=v.SLIDER_STEP / 2)
+    z = v.sliders[2]
+    z.value += 0.1
     np.testing.assert_allclose(v.targets["left_wrist"], wrist + [0.0, 0.0, 0.1])
-    # pushed to the top of its range: the range re-centres on the new value, so the next push goes further
-    # (later than ECHO_S after the selection: an end of a new range is taken as a stale echo only just after it)
-    v.ECHO_S = 0.0
+    assert v.sliders[2] is z  # its own move does not replace the slider (the browser keeps its focus)
     top = v.sliders[1].max
-    v.sliders[1].value = top
-    assert v.targets["left_wrist"][1] == pytest.approx(top) and v.sliders[1].max > top + 0.4
+    v.sliders[1].value = top  # pushed to the top: new sliders, centred on the new value
+    assert v.targets["left_wrist"][1] == pytest.approx(top, abs=v.SLIDER_STEP) and v.sliders[1].max > top + 0.4
 
 
-def test_a_stale_value_that_arrives_after_the_next_selection_moves_nothing(sample):
-    """Seen in JupyterLab under load (lesson 02): selecting left_wrist, then right_ankle, then chest, the browser
-    sent the wrist's height clamped into the *ankle's* range at the ankle's selection and once more after chest
-    was selected, and chest got a target 45 cm below it. A value clamped into any recent range is an echo too."""
+def test_a_press_on_the_previous_selections_slider_moves_the_new_joint_one_step(sample):
+    """Issue 44: select one joint, then another, and press before the browser shows the new sliders: the press
+    arrives on the old slider model, with the old joint's value plus one step. It moves the joint selected now by
+    one step on that axis, never to the old joint's value, and the sliders are made anew to show it."""
     s = sample.skeleton
     v = SkeletonViewer(s, sample.global_pos[0])
     seen = []
-    v.on_target_change(lambda name, p: seen.append(name))
-    v.select("head")
-    wrist = [sl.value for sl in v.sliders]
-    v.select("right_ankle")
-    lagged = [float(np.clip(x, sl.min, sl.max)) for sl, x in zip(v.sliders, wrist)]  # what the browser clamped
-    assert any(not np.isclose(x, w) for x, w in zip(lagged, wrist))
-    for sl, x in zip(v.sliders, lagged):  # the browser sends them once, at the ankle's selection ...
-        sl.value = x
-    v.select("right_knee")
-    for sl, x in zip(v.sliders, lagged):  # ... and again after the knee's ranges, inside them
-        assert sl.min < x < sl.max
-        sl.value = x
-    assert seen == [] and v.targets == {}
-    knee = sample.global_pos[0][s.index("right_knee")]
-    assert [sl.value for sl in v.sliders] == pytest.approx(knee)  # put back where the joint is
-    v.sliders[0].value = knee[0] + 0.05  # a real move still moves
-    assert seen == ["right_knee"]
+    v.on_target_change(lambda name, p: seen.append((name, p.copy())))
+    v.select("left_knee")
+    knee_sliders = list(v.sliders)
+    knee_y = knee_sliders[1].value  # what the browser shows until the new sliders arrive
+    v.select("right_wrist")
+    wrist_sliders = list(v.sliders)
+    hand = sample.global_pos[0][s.index("right_wrist")]
+    for k in range(1, 6):  # five presses on the knee's y slider, still on screen
+        knee_sliders[1].value = knee_y + k * v.SLIDER_STEP
+        assert seen[-1][0] == "right_wrist"
+        np.testing.assert_allclose(v.targets["right_wrist"], hand + [0.0, k * v.SLIDER_STEP, 0.0], atol=1e-12)
+    assert "left_knee" not in v.targets
+    assert v.sliders[1] is not wrist_sliders[1] and v.sliders[1].value == pytest.approx(hand[1] + 0.005, abs=6e-4)
+    wrist_sliders[1].value = wrist_sliders[1].value + v.SLIDER_STEP  # and one on the first wrist sliders
+    np.testing.assert_allclose(v.targets["right_wrist"], hand + [0.0, 0.006, 0.0], atol=1e-12)
+    assert len(seen) == 6
 
 
 def test_quick_moves_back_and_forth_after_a_selection_all_move(sample):
     """Right, left, right by one step within a second of selecting a joint (a student tapping the arrow keys, or
-    ``posekit bench studio``): every press moves the target, though the third value is one the slider held a
-    moment ago. Only values held up to the new range can be echoes."""
+    ``posekit bench studio``): every press moves the target by one step."""
     s = sample.skeleton
     v = SkeletonViewer(s, sample.global_pos[0])
     seen = []
-    v.on_target_change(lambda name, p: seen.append(round(float(p[0]), 4)))
+    v.on_target_change(lambda name, p: seen.append(round(float(p[0]), 6)))
     v.select("head")
     v.select("left_wrist")
-    x0 = v.sliders[0].value
+    x0, j0 = v.sliders[0].value, sample.global_pos[0][s.index("left_wrist"), 0]
     for x in (x0 + 0.001, x0, x0 + 0.001, x0):
         v.sliders[0].value = x
-    assert seen == [round(x0 + 0.001, 4), round(x0, 4), round(x0 + 0.001, 4), round(x0, 4)]
-    assert v.targets["left_wrist"][0] == pytest.approx(x0)
+    assert seen == [round(j0 + d, 6) for d in (0.001, 0.0, 0.001, 0.0)]
+    assert v.targets["left_wrist"][0] == pytest.approx(j0)
 
 
 def test_helper_joints_are_not_selectable_and_markers_stay_pickable():
