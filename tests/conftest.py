@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from posekit.paths import shared_data_dir
+from tests import browser_artifacts
 
 
 @pytest.fixture(scope="session")
@@ -59,7 +60,20 @@ def _group(path: str) -> str:
     return "browser" if name in _BROWSER_MODULES else name
 
 
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item, call):
+    """A failed browser test leaves its pages' screenshots and consoles and the servers' logs
+    (tests/browser_artifacts.py) and its report says where."""
+    outcome = yield
+    browser_artifacts.runtest_makereport(item, call, outcome.get_result())
+
+
+def pytest_terminal_summary(terminalreporter):
+    browser_artifacts.terminal_summary(terminalreporter)
+
+
 def pytest_configure(config):
+    browser_artifacts.install()
     # two workers on two cores: one torch thread each, not two each fighting for the same cores
     if os.environ.get("PYTEST_XDIST_WORKER"):
         import torch
