@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Skeleton", "ROLES", "roles_hint"]
+__all__ = ["Skeleton", "ROLES", "roles_hint", "joint_set_difference"]
 
 ROLES = (
     "pelvis", "chest", "neck", "head",
@@ -271,3 +271,20 @@ class Skeleton:
             and np.array_equal(self.parents, other.parents)
             and np.allclose(self.offsets, other.offsets, atol=atol)
         )
+
+
+def joint_set_difference(reference, other, *, show: int = 3, words=("extra", "lacks")) -> list[str]:
+    """The joints ``other`` has and ``reference`` lacks, and those it lacks, as at most two short phrases for a
+    message — the first ``show`` names of each, never whole lists: ``["extra: a, b, ...", "lacks: c"]``.
+
+    Parameters
+    ----------
+    reference, other : sequence of str
+        Joint names.
+    words : (str, str)
+        How the two phrases begin.
+    """
+    extra = [n for n in other if n not in reference]
+    lacking = [n for n in reference if n not in other]
+    return [f"{word}: {', '.join(names[:show])}{', ...' if len(names) > show else ''}"
+            for word, names in zip(words, (extra, lacking)) if names]

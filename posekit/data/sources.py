@@ -13,7 +13,7 @@ import numpy as np
 from ..io.bvh import read_bvh
 from ..kinematics import fk
 from ..paths import require_shared_data, samples_dir
-from ..skeleton import Skeleton
+from ..skeleton import Skeleton, joint_set_difference
 from .bandai import BANDAI_FOLDERS, BANDAI_ROLES
 from .motion import MotionSet
 from ..io.rigs import guess_units, unit_warning
@@ -121,13 +121,7 @@ def hierarchy_difference(first: Skeleton, other: Skeleton) -> str:
     """How ``other``'s joint hierarchy (names and parents) differs from ``first``'s; "" when equal."""
     a, b = first.names, other.names
     if len(a) != len(b):
-        extra, lacking = [n for n in b if n not in a], [n for n in a if n not in b]
-        parts = [f"{len(b)} joints instead of {len(a)}"]
-        if extra:
-            parts.append(f"extra: {', '.join(extra[:5])}{', ...' if len(extra) > 5 else ''}")
-        if lacking:
-            parts.append(f"lacks: {', '.join(lacking[:5])}{', ...' if len(lacking) > 5 else ''}")
-        return "; ".join(parts)
+        return "; ".join([f"{len(b)} joints instead of {len(a)}", *joint_set_difference(a, b, show=5)])
     renamed = [j for j in range(len(a)) if a[j] != b[j]]
     if renamed:
         j = renamed[0]

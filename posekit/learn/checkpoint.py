@@ -37,7 +37,7 @@ import numpy as np
 
 from ..io.torch_file import read_torch_file
 from ..records import NormStats
-from ..skeleton import Skeleton
+from ..skeleton import Skeleton, joint_set_difference
 
 __all__ = ["FORMAT", "FORMAT_VERSION", "save_checkpoint", "load_checkpoint"]
 
@@ -179,14 +179,8 @@ def _remake(ckpt: dict) -> str:
 def _name_difference(theirs: list, mine: list) -> str:
     """How two joint-name lists differ, in a line: the counts and the first few differences, never whole lists."""
     if len(theirs) != len(mine):
-        extra = [n for n in theirs if n not in mine]
-        lacking = [n for n in mine if n not in theirs]
-        parts = [f"{len(theirs)} joints there, {len(mine)} here"]
-        if extra:
-            parts.append(f"only there: {', '.join(extra[:3])}{', ...' if len(extra) > 3 else ''}")
-        if lacking:
-            parts.append(f"only here: {', '.join(lacking[:3])}{', ...' if len(lacking) > 3 else ''}")
-        return "; ".join(parts)
+        return "; ".join([f"{len(theirs)} joints there, {len(mine)} here",
+                          *joint_set_difference(mine, theirs, words=("only there", "only here"))])
     differ = [j for j, (a, b) in enumerate(zip(theirs, mine)) if a != b]
     shown = "; ".join(f"joint {j} is {theirs[j]!r} there, {mine[j]!r} here" for j in differ[:3])
     return f"{len(differ)} of {len(mine)} joint names differ ({shown}{'; ...' if len(differ) > 3 else ''})"
