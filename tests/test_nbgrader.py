@@ -23,8 +23,10 @@ import pytest
 pytest.importorskip("nbgrader")
 
 from posekit.course.lessons import lessons, read_notebook  # noqa: E402
-from posekit.course.nbgrader import assignment_notebook, screen  # noqa: E402
+from posekit.course.nbgrader import assignment_notebook, screen, scripts_on_path  # noqa: E402
 from posekit.course.solutions import exercises, notes  # noqa: E402
+
+scripts_on_path()  # nbgrader's grade book runs `alembic` by name, also when the venv is not activated
 
 ROOT = Path(__file__).resolve().parents[1]
 LESSONS = lessons()
@@ -160,6 +162,7 @@ def course(tmp_path_factory):
     from nbgrader.apps import NbGraderAPI
     from traitlets.config.loader import PyFileConfigLoader
 
+    scripts_on_path()  # nbgrader's grade book runs `alembic` by name, also when the venv is not activated
     root = tmp_path_factory.mktemp("course")
     _run([sys.executable, "-m", "posekit", "course", "nbgrader", "--out", str(root), "--cell-timeout", "120"], ROOT)
     config = PyFileConfigLoader("nbgrader_config.py", path=str(root)).load_config()

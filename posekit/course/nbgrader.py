@@ -299,7 +299,22 @@ def screen(course_dir, assignment: str) -> list[Refused]:
     return refused
 
 
+def scripts_on_path() -> None:
+    """Put this interpreter's scripts folder first on ``PATH``, for this process and those it starts.
+
+    nbgrader's grade book runs ``alembic`` by name (``nbgrader.api.get_alembic_version``), so it fails with
+    "No such file or directory: 'alembic'" when the environment nbgrader is installed in is not activated —
+    for example ``.venv/bin/posekit course autograde ...`` or ``make test``. Called by every function of this
+    module that runs nbgrader; call it before using nbgrader's Python API yourself.
+    """
+    scripts = str(Path(sys.executable).parent)
+    parts = os.environ.get("PATH", "").split(os.pathsep)
+    if parts[:1] != [scripts]:
+        os.environ["PATH"] = os.pathsep.join([scripts] + [p for p in parts if p and p != scripts])
+
+
 def _nbgrader_cmd(*args) -> list[str]:
+    scripts_on_path()
     return [sys.executable, "-m", "nbgrader", *args]
 
 
