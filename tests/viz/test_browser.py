@@ -465,7 +465,10 @@ def test_rig_viewer_selection_moves_nothing(lab, chromium):
         where, said = target.locator("td").all_inner_texts()[:3], status.inner_text()
         joints = cell.locator("select").first  # the viewer's *selected* joint list, the cell's only list
         joints.scroll_into_view_if_needed()
-        for j in ("right_ankle", "chest", "left_wrist"):
+        # the view offers the rig's four handles only (lesson 02 passes selectable=limbs)
+        offered = joints.locator("option").all_inner_texts()
+        assert "chest" not in offered and {"left_wrist", "right_ankle", "left_ankle"} <= set(offered), offered
+        for j in ("right_ankle", "left_ankle", "left_wrist"):
             joints.select_option(j)
             time.sleep(0.8)
         time.sleep(2.0)
