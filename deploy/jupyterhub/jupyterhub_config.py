@@ -28,6 +28,8 @@ import shutil
 import sys
 from pathlib import Path
 
+from tornado.web import HTTPError
+
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
 STATE = Path(os.environ.get("POSEKIT_HUB_STATE") or ROOT / "build" / "hub").resolve()
@@ -86,14 +88,24 @@ c.Spawner.environment = {
 c.Spawner.env_keep = ["PATH", "PYTHONPATH", "VIRTUAL_ENV", "LANG", "LC_ALL", "POSEKIT_DATA_DIR", "NUMBA_CACHE_DIR"]
 
 
+class LessonCopyError(HTTPError):
+    """The lessons could not be copied: the server is not started, and the hub's error page shows the student the
+    message (an HTTP error passes through the hub's spawn handler with its message; another exception becomes
+    "Unhandled error starting server")."""
+
+    def __init__(self, message):
+        super().__init__(500, message)
+        self.jupyterhub_message = message
+
+
 def copy_lessons(home: Path, lessons: Path = LESSONS) -> list[str]:
     """Copy every lesson notebook of ``lessons`` that ``home``/lessons lacks; never overwrite a file there.
 
-    Returns the names copied. Raises ``RuntimeError`` with a sentence naming the path when the copy cannot be made
+    Returns the names copied. Raises ``LessonCopyError`` with a sentence naming the path when the copy cannot be made
     (the hub shows it on the student's error page)."""
     dest = home / LESSON_FOLDER
     if dest.exists() and not dest.is_dir():
-        raise RuntimeError(f"posekit: cannot copy the lessons: {dest} is a file, expected a folder "
+        raise LessonCopyError(f"posekit: cannot copy the lessons: {dest} is a file, expected a folder "
                            f"(move it away and start the server again)")
     copied = []
     try:
@@ -107,7 +119,7 @@ def copy_lessons(home: Path, lessons: Path = LESSONS) -> list[str]:
             shutil.copyfile(src, target)
             copied.append(src.name)
     except OSError as err:
-        raise RuntimeError(f"posekit: cannot copy the lessons into {dest}: {err}") from err
+        raise LessonCopyError(f"posekit: cannot copy the lessons into {dest}: {err}") from err
     return copied
 
 
