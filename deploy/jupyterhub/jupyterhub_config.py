@@ -86,7 +86,7 @@ c.Spawner.environment = {
     "JUPYTERHUB_ACTIVITY_INTERVAL": str(ACTIVITY_EVERY),
     # one compiled-solver cache for the class: the hub's own (posekit/_jit.py's default place, which `make hub`
     # warms first). Each student's home would otherwise hold a cache of its own, and each student's first lesson
-    # compiled every solver again (measured: about 30 s and 115 MB more for that kernel)
+    # compiled every solver again, slower and in more memory
     "POSEKIT_NUMBA_CACHE": os.environ.get("POSEKIT_NUMBA_CACHE") or os.environ.get("NUMBA_CACHE_DIR") or os.path.join(
         os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "posekit"),
 }
