@@ -22,6 +22,7 @@ import json
 import math
 import os
 import platform
+import shlex
 import shutil
 import socket
 import subprocess
@@ -226,7 +227,7 @@ def measure(sizes, out, note=""):
                 hub.kill()
     shutil.rmtree(folder, ignore_errors=True)
     result = {
-        "command": "python deploy/jupyterhub/measure_class.py " + " ".join(sys.argv[1:]),
+        "command": shlex.join(["python", "deploy/jupyterhub/measure_class.py", *sys.argv[1:]]),
         "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
         "machine": {"platform": platform.platform(), "python": platform.python_version(),
                     "cpus": os.cpu_count(), "memory_gb": round(_total_memory() / 2**30, 1),
