@@ -26,7 +26,8 @@ OVERLAY = """\
 load_subconfig({config!r})
 c.JupyterHub.services.append({{"name": "posekit-test", "api_token": {token!r}}})
 c.JupyterHub.load_roles.append({{"name": "posekit-test", "services": ["posekit-test"],
-                                 "scopes": ["admin:users", "admin:servers", "list:users", "read:users"]}})
+                                 "scopes": ["admin:users", "admin:servers", "list:users", "read:users",
+                                            "access:servers"]}})
 """
 
 

@@ -116,11 +116,17 @@ def test_two_students_log_in_and_run_lesson_01(hub, chromium):
 
 
 def test_the_studio_is_served_from_each_server(hub):
-    # Voila's server extension answers on the student's server (its home page of the lessons folder); rendering
-    # the studio itself is tests/viz/test_studio_browser.py's part
+    # Voila's server extension answers on each student's server; on alice's it renders her copy of the studio
+    # with the studio's page (make studio's template: no stylesheet from a CDN); driving the studio in a browser is
+    # tests/viz/test_studio_browser.py's part
     for user in STUDENTS:
         response = hub.pages[user].request.get(f"{hub.url}/user/{user}/voila/tree/lessons")
         assert response.status == 200 and "Voil" in response.text(), f"{user}: no Voila at /voila/tree"
+    studio = hub.pages["alice"].request.get(f"{hub.url}/user/alice/voila/render/lessons/studio.ipynb",
+                                            timeout=180_000)
+    page = studio.text()
+    assert studio.status == 200 and "application/vnd.jupyter.widget-view+json" in page, page[-2000:]
+    assert "cdn.jsdelivr.net" not in page, "the studio was not served with its own template (posekit/viz/voila)"
 
 
 def test_a_student_cannot_reach_another_students_server(hub):
