@@ -7,6 +7,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import shutil
 import socket
 import subprocess
 import sys
@@ -75,8 +76,13 @@ def running_hub(folder: Path, cull_timeout: int = 3600, cull_every: int = 300, a
     it started, even when the block failed."""
     import psutil
 
-    if not PROXY.exists():
-        raise RuntimeError(f"{PROXY} is missing: run `cd deploy/jupyterhub && npm ci` (make hub does)")
+    hub_cmd = Path(sys.executable).parent / "jupyterhub"
+    if not hub_cmd.exists():
+        raise RuntimeError(f"{hub_cmd} is missing: pip install -e '.[hub]' (make hub and the dev extra install it)")
+    if not PROXY.exists():  # the proxy from the npm registry, as make hub installs it
+        if shutil.which("npm") is None:
+            raise RuntimeError(f"{PROXY} is missing and npm is not installed: install Node.js and npm, then make hub")
+        subprocess.run(["npm", "ci", "--no-audit", "--no-fund", "--loglevel=error"], cwd=PROXY.parents[2], check=True)
     state, log = folder / "state", folder / "hub.log"
     overlay = folder / "jupyterhub_test_config.py"
     overlay.write_text(OVERLAY.format(config=str(CONFIG), token=ADMIN_TOKEN))
@@ -87,7 +93,7 @@ def running_hub(folder: Path, cull_timeout: int = 3600, cull_every: int = 300, a
                POSEKIT_HUB_ACTIVITY_EVERY=str(activity_every), POSEKIT_HUB_PASSWORD=PASSWORD,
                PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}", **(extra_env or {}))
     out = open(log, "w")
-    proc = subprocess.Popen([str(Path(sys.executable).parent / "jupyterhub"), "-f", str(overlay)], cwd=folder,
+    proc = subprocess.Popen([str(hub_cmd), "-f", str(overlay)], cwd=folder,
                             env=env, stdout=out, stderr=subprocess.STDOUT)
     hub = Hub(f"http://127.0.0.1:{port}", state, log, proc)
     try:
