@@ -48,7 +48,8 @@ STATE.mkdir(parents=True, exist_ok=True)
 c = get_config()  # noqa: F821 - JupyterHub defines it when it loads this file
 
 # -- the hub and its proxy ------------------------------------------------------------------------------------------
-c.JupyterHub.bind_url = f"http://{os.environ.get('POSEKIT_HUB_IP', '127.0.0.1')}:{os.environ.get('POSEKIT_HUB_PORT', '8000')}"
+c.JupyterHub.bind_url = (f"http://{os.environ.get('POSEKIT_HUB_IP', '127.0.0.1')}:"
+                         f"{os.environ.get('POSEKIT_HUB_PORT', '8000')}")
 c.JupyterHub.hub_bind_url = f"http://127.0.0.1:{os.environ.get('POSEKIT_HUB_API_PORT', '8081')}"
 c.ConfigurableHTTPProxy.api_url = f"http://127.0.0.1:{os.environ.get('POSEKIT_HUB_PROXY_API_PORT', '8001')}"
 c.ConfigurableHTTPProxy.command = [str(PROXY)]

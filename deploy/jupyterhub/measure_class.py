@@ -1,4 +1,5 @@
-"""Measure a class on one hub: per-student memory and start time for lesson 01 with 1, 2, 4 ... students at once.
+"""Measure a class on one hub: per-student memory and start times for lesson 01 and the studio with 1, 2, 4 ...
+students at once.
 
     python deploy/jupyterhub/measure_class.py --students 1,2,4 --out deploy/jupyterhub/class_sizing.json
     python deploy/jupyterhub/measure_class.py --table deploy/jupyterhub/class_sizing.json    # docs/hub.md's table
@@ -7,10 +8,12 @@
 It starts a hub with the repository's configuration (jupyterhub_config.py: the trial login, the local spawner,
 make lab's settings) in a temporary state folder, and for each class size starts that many students' servers at once
 through the hub's REST API, then has each server's kernel run lesson 01's cells up to its solver panel (set-up, the
-held-out case, the three solvers, the panel) over the kernel websocket, all students at the same time. Per student
-it records the server's start (request to ready), the lesson's run (kernel start to the panel built), and the memory
-of the student's processes (the server and its kernel): resident now and the peak (the sum of each process's
-VmHWM). No browser is involved: what a browser adds is on the student's machine. It does not import posekit.
+held-out case, the three solvers, the panel) over the kernel websocket, all students at the same time; then every
+student opens the studio at once (Voila renders their copy of studio.ipynb on their server, a second kernel). Per
+student it records the server's start (request to ready), the lesson's run (kernel start to the panel built), the
+studio's page (request to the rendered page), and the memory of the student's processes (the server and its
+kernels) after the lesson and after the studio, and the peak (the sum of each process's VmHWM). No browser is
+involved: what a browser adds is on the student's machine. It does not import posekit.
 """
 
 from __future__ import annotations
@@ -134,8 +137,21 @@ def _user_api(url, user, method, path, body=None):
         return err.code, None
 
 
+def _open_studio(url, user):
+    """Render ``user``'s copy of the studio with Voila on their server (the page a browser gets, its kernel run);
+    returns the seconds it took."""
+    t0 = time.perf_counter()
+    req = urllib.request.Request(f"{url}/user/{user}/voila/render/lessons/studio.ipynb",
+                                 headers={"Authorization": f"token {TOKEN}"})
+    with urllib.request.urlopen(req, timeout=300) as r:
+        page = r.read().decode()
+    if "application/vnd.jupyter.widget-view+json" not in page:
+        raise RuntimeError(f"{user}: the studio's page came without its app")
+    return time.perf_counter() - t0
+
+
 def _memory(user):
-    """(server RSS, kernels' RSS, peak of both) in MB for ``user``'s server process and its children."""
+    """(server RSS, kernels' RSS, peak of all) in MB for ``user``'s server process and its children (kernels)."""
     import psutil
 
     for proc in psutil.process_iter(["cmdline"]):
@@ -178,12 +194,17 @@ async def _class(url, n, code):
     for user in users:
         _api(url, "POST", "/users", {"usernames": [user]})
     done = await asyncio.gather(*(one(u) for u in users))
+    with_lesson = {user: _memory(user) for user, _, _ in done}
+    # then every student opens the studio at once, from their own server (Voila's server extension)
+    studio_s = await asyncio.gather(*(asyncio.to_thread(_open_studio, url, user) for user, _, _ in done))
     rows = []
-    for user, start_s, lesson_s in done:
-        server_mb, kernel_mb, peak_mb = _memory(user)
+    for (user, start_s, lesson_s), open_s in zip(done, studio_s):
+        server_mb, kernels_mb, peak_mb = _memory(user)
         rows.append({"student": user, "server_start_s": round(start_s, 2), "lesson_s": round(lesson_s, 2),
-                     "server_rss_mb": round(server_mb, 1), "kernel_rss_mb": round(kernel_mb, 1),
-                     "rss_mb": round(server_mb + kernel_mb, 1), "peak_mb": round(peak_mb, 1)})
+                     "studio_s": round(open_s, 2), "server_rss_mb": round(with_lesson[user][0], 1),
+                     "kernel_rss_mb": round(with_lesson[user][1], 1),
+                     "rss_mb": round(with_lesson[user][0] + with_lesson[user][1], 1),
+                     "studio_rss_mb": round(server_mb + kernels_mb, 1), "peak_mb": round(peak_mb, 1)})
     for user in users:
         _api(url, "DELETE", f"/users/{user}/server")
     for user in users:
@@ -216,9 +237,10 @@ def measure(sizes, out, note=""):
             for n in sizes:
                 rows = asyncio.run(_class(url, n, code))
                 runs.append({"students": n, "per_student": rows})
-                print(f"{n} students: " + ", ".join(f"{r['rss_mb']:.0f} MB (peak {r['peak_mb']:.0f}), start "
-                                                      f"{r['server_start_s']:.1f} s, lesson {r['lesson_s']:.1f} s"
-                                                      for r in rows), flush=True)
+                print(f"{n} students: " + ", ".join(
+                    f"start {r['server_start_s']:.1f} s, lesson {r['lesson_s']:.1f} s {r['rss_mb']:.0f} MB, studio "
+                    f"{r['studio_s']:.1f} s {r['studio_rss_mb']:.0f} MB (peak {r['peak_mb']:.0f})" for r in rows),
+                    flush=True)
         finally:
             hub.terminate()
             try:
@@ -258,14 +280,16 @@ def tljh_memory_gb(users, peak_mb):
 
 def table(result) -> str:
     """docs/hub.md's class-sizing tables (markdown), read from a results file of ``measure``."""
-    lines = ["| students at once | server start, s (median / max) | lesson 01 to its panel, s (median / max) | "
-             "memory per student now, MB (max) | peak per student, MB (max) |", "|---|---|---|---|---|"]
+    lines = ["| students at once | server start, s | lesson 01 to its panel, s | the studio's page, s | "
+             "memory with lesson 01, MB | with lesson 01 and the studio, MB | peak, MB |",
+             "|---|---|---|---|---|---|---|"]
     for run in result["runs"]:
         rows = run["per_student"]
-        start, lesson = [r["server_start_s"] for r in rows], [r["lesson_s"] for r in rows]
-        lines.append(f"| {run['students']} | {_median(start):.1f} / {max(start):.1f} | {_median(lesson):.1f} / "
-                     f"{max(lesson):.1f} | {max(r['rss_mb'] for r in rows):.0f} | "
+        times = [[r[k] for r in rows] for k in ("server_start_s", "lesson_s", "studio_s")]
+        lines.append(f"| {run['students']} | " + " | ".join(f"{_median(t):.1f} / {max(t):.1f}" for t in times) +
+                     f" | {max(r['rss_mb'] for r in rows):.0f} | {max(r['studio_rss_mb'] for r in rows):.0f} | "
                      f"{max(r['peak_mb'] for r in rows):.0f} |")
+    lines += ["", "Times: median / slowest student; memory: the student using the most (their server and kernels)."]
     peak = result["per_student_peak_mb"]
     lines += ["", f"Memory a machine needs by TLJH's rule (students × {peak:.0f} MB + {TLJH_OVERHEAD_MB} MB):", "",
               "| students at once | " + " | ".join(str(n) for n in SIZES) + " |",
@@ -276,9 +300,9 @@ def table(result) -> str:
 
 def z2jh_resources(result) -> dict:
     """zero-to-jupyterhub's ``singleuser`` memory and CPU from the measured peak: the guarantee is the peak rounded
-    up to 64 MB (what every student is sure to have), the limit twice that (room for the exercises and the studio;
-    past it the kernel is killed), one CPU guaranteed at a quarter and limited to one (the lessons' solvers run on
-    one core at a time)."""
+    up to 64 MB (what every student is sure to have), the limit twice that (room for the exercises and the later
+    lessons; past it the kernel is killed), a quarter of a CPU guaranteed and one at most (a choice, not measured:
+    the lessons' solvers run on one core at a time)."""
     guarantee = math.ceil(result["per_student_peak_mb"] / 64) * 64
     return {"memory": {"guarantee": f"{guarantee}M", "limit": f"{2 * guarantee}M"},
             "cpu": {"guarantee": 0.25, "limit": 1.0}}
