@@ -20,7 +20,7 @@ STAMP := $(VENV)/.posekit-installed
 export POSEKIT_DATA_DIR ?= $(if $(wildcard ../shared/data),$(abspath ../shared/data),)
 ROOT_FLAG := $(if $(filter 0,$(shell id -u)),--allow-root,)
 
-.PHONY: setup warm lab studio test test-unit test-portable test-latest browser-deps bench clean course-assets slides course solutions docs
+.PHONY: setup warm lab studio test test-unit test-portable test-latest browser-deps bench clean course-assets slides course solutions docs hub
 
 # JupyterLab settings for this environment: no news pop-up, no update check (nothing is fetched)
 LAB_OVERRIDES := $(VENV)/share/jupyter/lab/settings/overrides.json
@@ -122,6 +122,17 @@ test-portable: setup
 # the newest releases of jupyterlab, ipywidgets, pythreejs, voila, nbval, playwright, numpy ... (torch: the CPU wheel)
 test-latest: browser-deps
 	$(PYTHON) tools/test_latest.py $(LATEST_ARGS)
+
+# a class on one machine, for trying it (docs/hub.md): JupyterHub with a trial login (any name, HUB_PASSWORD or
+# "posekit-trial"), each student's server on their own copy of the lessons, idle servers culled after HUB_CULL
+# seconds (default 3600); http://localhost:8000 (HUB_PORT). Ctrl-C stops the hub, its proxy and every server
+HUB_PROXY := deploy/jupyterhub/node_modules/.bin/configurable-http-proxy
+hub: setup warm
+	test -x $(VENV)/bin/jupyterhub || $(PY) -m pip install -q -e ".[hub]"
+	test -x $(HUB_PROXY) || (cd deploy/jupyterhub && npm ci --no-audit --no-fund --loglevel=error)
+	$(if $(HUB_PASSWORD),POSEKIT_HUB_PASSWORD="$(HUB_PASSWORD)") $(if $(HUB_CULL),POSEKIT_HUB_CULL_TIMEOUT="$(HUB_CULL)") \
+	  $(if $(HUB_PORT),POSEKIT_HUB_PORT="$(HUB_PORT)") PATH="$(abspath $(VENV))/bin:$$PATH" \
+	  $(VENV)/bin/jupyterhub -f deploy/jupyterhub/jupyterhub_config.py $(HUB_ARGS)
 
 bench: setup
 	$(VENV)/bin/posekit bench fk

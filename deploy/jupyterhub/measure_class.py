@@ -1,0 +1,328 @@
+"""Measure a class on one hub: per-student memory and start times for lesson 01 and the studio with 1, 2, 4 ...
+students at once.
+
+    python deploy/jupyterhub/measure_class.py --students 1,2,4 --out deploy/jupyterhub/class_sizing.json
+    python deploy/jupyterhub/measure_class.py --table deploy/jupyterhub/class_sizing.json    # docs/hub.md's table
+    python deploy/jupyterhub/measure_class.py --values deploy/jupyterhub/class_sizing.json   # z2jh's resources
+
+It starts a hub with the repository's configuration (jupyterhub_config.py: the trial login, the local spawner,
+make lab's settings) in a temporary state folder, and for each class size starts that many students' servers at once
+through the hub's REST API, then has each server's kernel run lesson 01's cells up to its solver panel (set-up, the
+held-out case, the three solvers, the panel) over the kernel websocket, all students at the same time; then every
+student opens the studio at once (Voila renders their copy of studio.ipynb on their server, a second kernel). Per
+student it records the server's start (request to ready), the lesson's run (kernel start to the panel built), the
+studio's page (request to the rendered page), and the memory of the student's processes (the server and its
+kernels) after the lesson and after the studio, and the peak (the sum of each process's VmHWM). No browser is
+involved: what a browser adds is on the student's machine. It does not import posekit.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import datetime
+import json
+import math
+import os
+import platform
+import shlex
+import shutil
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+import urllib.error
+import urllib.request
+import uuid
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parents[1]
+LESSON = ROOT / "notebooks" / "01_fabrik.ipynb"
+CELLS = ("motions = load_sample()", "cases = build_cases(", 'solvers = {"fabrik": fabrik', "SolverPanel(")
+"""The code cells of lesson 01 each student runs (the ones tests/viz/test_browser.py runs for the panel)."""
+TOKEN = "posekit-measure-" + uuid.uuid4().hex
+OVERLAY = """\
+load_subconfig({config!r})
+c.JupyterHub.services.append({{"name": "posekit-measure", "api_token": {token!r}}})
+c.JupyterHub.load_roles.append({{"name": "posekit-measure", "services": ["posekit-measure"],
+    "scopes": ["admin:users", "admin:servers", "list:users", "read:users", "access:servers"]}})
+"""
+TLJH_OVERHEAD_MB = 128
+"""The Littlest JupyterHub's sizing rule: memory = concurrent users x per-user peak + 128 MB (the hub and proxy)."""
+SIZES = (10, 20, 30, 50)
+"""Class sizes the sizing table gives a machine's memory for."""
+
+
+def _free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _api(url, method, path, body=None, timeout=30):
+    req = urllib.request.Request(f"{url}/hub/api{path}", method=method,
+                                 data=None if body is None else json.dumps(body).encode(),
+                                 headers={"Authorization": f"token {TOKEN}"})
+    try:
+        with urllib.request.urlopen(req, timeout=timeout) as r:
+            raw = r.read()
+            return r.status, (json.loads(raw) if raw else None)
+    except urllib.error.HTTPError as err:
+        return err.code, None
+
+
+def _server(url, user):
+    status, info = _api(url, "GET", f"/users/{user}")
+    return (info or {}).get("servers", {}).get("") if status == 200 else None
+
+
+def _lesson_code():
+    nb = json.loads(LESSON.read_text())
+    code = ["".join(c["source"]) for c in nb["cells"] if c["cell_type"] == "code"]
+    chosen = [src for src in code if any(k in src for k in CELLS)]
+    if len(chosen) != len(CELLS):
+        raise SystemExit(f"{LESSON.name}: expected one code cell for each of {CELLS}, found {len(chosen)}")
+    return chosen
+
+
+async def _run_lesson(url, user, code):
+    """Start a kernel on ``user``'s server and run ``code`` (cells) in it; returns the seconds it took."""
+    from tornado.httpclient import HTTPRequest
+    from tornado.websocket import websocket_connect
+
+    headers = {"Authorization": f"token {TOKEN}"}
+    t0 = time.perf_counter()
+    status, kernel = await asyncio.to_thread(_user_api, url, user, "POST", "/api/kernels", {"name": "python3"})
+    if status != 201:
+        raise RuntimeError(f"{user}: could not start a kernel ({status})")
+    ws_url = url.replace("http", "ws", 1) + f"/user/{user}/api/kernels/{kernel['id']}/channels"
+    conn = await websocket_connect(HTTPRequest(ws_url, headers=headers))
+    for src in code:
+        msg_id = uuid.uuid4().hex
+        await conn.write_message(json.dumps({
+            "header": {"msg_id": msg_id, "msg_type": "execute_request", "username": user, "session": msg_id,
+                       "version": "5.3", "date": datetime.datetime.now(datetime.timezone.utc).isoformat()},
+            "parent_header": {}, "metadata": {}, "channel": "shell",
+            "content": {"code": src, "silent": False, "store_history": True, "user_expressions": {},
+                        "allow_stdin": False, "stop_on_error": True}}))
+        while True:
+            raw = await conn.read_message()
+            if raw is None:
+                raise RuntimeError(f"{user}: the kernel's websocket closed")
+            if isinstance(raw, bytes):
+                continue
+            msg = json.loads(raw)
+            if msg.get("parent_header", {}).get("msg_id") != msg_id:
+                continue
+            if msg["msg_type"] == "error":
+                raise RuntimeError(f"{user}: lesson 01 failed: {msg['content']['ename']}: {msg['content']['evalue']}")
+            if msg["msg_type"] == "execute_reply":
+                if msg["content"].get("status") != "ok":
+                    raise RuntimeError(f"{user}: lesson 01's cell ended with {msg['content'].get('status')}")
+                break
+    conn.close()
+    return time.perf_counter() - t0
+
+
+def _user_api(url, user, method, path, body=None):
+    req = urllib.request.Request(f"{url}/user/{user}{path}", method=method,
+                                 data=None if body is None else json.dumps(body).encode(),
+                                 headers={"Authorization": f"token {TOKEN}", "Content-Type": "application/json"})
+    try:
+        with urllib.request.urlopen(req, timeout=60) as r:
+            return r.status, json.loads(r.read() or b"null")
+    except urllib.error.HTTPError as err:
+        return err.code, None
+
+
+def _open_studio(url, user):
+    """Render ``user``'s copy of the studio with Voila on their server (the page a browser gets, its kernel run);
+    returns the seconds it took."""
+    t0 = time.perf_counter()
+    req = urllib.request.Request(f"{url}/user/{user}/voila/render/lessons/studio.ipynb",
+                                 headers={"Authorization": f"token {TOKEN}"})
+    with urllib.request.urlopen(req, timeout=300) as r:
+        page = r.read().decode()
+    if "application/vnd.jupyter.widget-view+json" not in page:
+        raise RuntimeError(f"{user}: the studio's page came without its app")
+    return time.perf_counter() - t0
+
+
+def _memory(user):
+    """(server RSS, kernels' RSS, peak of all) in MB for ``user``'s server process and its children (kernels)."""
+    import psutil
+
+    for proc in psutil.process_iter(["cmdline"]):
+        try:
+            if not any("jupyterhub-singleuser" in part for part in proc.info["cmdline"] or []):
+                continue
+            if proc.environ().get("JUPYTERHUB_USER") != user:
+                continue
+            kids = proc.children(recursive=True)
+            peak = sum(_hwm_kb(p.pid) for p in [proc, *kids]) / 1024
+            return (proc.memory_info().rss / 2**20, sum(k.memory_info().rss for k in kids) / 2**20, peak)
+        except psutil.Error:
+            continue
+    raise RuntimeError(f"no server process found for {user}")
+
+
+def _hwm_kb(pid):
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("VmHWM:"):
+            return int(line.split()[1])
+    return 0
+
+
+async def _class(url, n, code):
+    users = [f"student{i + 1}" for i in range(n)]
+
+    async def one(user):
+        t0 = time.perf_counter()
+        status, _ = await asyncio.to_thread(_api, url, "POST", f"/users/{user}/server")
+        if status not in (201, 202):
+            raise RuntimeError(f"{user}: the hub refused to start the server ({status})")
+        while not (await asyncio.to_thread(_server, url, user) or {}).get("ready"):
+            if time.perf_counter() - t0 > 300:
+                raise RuntimeError(f"{user}: the server did not start within 300 s")
+            await asyncio.sleep(0.2)
+        start_s = time.perf_counter() - t0
+        lesson_s = await _run_lesson(url, user, code)
+        return user, start_s, lesson_s
+
+    for user in users:
+        _api(url, "POST", "/users", {"usernames": [user]})
+    done = await asyncio.gather(*(one(u) for u in users))
+    with_lesson = {user: _memory(user) for user, _, _ in done}
+    # then every student opens the studio at once, from their own server (Voila's server extension)
+    studio_s = await asyncio.gather(*(asyncio.to_thread(_open_studio, url, user) for user, _, _ in done))
+    rows = []
+    for (user, start_s, lesson_s), open_s in zip(done, studio_s):
+        server_mb, kernels_mb, peak_mb = _memory(user)
+        rows.append({"student": user, "server_start_s": round(start_s, 2), "lesson_s": round(lesson_s, 2),
+                     "studio_s": round(open_s, 2), "server_rss_mb": round(with_lesson[user][0], 1),
+                     "kernel_rss_mb": round(with_lesson[user][1], 1),
+                     "rss_mb": round(with_lesson[user][0] + with_lesson[user][1], 1),
+                     "studio_rss_mb": round(server_mb + kernels_mb, 1), "peak_mb": round(peak_mb, 1)})
+    for user in users:
+        _api(url, "DELETE", f"/users/{user}/server")
+    for user in users:
+        while _server(url, user) is not None:
+            time.sleep(0.5)
+        _api(url, "DELETE", f"/users/{user}")
+    return rows
+
+
+def measure(sizes, out, note=""):
+    code = _lesson_code()
+    folder = Path(tempfile.mkdtemp(prefix="posekit-hub-measure-"))
+    overlay = folder / "jupyterhub_measure_config.py"
+    overlay.write_text(OVERLAY.format(config=str(HERE / "jupyterhub_config.py"), token=TOKEN))
+    port = _free_port()
+    env = dict(os.environ, POSEKIT_HUB_STATE=str(folder / "state"), POSEKIT_HUB_PORT=str(port),
+               POSEKIT_HUB_API_PORT=str(_free_port()), POSEKIT_HUB_PROXY_API_PORT=str(_free_port()),
+               PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}")
+    url = f"http://127.0.0.1:{port}"
+    with open(folder / "hub.log", "w") as log:
+        hub = subprocess.Popen([str(Path(sys.executable).parent / "jupyterhub"), "-f", str(overlay)], cwd=folder,
+                               env=env, stdout=log, stderr=subprocess.STDOUT)
+        try:
+            t0 = time.time()
+            while "JupyterHub is now running" not in (folder / "hub.log").read_text(errors="replace"):
+                if hub.poll() is not None or time.time() - t0 > 120:
+                    raise SystemExit(f"the hub did not start; its log: {folder / 'hub.log'}")
+                time.sleep(0.5)
+            runs = []
+            for n in sizes:
+                rows = asyncio.run(_class(url, n, code))
+                runs.append({"students": n, "per_student": rows})
+                print(f"{n} students: " + ", ".join(
+                    f"start {r['server_start_s']:.1f} s, lesson {r['lesson_s']:.1f} s {r['rss_mb']:.0f} MB, studio "
+                    f"{r['studio_s']:.1f} s {r['studio_rss_mb']:.0f} MB (peak {r['peak_mb']:.0f})" for r in rows),
+                    flush=True)
+        finally:
+            hub.terminate()
+            try:
+                hub.wait(timeout=60)
+            except subprocess.TimeoutExpired:
+                hub.kill()
+    shutil.rmtree(folder, ignore_errors=True)
+    result = {
+        "command": shlex.join(["python", "deploy/jupyterhub/measure_class.py", *sys.argv[1:]]),
+        "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
+        "machine": {"platform": platform.platform(), "python": platform.python_version(),
+                    "cpus": os.cpu_count(), "memory_gb": round(_total_memory() / 2**30, 1),
+                    "note": note},
+        "lesson": LESSON.name, "cells": list(CELLS), "runs": runs,
+        "per_student_peak_mb": max(r["peak_mb"] for run in runs for r in run["per_student"]),
+    }
+    Path(out).write_text(json.dumps(result, indent=1) + "\n")
+    print(f"wrote {out}")
+    return result
+
+
+def _total_memory():
+    import psutil
+
+    return psutil.virtual_memory().total
+
+
+def _median(values):
+    v = sorted(values)
+    return (v[(len(v) - 1) // 2] + v[len(v) // 2]) / 2
+
+
+def tljh_memory_gb(users, peak_mb):
+    """TLJH's rule: users x per-user peak + 128 MB, in GB (1024 MB)."""
+    return (users * peak_mb + TLJH_OVERHEAD_MB) / 1024
+
+
+def table(result) -> str:
+    """docs/hub.md's class-sizing tables (markdown), read from a results file of ``measure``."""
+    lines = ["| students at once | server start, s | lesson 01 to its panel, s | the studio's page, s | "
+             "memory with lesson 01, MB | with lesson 01 and the studio, MB | peak, MB |",
+             "|---|---|---|---|---|---|---|"]
+    for run in result["runs"]:
+        rows = run["per_student"]
+        times = [[r[k] for r in rows] for k in ("server_start_s", "lesson_s", "studio_s")]
+        lines.append(f"| {run['students']} | " + " | ".join(f"{_median(t):.1f} / {max(t):.1f}" for t in times) +
+                     f" | {max(r['rss_mb'] for r in rows):.0f} | {max(r['studio_rss_mb'] for r in rows):.0f} | "
+                     f"{max(r['peak_mb'] for r in rows):.0f} |")
+    lines += ["", "Times: median / slowest student; memory: the student using the most (their server and kernels)."]
+    peak = result["per_student_peak_mb"]
+    lines += ["", f"Memory a machine needs by TLJH's rule (students × {peak:.0f} MB + {TLJH_OVERHEAD_MB} MB):", "",
+              "| students at once | " + " | ".join(str(n) for n in SIZES) + " |",
+              "|---|" + "---|" * len(SIZES),
+              "| memory, GB | " + " | ".join(f"{tljh_memory_gb(n, peak):.1f}" for n in SIZES) + " |"]
+    return "\n".join(lines)
+
+
+def z2jh_resources(result) -> dict:
+    """zero-to-jupyterhub's ``singleuser`` memory and CPU from the measured peak: the guarantee is the peak rounded
+    up to 64 MB (what every student is sure to have), the limit twice that (room for the exercises and the later
+    lessons; past it the kernel is killed), a quarter of a CPU guaranteed and one at most (a choice, not measured:
+    the lessons' solvers run on one core at a time)."""
+    guarantee = math.ceil(result["per_student_peak_mb"] / 64) * 64
+    return {"memory": {"guarantee": f"{guarantee}M", "limit": f"{2 * guarantee}M"},
+            "cpu": {"guarantee": 0.25, "limit": 1.0}}
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--students", default="1,2,4", help="class sizes to measure, comma-separated (default 1,2,4)")
+    ap.add_argument("--out", default=str(HERE / "class_sizing.json"), help="the results file to write")
+    ap.add_argument("--table", metavar="RESULTS", help="print docs/hub.md's tables from a results file and exit")
+    ap.add_argument("--values", metavar="RESULTS", help="print z2jh's singleuser resources from a results file")
+    ap.add_argument("--note", default="", help="a word on the machine kept in the results (e.g. what else ran)")
+    args = ap.parse_args(argv)
+    if args.table:
+        print(table(json.loads(Path(args.table).read_text())))
+    elif args.values:
+        print(json.dumps(z2jh_resources(json.loads(Path(args.values).read_text())), indent=1))
+    else:
+        measure([int(n) for n in args.students.split(",")], args.out, args.note)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,102 @@
+"""The hub's configuration without a hub (deploy/jupyterhub/jupyterhub_config.py): each student's lessons copied
+without overwriting, make lab's settings passed to each server, the culler as a service; and the pages and files
+built from the measured class (docs/hub.md's tables, the zero-to-jupyterhub values, the image's settings)."""
+
+from __future__ import annotations
+
+import json
+import re
+import runpy
+
+import pytest
+import yaml
+from traitlets.config import Config
+
+from posekit.viz.websocket import server_flags
+from tests.hub.hub_helpers import CONFIG, ROOT
+
+HUB = ROOT / "deploy" / "jupyterhub"
+RESULTS = HUB / "class_sizing.json"
+VALUES = HUB / "z2jh-values.yaml"
+
+
+@pytest.fixture
+def config(tmp_path, monkeypatch):
+    """The configuration file run as JupyterHub runs it, its state in a temporary folder: (namespace, config)."""
+    monkeypatch.setenv("POSEKIT_HUB_STATE", str(tmp_path / "state"))
+    monkeypatch.setenv("POSEKIT_HUB_CULL_TIMEOUT", "600")
+    c = Config()
+    return runpy.run_path(str(CONFIG), init_globals={"get_config": lambda: c}), c
+
+
+def test_lessons_are_copied_once_and_edits_are_kept(config, tmp_path):
+    ns, _ = config
+    home = tmp_path / "alice"
+    first = ns["copy_lessons"](home)
+    lessons = sorted(p.name for p in (ROOT / "notebooks").glob("*.ipynb") if not p.name.startswith("_"))
+    assert first == lessons and "studio.ipynb" in first and "01_fabrik.ipynb" in first
+    edited = home / "lessons" / "01_fabrik.ipynb"
+    edited.write_text("my own work")
+    (home / "lessons" / "00_skeletons_and_poses.ipynb").unlink()  # deleted by the student: copied back
+    assert ns["copy_lessons"](home) == ["00_skeletons_and_poses.ipynb"]
+    assert edited.read_text() == "my own work"
+
+
+def test_a_lessons_copy_that_cannot_be_made_says_why(config, tmp_path):
+    ns, _ = config
+    home = tmp_path / "carol"
+    home.mkdir()
+    (home / "lessons").write_text("")
+    with pytest.raises(ns["LessonCopyError"], match="is a file, expected a folder") as err:
+        ns["copy_lessons"](home)
+    assert "expected a folder" in err.value.jupyterhub_message  # what the hub's error page shows
+
+
+def test_each_server_gets_make_labs_settings_and_the_culler_runs(config):
+    _, c = config
+    assert server_flags("lab")[0] in c.Spawner.args
+    assert "--VoilaConfiguration.template=posekit" in c.Spawner.args
+    assert c.Spawner.default_url == "/lab/tree/lessons"
+    assert str(ROOT / "posekit" / "viz" / "voila") in c.Spawner.environment["JUPYTER_PATH"]
+    assert c.Spawner.environment["POSEKIT_NUMBA_CACHE"]  # one compiled-solver cache, not one per student's home
+    culler = next(s for s in c.JupyterHub.services if s["name"] == "idle-culler")
+    assert culler["command"][1:3] == ["-m", "jupyterhub_idle_culler"] and "--timeout=600" in culler["command"]
+    role = next(r for r in c.JupyterHub.load_roles if "idle-culler" in r.get("services", []))
+    assert "delete:servers" in role["scopes"]
+    assert c.JupyterHub.authenticator_class == "shared-password"  # the trial login, labelled so in the file
+    assert c.JupyterHub.bind_url.startswith("http://127.0.0.1:")  # a trial is not served to the network
+
+
+def _measure_module():
+    return runpy.run_path(str(HUB / "measure_class.py"), run_name="posekit_measure_class")
+
+
+def test_the_sizing_table_is_the_measured_one():
+    table = _measure_module()["table"](json.loads(RESULTS.read_text()))
+    page = (ROOT / "docs" / "hub.md").read_text()
+    found = re.search(r"<!-- class-sizing: begin[^>]*-->\n(.*?)\n<!-- class-sizing: end -->", page, re.S)
+    assert found, "docs/hub.md lacks the class-sizing block"
+    assert found.group(1).strip() == table.strip(), (
+        "docs/hub.md's class-sizing table differs from python deploy/jupyterhub/measure_class.py --table "
+        f"{RESULTS.relative_to(ROOT)}")
+
+
+def test_the_kubernetes_resources_follow_the_measured_peak():
+    results = json.loads(RESULTS.read_text())
+    values = yaml.safe_load(VALUES.read_text())
+    single = values["singleuser"]
+    want = _measure_module()["z2jh_resources"](results)
+    assert single["memory"] == want["memory"] and single["cpu"] == want["cpu"]
+    guarantee = int(single["memory"]["guarantee"].rstrip("M"))
+    assert guarantee >= results["per_student_peak_mb"]  # every student is sure to have their measured peak
+    assert single["defaultUrl"] == "/lab/tree/lessons"
+    assert values["cull"]["enabled"] and values["cull"]["timeout"] == 3600  # as make hub's default
+
+
+def test_the_image_carries_make_hubs_server_settings():
+    post = (ROOT / "deploy" / "image" / "postBuild").read_text()
+    settings = json.loads(re.search(r"<<JSON\n(.*?)\nJSON", post, re.S).group(1))
+    assert settings["ServerApp"]["kernel_websocket_connection_class"] == server_flags("lab")[0].split("=", 1)[1]
+    assert settings["VoilaConfiguration"]["template"] == "posekit"
+    requirements = (ROOT / "deploy" / "image" / "requirements.txt").read_text()
+    assert "download.pytorch.org/whl/cpu" in requirements and "+cpu" in requirements  # never the CUDA build
