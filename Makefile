@@ -10,6 +10,7 @@
 #   instructors: make slides (reveal.js slides of every lesson), make solutions (the lessons with
 #               their exercise solutions, executed), make course (one static page: lessons, slides,
 #               benchmark report) -- all under build/, openable from disk
+#   make hub    the lessons served to a class by JupyterHub on this machine (trial login; docs/hub.md)
 #   make docs   rewrite the generated documentation pages: docs/cli.md (the argument parser) and docs/benchmarks.md
 #               (the results files under data_samples/results)
 PYTHON ?= python3

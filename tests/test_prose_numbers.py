@@ -124,6 +124,10 @@ ALLOWED = {
     ("README.md", "3.13"): "the newest Python posekit supports (pyproject.toml)",
     ("docs/setup.md", "3.13"): "the newest Python posekit supports (pyproject.toml)",
     ("docs/setup.md", "2.13"): "the newest torch pyproject.toml admits",
+    # the hub's settings and TLJH's sizing rule
+    ("docs/hub.md", "20 minutes"): "the hub's kernel cull setting (deploy/jupyterhub/jupyterhub_config.py)",
+    ("docs/hub.md", "128 MB"): "TLJH's sizing rule: the hub's own share",
+    ("docs/hub.md", "64 MB"): "the values file rounds the measured peak up to a multiple of it (a rule)",
 }
 
 
@@ -287,7 +291,10 @@ class Known:
 
 # --- what the prose says --------------------------------------------------------------------------------------
 def _prose_without_code(text):
-    """Markdown minus code blocks and spans, maths and link targets (numbers there are code, symbols or paths)."""
+    """Markdown minus code blocks and spans, maths and link targets (numbers there are code, symbols or paths),
+    and blocks a command renders from its results file (``<!-- NAME: begin (command) -->`` ... ``<!-- NAME: end
+    -->``: the test of that command compares them with the file)."""
+    text = re.sub(r"<!-- ([\w-]+): begin.*?<!-- \1: end -->", " ", text, flags=re.S)
     text = re.sub(r"```.*?```", " ", text, flags=re.S)
     text = re.sub(r"`[^`]*`", " ", text)
     text = re.sub(r"\]\([^)]*\)", "]", text)
