@@ -251,7 +251,8 @@ def measure(sizes, out, note=""):
     result = {
         "command": shlex.join(["python", "deploy/jupyterhub/measure_class.py", *sys.argv[1:]]),
         "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
-        "machine": {"platform": platform.platform(), "python": platform.python_version(),
+        # the operating system and architecture, not the kernel's build string (it names a host, not a machine)
+        "machine": {"platform": f"{platform.system()} {platform.machine()}", "python": platform.python_version(),
                     "cpus": os.cpu_count(), "memory_gb": round(_total_memory() / 2**30, 1),
                     "note": note},
         "lesson": LESSON.name, "cells": list(CELLS), "runs": runs,
