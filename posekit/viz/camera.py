@@ -109,22 +109,24 @@ class FramedCamera:
                                "position": self._camera_position(radius)})
 
     def camera_state(self) -> dict:
-        """Where the camera is: ``position`` (3,) and ``quaternion`` (4,, x y z w, three.js order) in the scene
-        frame, the framed ``offset`` (3,, world) and ``radius`` (metres) — what :meth:`set_camera_state` restores
-        (undo in the studio)."""
+        """Where the camera is: ``position`` (3,) in the scene frame, the framed ``offset`` (3,, world) and
+        ``radius`` (metres) — what :meth:`set_camera_state` restores (undo in the studio).
+
+        The orientation is not part of it: OrbitControls always looks at the pivot with Y up, so the position
+        determines it, and the kernel's copy of ``camera.quaternion`` is not the browser's (it stays at its
+        default until the kernel sets it; restoring that default turned the camera away from the pose)."""
         return {"position": [float(c) for c in self.camera.position],
-                "quaternion": [float(c) for c in self.camera.quaternion],
                 "offset": [float(c) for c in self._offset], "radius": float(self._radius)}
 
     def set_camera_state(self, state: dict):
-        """Put the camera where :meth:`camera_state` said (without ``quaternion``: looking at the pivot, up Y)."""
+        """Put the camera where :meth:`camera_state` said, looking at the pivot with Y up."""
         self._offset = np.asarray(state["offset"], float).copy()
         self._radius = float(state["radius"])
         with self._world.hold_sync():
             self._world.position = [float(-c) for c in self._offset]
             self._world.matrix = translation_matrix(self._world.position)
         position = [float(c) for c in state["position"]]
-        quaternion = state.get("quaternion") or _look_at_origin(np.asarray(position, float))
+        quaternion = _look_at_origin(np.asarray(position, float))
         with self.camera.hold_sync():
             self.camera.position = position
             self.camera.quaternion = [float(c) for c in quaternion]

@@ -220,6 +220,33 @@ def test_dragging_a_target_in_3d_resolves_every_view(page, server):
     page.screenshot(path=str(server.folder / "studio_after_drag.png"))
 
 
+def test_undo_after_a_drag_that_widened_the_view_brings_back_the_view_as_it_was(page, server):
+    """Issue 44: a drag in 3D out past the view's edge widens the camera once the mouse is up; *undo* brings
+    back the pose and the camera together, so every pixel of the view is as before the drag (before the fix the
+    camera came back turned away from the pose: about a tenth of the view's pixels differed)."""
+    first = _canvases(page)[0]
+    first.scroll_into_view_if_needed()
+    before, n0 = _pixels(first), update_number(page)
+    x, y = press_in_3d(page, first, selected_joint(before), VIEWS)
+    box = first.bounding_box()
+    page.mouse.move(box["x"] + box["width"] - 3, box["y"] + 5, steps=20)  # up and out past the corner
+    page.mouse.up()
+    _wait_update(page, n0, "a solve after the drag")
+    wait_for(lambda: _changed_fraction(before, _pixels(first)) > 0.02, 60, "the view to show the dragged pose")
+    page.locator(VIEWS).get_by_role("button", name="drag in 3D").click()  # orbit again
+    n1 = update_number(page)
+    page.locator(".widget-button", has_text="undo").first.click()
+    _wait_update(page, n1, "a solve after undo")
+    # the view settles on the picture it showed before the drag (a state of the page, not a pause)
+    wait_for(lambda: _changed_fraction(before, _pixels(first)) < 0.002, 60,
+             "the view after undo to be the view before the drag")
+
+
+def _changed_fraction(a, b):
+    """The share of pixels whose colour differs by more than 30 in a channel."""
+    return float((np.abs(a.astype(int) - b.astype(int)).max(axis=-1) > 30).mean())
+
+
 def _orange(img):
     """Pixels of a lit orange look-at marker (not the yellow selection marker, not the red bones)."""
     r, g, b = (img[..., k].astype(float) for k in range(3))
