@@ -227,12 +227,18 @@ def test_undo_after_a_drag_that_widened_the_view_brings_back_the_view_as_it_was(
     first = _canvases(page)[0]
     first.scroll_into_view_if_needed()
     before, n0 = _pixels(first), update_number(page)
+    readout = page.locator(".posekit-target-y .widget-readout").first
+    ty0 = float(readout.inner_text())
     x, y = press_in_3d(page, first, selected_joint(before), VIEWS)
     box = first.bounding_box()
     page.mouse.move(box["x"] + box["width"] - 3, box["y"] + 5, steps=20)  # up and out past the corner
     page.mouse.up()
     _wait_update(page, n0, "a solve after the drag")
     wait_for(lambda: _changed_fraction(before, _pixels(first)) > 0.02, 60, "the view to show the dragged pose")
+    # the drag kept the camera's scale while the mouse was down: the corner is a few hand-spans up, not metres
+    # (the issue: a view that widened mid-drag turned a 120 px drag into a 1.94 m lift)
+    ty = float(readout.inner_text())
+    assert 0.1 < ty - ty0 < 1.0, f"the hand's target went from y = {ty0} to {ty} m"
     page.locator(VIEWS).get_by_role("button", name="drag in 3D").click()  # orbit again
     n1 = update_number(page)
     page.locator(".widget-button", has_text="undo").first.click()
