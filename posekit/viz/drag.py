@@ -21,7 +21,11 @@ import numpy as np
 
 from .meshes import attribute, geometry, icosphere
 
-__all__ = ["drag_point", "DragTargets"]
+__all__ = ["drag_point", "DragTargets", "DRAG_ON_CLASS"]
+
+DRAG_ON_CLASS = "posekit-drag-on"
+"""The CSS class the kernel puts on the *drag in 3D* switch once it has stopped orbiting (and takes off once it
+orbits again): a page, or a test driving one, presses in the view after it shows."""
 
 SURFACE_RADIUS = 40.0
 """Radius (metres) of the invisible sphere every mouse ray from inside the scene meets."""
@@ -101,6 +105,9 @@ class DragTargets:
 
     def _on_drag_mode(self, change):
         self.orbit.enabled = not change["new"]
+        # the page learns that the kernel has switched orbiting (a class on the switch, sent after ``enabled``): a
+        # press before it orbits the camera instead of grabbing a joint
+        (self.drag_mode.add_class if change["new"] else self.drag_mode.remove_class)(DRAG_ON_CLASS)
         self._let_go()
 
     def _let_go(self):

@@ -35,21 +35,33 @@ def selected_joint(img):
 
 
 def press_in_3d(page, canvas, at, views=".posekit-views"):
-    """Switch *drag in 3D* on and press the mouse at pixel ``at`` (x, y) of ``canvas``; returns that point in the
-    page's coordinates (the mouse stays down).
-
-    Between the switch and the press it pauses as a person does: the kernel turns orbiting off in the page in
-    reply to the switch, and a press before that reply orbits the camera instead (a full CI run, the other core
-    busy with notebooks, lost that race twice in one run)."""
-    toggle = page.locator(views).get_by_role("button", name="drag in 3D")
-    toggle.click()
-    wait_for(lambda: "mod-active" in (toggle.get_attribute("class") or ""), 10, "the drag-in-3D switch to show on")
-    page.wait_for_timeout(2000)
+    """Switch *drag in 3D* on (:func:`drag_in_3d`) and press the mouse at pixel ``at`` (x, y) of ``canvas``;
+    returns that point in the page's coordinates (the mouse stays down)."""
+    drag_in_3d(page, views, True)
     box = canvas.bounding_box()
     x, y = box["x"] + at[0], box["y"] + at[1]
     page.mouse.move(x, y)
     page.mouse.down()
     return x, y
+
+
+def drag_in_3d(page, views=".posekit-views", on=True):
+    """Set the first *drag in 3D* switch in ``views`` to ``on`` (clicking it only when it is not) and wait until
+    the kernel reports the switch done: it marks the switch with ``posekit.viz.drag.DRAG_ON_CLASS`` after it has
+    turned orbiting off, and takes the mark off after turning it on. A press before that reply orbits the camera
+    instead of grabbing a joint (a full CI run, the other core busy with notebooks, lost that race twice in one
+    run); waiting for the reply, not a pause, holds however slow the kernel is."""
+    from posekit.viz.drag import DRAG_ON_CLASS
+
+    toggle = page.locator(views).get_by_role("button", name="drag in 3D").first
+
+    def state():
+        classes = (toggle.get_attribute("class") or "").split()
+        return "mod-active" in classes, DRAG_ON_CLASS in classes
+
+    if state()[0] != on:
+        toggle.click()
+    wait_for(lambda: state() == (on, on), 30, f"the kernel to switch drag in 3D {'on' if on else 'off'}")
 
 
 def wait_for(pred, timeout, what, every: float = 0.5):
