@@ -46,14 +46,16 @@ def press_in_3d(page, canvas, at, views=".posekit-views"):
 
 
 def drag_in_3d(page, views=".posekit-views", on=True):
-    """Set the first *drag in 3D* switch in ``views`` to ``on`` (clicking it only when it is not) and wait until
-    the kernel reports the switch done: it marks the switch with ``posekit.viz.drag.DRAG_ON_CLASS`` after it has
-    turned orbiting off, and takes the mark off after turning it on. A press before that reply orbits the camera
-    instead of grabbing a joint (a full CI run, the other core busy with notebooks, lost that race twice in one
-    run); waiting for the reply, not a pause, holds however slow the kernel is."""
+    """Set the first *drag in 3D* switch in ``views`` (a selector or a locator) to ``on``, clicking it only when it
+    is not, and wait until the kernel reports the switch done: it marks the switch with
+    ``posekit.viz.drag.DRAG_ON_CLASS`` after it has turned orbiting off, and takes the mark off after turning it on.
+    A press before that reply orbits the camera instead of grabbing a joint (a full CI run, the other core busy with
+    notebooks, lost that race twice in one run); waiting for the reply, not a pause, holds however slow the kernel
+    is."""
     from posekit.viz.drag import DRAG_ON_CLASS
 
-    toggle = page.locator(views).get_by_role("button", name="drag in 3D").first
+    scope = page.locator(views) if isinstance(views, str) else views
+    toggle = scope.get_by_role("button", name="drag in 3D").first
 
     def state():
         classes = (toggle.get_attribute("class") or "").split()
@@ -62,6 +64,30 @@ def drag_in_3d(page, views=".posekit-views", on=True):
     if state()[0] != on:
         toggle.click()
     wait_for(lambda: state() == (on, on), 30, f"the kernel to switch drag in 3D {'on' if on else 'off'}")
+
+
+def kernel_round_trip(page, views=".posekit-views"):
+    """Wait until the kernel has handled everything the page sent it before, and the page has drawn every reply:
+    switch the first view's *drag in 3D* on and off again, each time waiting for the kernel's mark
+    (:func:`drag_in_3d`). A page sends its kernel messages in order and the kernel answers in order, so once the
+    second mark is gone, an echo the page sent earlier (a slider snapping to a new range) has been handled and any
+    solve it caused has reached the page. Tests that check that something did *not* happen wait for this, not for
+    a pause."""
+    drag_in_3d(page, views, True)
+    drag_in_3d(page, views, False)
+
+
+def wait_still(locator, timeout, what):
+    """Wait until an element's picture stands still (two screenshots in a row alike) and return it."""
+    last = [pixels(locator)]
+
+    def still():
+        now = pixels(locator)
+        same = (np.abs(now - last[0]).sum(-1) > 60).mean() < 0.0005
+        last[0] = now
+        return now if same else None
+
+    return wait_for(still, timeout, what)
 
 
 def wait_for(pred, timeout, what, every: float = 0.5):
@@ -77,7 +103,7 @@ def wait_for(pred, timeout, what, every: float = 0.5):
 
 SENT_LOG = r"""(() => {
   // every state update the page sends its kernel, in order: the names of the traits it reports
-  const sent = window.__posekit_sent = [];
+  const sent = window.__posekit_sent = [], switches = window.__posekit_switches = [];
   const decode = (data) => {
     if (typeof data === 'string') return JSON.parse(data);
     // the kernel websocket protocol v1: a count, offsets, then channel, header, parent, metadata, content
@@ -95,7 +121,12 @@ SENT_LOG = r"""(() => {
         const msg = decode(data), body = msg.content.data || {};
         // (the widget manager's own control channel opens without a model)
         if (msg.header.msg_type === 'comm_open' && body.state) sent.push(['open', body.state._model_name]);
-        if (msg.header.msg_type === 'comm_msg' && body.method === 'update') sent.push(Object.keys(body.state));
+        if (msg.header.msg_type === 'comm_msg' && body.method === 'update') {
+          const keys = Object.keys(body.state);
+          // a switch's value (a toggle button: true or false) is kept apart: kernel_round_trip sends two
+          if (keys.length === 1 && typeof body.state.value === 'boolean') switches.push(body.state.value);
+          else sent.push(keys);
+        }
       } catch (err) { sent.push(['unreadable', String(err)]); }
       return send(data);
     };
@@ -105,7 +136,8 @@ SENT_LOG = r"""(() => {
   Object.assign(window.WebSocket, Socket);
 })();"""
 """An init script for a page (``page.add_init_script``): ``window.__posekit_sent`` lists every state update the
-page sends its kernel (the trait names; ``["open", model]`` for a model the page creates)."""
+page sends its kernel (the trait names; ``["open", model]`` for a model the page creates), but a switch's new value
+(true or false), which goes to ``window.__posekit_switches``."""
 
 
 _SELECT_ON_PRESS = """(scope, joint) => {

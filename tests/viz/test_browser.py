@@ -24,8 +24,8 @@ import pytest
 
 from posekit.bench.studio import QUIET_CONSOLE
 from posekit.viz.websocket import server_flags
-from tests.viz.browser_helpers import (foreground as _foreground, pixels as _pixels, presses_right_after_selections,
-                                      wait_for as _wait_for)
+from tests.viz.browser_helpers import (foreground as _foreground, kernel_round_trip, pixels as _pixels,
+                                      presses_right_after_selections, wait_for as _wait_for, wait_still)
 
 pytestmark = pytest.mark.browser
 
@@ -306,8 +306,7 @@ def test_viewer_renders_and_slider_moves_joint(lab, chromium):
         page.keyboard.press("End")
         _wait_for(lambda: (np.abs(_pixels(view) - frame0).sum(-1) > 60).mean() > 0.0005 or None, 30,
                   "the viewer to show the clip's last frame")
-        time.sleep(1.0)
-        img = _pixels(view)
+        img = wait_still(view, 30, "the clip's last frame to stand still")
         # joint spheres are the light blue (#2e86c1 lit); bones are darker blue
         r, g, b = img[..., 0], img[..., 1], img[..., 2]
         ys, xs = np.nonzero((b > 150) & (b - r > 80) & (g > 100))
@@ -327,13 +326,12 @@ def test_viewer_renders_and_slider_moves_joint(lab, chromium):
         _drag(page, first_viewer.locator(".widget-slider", has_text="target y").locator(".noUi-handle").first, 50)
         target = status.locator("tr", has_text="target")
         _wait_for(lambda: target.count() == 1, 30, "a target for the picked joint")
-        time.sleep(1.5)
+        kernel_round_trip(page, first_viewer)  # the kernel has taken the slider's last value
         where = target.locator("td").all_inner_texts()[:3]
         joints = first_viewer.locator(".widget-dropdown", has_text="selected").locator("select")
         for j in ("left_knee", "chest", picked):
             joints.select_option(j)
-            time.sleep(0.8)
-        time.sleep(2.0)
+            kernel_round_trip(page, first_viewer)  # and any echo of the re-ranged sliders
         assert status.locator("tr").nth(1).locator("th").inner_text().strip() == picked
         assert target.locator("td").all_inner_texts()[:3] == where, "selecting joints moved the target"
     finally:
@@ -365,8 +363,7 @@ def _select_others_and_back(page, cell, labels, what):
     # (a panel offers its effectors' joints only: lesson 04 has two)
     for j in (others[1 % len(others)], others[len(others) // 2], orig or "(none)"):
         joints.select_option(label=j)
-        time.sleep(0.8)
-    time.sleep(2.0)  # let any echo from the browser arrive
+        kernel_round_trip(page, cell)  # the kernel has handled the choice and any echo of the re-ranged sliders
     assert [l.inner_text() for l in labels.all()] == texts, f"{what}: selecting joints moved a target"
 
 
@@ -461,7 +458,7 @@ def test_rig_viewer_selection_moves_nothing(lab, chromium):
         table = cell.locator(".widget-html-content", has=page.locator("th", has_text="x m")).first
         target = table.locator("tr", has_text="target")
         _wait_for(lambda: target.count() == 1, 60, "the left wrist's target in the status table")
-        time.sleep(1.5)
+        kernel_round_trip(page, cell)  # every update the page sent as it opened has been handled
         where, said = target.locator("td").all_inner_texts()[:3], status.inner_text()
         joints = cell.locator("select").first  # the viewer's *selected* joint list, the cell's only list
         joints.scroll_into_view_if_needed()
@@ -470,8 +467,7 @@ def test_rig_viewer_selection_moves_nothing(lab, chromium):
         assert "chest" not in offered and {"left_wrist", "right_ankle", "left_ankle"} <= set(offered), offered
         for j in ("right_ankle", "left_ankle", "left_wrist"):
             joints.select_option(j)
-            time.sleep(0.8)
-        time.sleep(2.0)
+            kernel_round_trip(page, cell)  # the kernel has handled the choice and any echo of the re-ranged sliders
         assert table.locator("tr").nth(1).locator("th").inner_text().strip() == "left_wrist"
         assert target.locator("td").all_inner_texts()[:3] == where, "selecting joints moved the wrist's target"
         assert status.inner_text() == said, "selecting joints re-posed the rig"

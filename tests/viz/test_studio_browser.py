@@ -12,13 +12,11 @@ Needs Debian's ``chromium`` (``make test`` installs it) and Playwright's Python 
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 import pytest
 
-from tests.viz.browser_helpers import (BACKGROUND, SENT_LOG, drag_in_3d, pixels as _pixels, press_in_3d,
-                                      presses_right_after_selections, selected_joint, wait_for)
+from tests.viz.browser_helpers import (BACKGROUND, SENT_LOG, drag_in_3d, kernel_round_trip, pixels as _pixels,
+                                      press_in_3d, presses_right_after_selections, selected_joint, wait_for)
 from posekit.bench.studio import (CHROMIUM, blank_tab, choose_solvers, launch_chromium, open_studio, rapid_updates,
                                   serve_voila, update_number)
 
@@ -103,8 +101,10 @@ def test_an_opening_page_reports_almost_nothing_back_and_asks_nothing_outside(pa
     # the views' models hold what the browser computes (buffer versions, matrices, projections, lights' parts), so
     # the page does not send them back: about 200 updates and 12 new models, each handled by the kernel, before
     wait_for(lambda: update_number(page) >= 0, 60, "the summary")
-    time.sleep(2)  # what the page sends once the views are drawn
+    # what the page sends once the views are drawn: anything sent before the round trip's switch on and off
+    kernel_round_trip(page, VIEWS)
     sent = page.evaluate("() => window.__posekit_sent")
+    assert page.evaluate("() => window.__posekit_switches") == [True, False]  # the round trip's own
     assert not [s for s in sent if s[0] == "open"], sent
     three = {"version", "matrix", "projectionMatrix", "matrixWorldNeedsUpdate", "morphTargetInfluences", "type"}
     assert not [s for s in sent if three & set(s)], sent
@@ -148,8 +148,7 @@ def test_a_fresh_studio_has_no_history_and_selecting_moves_nothing(page):
     n0, texts = update_number(page), _texts(page)
     for j in ("Head", "Hand_R", "Foot_L", "Hand_R", "Chest", "Hand_L"):
         joints.select_option(j)
-        time.sleep(0.8)
-    time.sleep(2.0)  # let any echo from the browser arrive
+        kernel_round_trip(page, VIEWS)  # the kernel has handled the choice and any echo of the re-ranged sliders
     assert update_number(page) == n0, "selecting joints re-solved: a target moved or an effector was added"
     assert _texts(page) == texts
     assert _buttons_disabled(page) == [True, True]
@@ -287,7 +286,7 @@ def test_a_look_at_marker_drags_its_own_target(page, server):
     assert rows1["target"] == rows0["target"], "dragging the look-at marker moved the head's position target"
     # the sliders: switch them to the look-at target and push X
     choice.get_by_role("button", name="look-at").click()
-    time.sleep(1.0)
+    kernel_round_trip(page, VIEWS)  # the sliders now hold the look-at target
     n0 = update_number(page)
     _drag_slider(page, page.locator(".posekit-target-x .noUi-handle").first, 60)
     _wait_update(page, n0, "a solve after the look-at slider")

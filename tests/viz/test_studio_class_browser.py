@@ -29,6 +29,7 @@ def test_the_floor_page_answers_every_key_press(tmp_path):
     from playwright.sync_api import sync_playwright
 
     from posekit.bench.studio import floor_notebook, launch_chromium, open_floor, rapid_updates, serve_voila
+    from tests.viz.browser_helpers import wait_for
 
     with serve_voila(extra=[floor_notebook(tmp_path)], cull_idle_s=60) as server, sync_playwright() as p:
         assert server.url.endswith("voila/render/studio.ipynb")
@@ -40,7 +41,7 @@ def test_the_floor_page_answers_every_key_press(tmp_path):
             logs = []
             page.on("console", lambda m: logs.append(m.type))
             page.evaluate("() => { console.debug('posekit'); console.log('posekit'); }")
-            page.wait_for_timeout(200)
+            wait_for(lambda: "log" in logs, 10, "the page's console.log")  # it follows the debug line, if any
         finally:
             browser.close()
     assert r["updates"] == 20 and len(r["latency_ms"]) == 20 and (r["latency_ms"] > 0).all()
