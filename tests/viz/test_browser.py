@@ -188,9 +188,26 @@ def _lab_page(chromium, viewport):
     return page
 
 
+def _kernel_of(url, token, notebook):
+    """The kernel of ``notebook``'s session as the server reports it: (id, execution state, connections), or None
+    while there is no session for it."""
+    with urllib.request.urlopen(f"{url}/api/sessions?token={token}", timeout=5) as r:
+        for s in json.load(r):
+            if s["path"].endswith(notebook) and s.get("kernel"):
+                k = s["kernel"]
+                return k["id"], k.get("execution_state"), k.get("connections", 0)
+    return None
+
+
 def _open_and_run_all(page, url, token, work, notebook):
     page.goto(f"{url}/lab/tree/{notebook}?reset&token={token}", timeout=120_000)
     page.wait_for_selector(".jp-Notebook:visible .jp-Cell", timeout=120_000)
+    # the notebook's kernel as the server sees it: started, idle and connected to the page. As a notebook opens,
+    # JupyterLab may start a kernel and at once replace it with another (seen on a loaded machine: the first was shut
+    # down before its websocket connected); Run All sent before the swap went to the kernel that was going, and the
+    # cells came back cleared, never run
+    kernel = _wait_for(lambda: (lambda k: k if k and k[1] == "idle" and k[2] >= 1 else None)(
+        _kernel_of(url, token, notebook)), 120, f"{notebook}'s kernel to be idle and connected")[0]
     page.wait_for_selector(".jp-Notebook-ExecutionIndicator[data-status='idle'], "
                            "#jp-main-statusbar :text('Idle')", timeout=120_000)
     # Run All, then check that the kernel took the cells (a "[*]" prompt: the saved outputs already
@@ -207,8 +224,14 @@ def _open_and_run_all(page, url, token, work, notebook):
             page.wait_for_function(_RUNNING, timeout=10_000, polling=100)
             if page.dialogs:  # say what was in the way (the run went on)
                 warnings.warn(f"{notebook}: JupyterLab dialogs closed on the way: {page.dialogs}")
+            now = _kernel_of(url, token, notebook)
+            if now is None or now[0] != kernel:
+                pytest.fail(_diagnose(page, url, token, work, f"{notebook}: the kernel changed under Run All "
+                                                              f"({kernel} -> {now})"))
             return
-        except Exception:  # noqa: BLE001 - playwright's TimeoutError; try the menu again
+        except Exception as exc:  # noqa: BLE001 - playwright's TimeoutError; try the menu again
+            if isinstance(exc, pytest.fail.Exception):
+                raise
             page.keyboard.press("Escape")
     pytest.fail(_diagnose(page, url, token, work, f"{notebook}: Run All Cells never started the kernel "
                                                   f"(dialogs closed on the way: {page.dialogs or 'none'})"))
