@@ -85,7 +85,8 @@ def _sun(target):
     camera = model(three.OrthographicCamera, **box, projectionMatrix=orthographic_matrix(*box.values()))
     # matrixWorldNeedsUpdate as three.js leaves it for a light it has placed: nothing to report back either
     return three.DirectionalLight(color="#ffffff", position=[3, 5, 4], intensity=0.75, target=target,
-                                  shadow=model(three.DirectionalLightShadow, camera=camera), matrixWorldNeedsUpdate=True)
+                                  shadow=model(three.DirectionalLightShadow, camera=camera),
+                                  matrixWorldNeedsUpdate=True)
 
 
 def antialias_default() -> bool:
@@ -147,7 +148,6 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
                  height: int = 420, joint_radius: float = 0.025, controls: bool = True,
                  background: str = "#f7f7f2", floor: bool = True, follow: bool = True, antialias: bool | None = None,
                  selectable=None):
-        import ipywidgets as w
         import pythreejs as three
 
         from ..kinematics import rest_pose
