@@ -9,7 +9,9 @@ message to the browser (and one acknowledgement back), not one per part. Bones a
 each face's normal on the graphics card), so a moved pose sends no normals; every other part is coloured by vertex
 colours, so a view compiles three shader programs (bones, spheres, lines) whatever it shows. Every attribute and
 geometry is made as the browser's three.js would make it (:func:`attribute`, :func:`geometry`), so a page that opens
-reports nothing back to the kernel for them. Units: metres; axes: :mod:`posekit.conventions`.
+reports nothing back to the kernel for them. The materials and the buffers nothing changes (triangle indices, normals,
+a ghost's colours) are one model for every view of a page (:mod:`posekit.viz.shared`): a page with four views opens
+with a third of the models. Units: metres; axes: :mod:`posekit.conventions`.
 """
 
 from __future__ import annotations
@@ -240,8 +242,10 @@ class Figure:
     ``triad_length`` per target: x red, y green, z blue), then the two :data:`PICK_BOUND` corners. Each part is
     a mesh (or line segments) of its own, with its own index into the shared rows, so picking and visibility stay
     per part; the normal and colour arrays are shared as well (every part is coloured by its rows of the colour
-    array, so the spheres share one material and the lines another) and sent again only when the number of
-    targets of a kind changes (:meth:`layout`) or the highlight moves.
+    array, so the spheres share one material and the lines another, with every other view's) and sent again only
+    when the number of targets of a kind changes (:meth:`layout`) or the highlight moves. The normals and each part's
+    triangle indices depend only on the skeleton and the counts: views that show as many markers hold the same
+    models (:func:`~posekit.viz.shared.constant_attribute`); the positions and colours are the view's own.
     :meth:`draw` writes every part and sends the positions once.
 
     Attributes
