@@ -10,8 +10,8 @@ each face's normal on the graphics card), so a moved pose sends no normals; ever
 colours, so a view compiles three shader programs (bones, spheres, lines) whatever it shows. Every attribute and
 geometry is made as the browser's three.js would make it (:func:`attribute`, :func:`geometry`), so a page that opens
 reports nothing back to the kernel for them. The materials and the buffers nothing changes (triangle indices, normals,
-a ghost's colours) are one model for every view of a page (:mod:`posekit.viz.shared`): a page with four views opens
-with a third of the models. Units: metres; axes: :mod:`posekit.conventions`.
+a ghost's colours) are one model for every view of a page (:mod:`posekit.viz.shared`): the studio's four views open
+with fewer than half the models they had. Units: metres; axes: :mod:`posekit.conventions`.
 """
 
 from __future__ import annotations
