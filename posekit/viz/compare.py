@@ -14,6 +14,7 @@ import numpy as np
 
 from ..ik.api import Effector, Pose
 from ..ik.effectors import resolve_effectors
+from .shared import widget
 from .viewer import SkeletonViewer, show_widget
 
 __all__ = ["SolverPanel", "ignored_effectors", "reached_mark", "solver_views", "solve_views", "status_line",
@@ -87,10 +88,10 @@ def solver_views(skeleton, names, pose, truth=None, width: int = 300, height: in
     for k, name in enumerate(names):
         v = SkeletonViewer(skeleton, pose, ghost=truth, width=width, height=height, controls=(k == 0),
                            selectable=selectable if k == 0 else None)
-        viewers[name], labels[name] = v, w.HTML(layout=w.Layout(width=f"{width}px"))  # a long message wraps
+        viewers[name], labels[name] = v, widget(w.HTML, layout={"width": f"{width}px"})  # a long message wraps
         # a view keeps its width (never squeezed into a scrolled box): a narrow page wraps the views onto rows
-        boxes.append(w.VBox([w.HTML(f"<b>{html.escape(str(name))}</b>"), v.renderer, labels[name]],
-                            layout=w.Layout(flex="0 0 auto", margin="0 8px 8px 0")))
+        boxes.append(widget(w.VBox, [widget(w.HTML, f"<b>{html.escape(str(name))}</b>"), v.renderer, labels[name]],
+                            layout={"flex": "0 0 auto", "margin": "0 8px 8px 0"}))
     return viewers, labels, boxes
 
 
@@ -205,12 +206,13 @@ class SolverPanel:
         first = next(iter(self.viewers.values()))
         first.on_target_change(self._on_target)
         first.on_look_target_change(self._on_target)
-        self.remove_button = w.Button(description="remove target", icon="times", layout=w.Layout(width="130px"),
-                                      tooltip="take the selected joint's effector away")
+        self.remove_button = widget(w.Button, description="remove target", icon="times", layout={"width": "130px"},
+                                    tooltip="take the selected joint's effector away")
         self.remove_button.on_click(lambda _: self.remove_effector(first.selected))
-        self.message = w.HTML()
-        self.widget = w.VBox([w.HBox(boxes, layout=w.Layout(flex_flow="row wrap")), first.controls,
-                              w.HBox([self.remove_button, self.message], layout=w.Layout(align_items="center"))])
+        self.message = widget(w.HTML)
+        self.widget = widget(w.VBox, [widget(w.HBox, boxes, layout={"flex_flow": "row wrap"}), first.controls,
+                                      widget(w.HBox, [self.remove_button, self.message],
+                                             layout={"align_items": "center"})])
         self.solve()
 
     def _ipython_display_(self):

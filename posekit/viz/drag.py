@@ -19,7 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .meshes import attribute, geometry, icosphere
+from .meshes import icosphere
+from .shared import constant_attribute, constant_geometry, material, widget
 
 __all__ = ["drag_point", "DragTargets", "DRAG_ON_CLASS"]
 
@@ -73,19 +74,20 @@ class DragTargets:
         import pythreejs as three
 
         unit, faces = icosphere(2)
+        # one geometry and one material model for the sphere of every view (posekit.viz.shared)
         self._drag_sphere = three.Mesh(
-            geometry(attributes={
-                "position": attribute((SURFACE_RADIUS * unit).astype(np.float32)),
-                "index": attribute(faces.reshape(-1).astype(np.uint32))}),
+            constant_geometry({"position": constant_attribute((SURFACE_RADIUS * unit).astype(np.float32)),
+                               "index": constant_attribute(faces.reshape(-1).astype(np.uint32))}),
             # never drawn (a material that is not visible) but still hit by the pickers' rays: three.js tests only
             # the object's own visibility when it casts a ray, the material's when it draws
-            three.MeshBasicMaterial(color="#ffffff", side="BackSide", visible=False))
+            material(three.MeshBasicMaterial, color="#ffffff", side="BackSide", visible=False))
         return self._drag_sphere
 
     def _drag_pickers(self):
         """Mouse down on the joints and markers, mouse move and mouse up on the sphere."""
         import pythreejs as three
 
+        self._drag_made = True
         self._grab = three.Picker(controlling=self._grabbable, event="mousedown")
         self._grab.observe(self._on_grab, names=["point"])
         self._move = three.Picker(controlling=self._drag_sphere, event="mousemove")
@@ -97,13 +99,15 @@ class DragTargets:
     def _drag_toggle(self):
         import ipywidgets as w
 
-        toggle = w.ToggleButton(value=False, description="drag in 3D", icon="hand-pointer-o",
-                                tooltip="on: press on a joint or a target and move the mouse to drag the target "
-                                        "(orbiting stops); off: the mouse orbits")
+        toggle = widget(w.ToggleButton, value=False, description="drag in 3D", icon="hand-pointer-o",
+                        tooltip="on: press on a joint or a target and move the mouse to drag the target "
+                                "(orbiting stops); off: the mouse orbits")
         toggle.observe(self._on_drag_mode, names="value")
         return toggle
 
     def _on_drag_mode(self, change):
+        if change["new"] and not getattr(self, "_drag_made", False):  # a view without controls: made when needed
+            self.renderer.controls = [*self.renderer.controls, *self._drag_pickers()]
         self.orbit.enabled = not change["new"]
         # the page learns that the kernel has switched orbiting (a class on the switch, sent after ``enabled``): a
         # press before it orbits the camera instead of grabbing a joint

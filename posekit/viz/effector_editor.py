@@ -30,6 +30,7 @@ from ..kinematics import fk
 from ..rotations import euler_to_quat, quat_to_matrix
 from ..transforms import facing_angle
 from .compare import solve_views, solver_views
+from .shared import widget
 from .viewer import show_widget
 
 __all__ = ["EffectorEditor"]
@@ -83,25 +84,26 @@ class EffectorEditor:
         self.first = next(iter(self.viewers.values()))
         self.first.on_target_change(self._on_target)
         self.first.on_look_target_change(self._on_look)
-        self.add_joint = w.Dropdown(options=[skeleton.names[j] for j in self.first.body],
-                                    value=skeleton.names[skeleton.pelvis()],
-                                    description="joint", layout=w.Layout(width="220px"))
-        self.add_kind = w.Dropdown(options=[(k.replace("_", "-"), k) for k in KIND_CHOICES], value="position",
-                                   description="kind",
-                                   layout=w.Layout(width="200px"))
-        self.add_button = w.Button(description="add effector", button_style="info")
+        self.add_joint = widget(w.Dropdown, options=[skeleton.names[j] for j in self.first.body],
+                                value=skeleton.names[skeleton.pelvis()], description="joint", layout={"width": "220px"})
+        self.add_kind = widget(w.Dropdown, options=[(k.replace("_", "-"), k) for k in KIND_CHOICES], value="position",
+                               description="kind", layout={"width": "200px"})
+        self.add_button = widget(w.Button, description="add effector", button_style="info")
         self.add_button.on_click(lambda _: self._add_clicked())
-        self.message = w.HTML()
-        self.rows_box = w.VBox([])
-        wrap = w.Layout(flex_flow="row wrap", align_items="center")  # a narrow page: views and controls wrap
-        self.widget = w.VBox([w.HBox(boxes, layout=wrap), self.first.controls,
-                              w.HBox([self.add_joint, self.add_kind, self.add_button, self.message], layout=wrap),
-                              self.rows_box])
+        self.message = widget(w.HTML)
+        self.rows_box = widget(w.VBox, [])
+        wrap = {"flex_flow": "row wrap", "align_items": "center"}  # a narrow page: views and controls wrap
+        self.widget = widget(w.VBox, [widget(w.HBox, boxes, layout=wrap), self.first.controls,
+                                      widget(w.HBox, [self.add_joint, self.add_kind, self.add_button, self.message],
+                                             layout=wrap),
+                                      self.rows_box])
         self._quiet = True
         for e in effectors:
             self.add(e.joint, e.kind, target=e.target, axis=e.axis)
         self._quiet = False
         self.solve()
+        for v in self.viewers.values():  # not shown yet: no press can come from the sliders replaced while building
+            v._forget_replaced_sliders()
 
     def _ipython_display_(self):
         show_widget(self.widget, f"[effector editor: live 3D views of {', '.join(self.solvers)} on {len(self.rows)} "
@@ -141,20 +143,20 @@ class EffectorEditor:
                 axis = G[j].T @ world
             row["axis"] = np.asarray(axis, float)
             row["target"] = P[j] + G[j] @ row["axis"] if target is None else np.asarray(target, float)
-        tol = w.FloatSlider(value=float(lam), min=0.0, max=1.0, step=0.01, description="tolerance",
-                            continuous_update=False, layout=w.Layout(width="260px"))
-        remove = w.Button(description="remove", layout=w.Layout(width="80px"))
-        parts = [w.HTML(f"<b>{name}</b> {kind.replace('_', '-')}", layout=w.Layout(width="180px")), tol]
+        tol = widget(w.FloatSlider, value=float(lam), min=0.0, max=1.0, step=0.01, description="tolerance",
+                     continuous_update=False, layout={"width": "260px"})
+        remove = widget(w.Button, description="remove", layout={"width": "80px"})
+        parts = [widget(w.HTML, f"<b>{name}</b> {kind.replace('_', '-')}", layout={"width": "180px"}), tol]
         row["tol"] = tol
-        row["widgets"] = w.HBox(parts + [remove])
+        row["widgets"] = widget(w.HBox, parts + [remove])
         if kind == "rotation":  # 360 px for 360 degrees: a pixel a degree, and the readout takes typed values
-            row["angle_sliders"] = [w.FloatSlider(value=0.0, min=-180, max=180, step=1, description=f"{a} °",
-                                                  continuous_update=False, readout_format=".0f",
-                                                  layout=w.Layout(width="460px"))
+            row["angle_sliders"] = [widget(w.FloatSlider, value=0.0, min=-180, max=180, step=1, description=f"{a} °",
+                                           continuous_update=False, readout_format=".0f", layout={"width": "460px"})
                                     for a in ("yaw", "pitch", "roll")]
             for s in row["angle_sliders"]:
                 s.observe(lambda ch, r=row: self._on_angles(r), names="value")
-            row["widgets"] = w.VBox([row["widgets"], w.HBox(row["angle_sliders"][:2]), row["angle_sliders"][2]])
+            row["widgets"] = widget(w.VBox, [row["widgets"], widget(w.HBox, row["angle_sliders"][:2]),
+                                             row["angle_sliders"][2]])
         tol.observe(lambda ch, r=row: self.set_tolerance(self.rows.index(r), ch["new"]), names="value")
         remove.on_click(lambda _, r=row: self.remove(self.rows.index(r)))
         self.rows.append(row)

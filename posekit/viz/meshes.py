@@ -9,12 +9,16 @@ message to the browser (and one acknowledgement back), not one per part. Bones a
 each face's normal on the graphics card), so a moved pose sends no normals; every other part is coloured by vertex
 colours, so a view compiles three shader programs (bones, spheres, lines) whatever it shows. Every attribute and
 geometry is made as the browser's three.js would make it (:func:`attribute`, :func:`geometry`), so a page that opens
-reports nothing back to the kernel for them. Units: metres; axes: :mod:`posekit.conventions`.
+reports nothing back to the kernel for them. The materials and the buffers nothing changes (triangle indices, normals,
+a ghost's colours) are one model for every view of a page (:mod:`posekit.viz.shared`): the studio's four views open
+with fewer than half the models they had. Units: metres; axes: :mod:`posekit.conventions`.
 """
 
 from __future__ import annotations
 
 import numpy as np
+
+from .shared import constant_attribute, material as shared_material, release
 
 __all__ = ["icosphere", "Spheres", "Bones", "Figure", "SIDE_COLOURS", "PICK_BOUND", "attribute", "geometry"]
 
@@ -129,12 +133,14 @@ class Spheres:
         colours = np.repeat(_hex(color)[None], n * V + 2, axis=0)
         self.geometry = geometry(attributes={
             "position": attribute(self._positions(np.zeros((n, 3)))),
-            "normal": attribute(normals),
-            "color": attribute(colours),
-            "index": attribute(index),
+            "normal": constant_attribute(normals),
+            "color": constant_attribute(colours),
+            "index": constant_attribute(index),
         })
-        # vertex colours, as the figure's joints and markers: one shader program for every sphere of a view
-        material = three.MeshLambertMaterial(vertexColors="VertexColors", transparent=opacity < 1, opacity=opacity)
+        # vertex colours, as the figure's joints and markers: one shader program for every sphere of a view, and one
+        # material model for the spheres of every view of this opacity (shared.material)
+        material = shared_material(three.MeshLambertMaterial, vertexColors="VertexColors", transparent=opacity < 1,
+                                   opacity=opacity)
         self.mesh = three.Mesh(self.geometry, material)
 
     def _positions(self, centres):
@@ -183,11 +189,12 @@ class _Tubes:
 
 def _bone_material(opacity: float = 1.0):
     """Flat shading: each face's normal comes from its vertices on the graphics card, so moving a pose sends
-    positions only (an 8-sided cylinder reads the same faceted or smooth at this size); no shine."""
+    positions only (an 8-sided cylinder reads the same faceted or smooth at this size); no shine. One material model
+    for the bones of every view of this opacity (:func:`~posekit.viz.shared.material`)."""
     import pythreejs as three
 
-    return three.MeshPhongMaterial(vertexColors="VertexColors", flatShading=True, shininess=0, specular="#000000",
-                                   transparent=opacity < 1, opacity=opacity)
+    return shared_material(three.MeshPhongMaterial, vertexColors="VertexColors", flatShading=True, shininess=0,
+                           specular="#000000", transparent=opacity < 1, opacity=opacity)
 
 
 class Bones:
@@ -213,8 +220,8 @@ class Bones:
         self.pairs, self.radius, self.sides = self._tubes.pairs, self._tubes.radius, self._tubes.sides
         self.geometry = geometry(attributes={
             "position": attribute(self._buffers(np.zeros((skeleton.n_joints, 3)))),
-            "color": attribute(self._tubes.colours),
-            "index": attribute(self._tubes.faces.reshape(-1).astype(np.uint32)),
+            "color": constant_attribute(self._tubes.colours),
+            "index": constant_attribute(self._tubes.faces.reshape(-1).astype(np.uint32)),
         })
         self.mesh = three.Mesh(self.geometry, _bone_material(opacity))
 
@@ -235,8 +242,10 @@ class Figure:
     ``triad_length`` per target: x red, y green, z blue), then the two :data:`PICK_BOUND` corners. Each part is
     a mesh (or line segments) of its own, with its own index into the shared rows, so picking and visibility stay
     per part; the normal and colour arrays are shared as well (every part is coloured by its rows of the colour
-    array, so the spheres share one material and the lines another) and sent again only when the number of
-    targets of a kind changes (:meth:`layout`) or the highlight moves.
+    array, so the spheres share one material and the lines another, with every other view's) and sent again only
+    when the number of targets of a kind changes (:meth:`layout`) or the highlight moves. The normals and each part's
+    triangle indices depend only on the skeleton and the counts: views that show as many markers hold the same
+    models (:func:`~posekit.viz.shared.constant_attribute`); the positions and colours are the view's own.
     :meth:`draw` writes every part and sends the positions once.
 
     Attributes
@@ -262,9 +271,11 @@ class Figure:
         self.highlighted = None
         self._marker_rgb = {"targets": _hex(target_colour), "looks": _hex(look_colour), "rays": _hex(look_colour)}
         # every part takes its colours from the shared colour array: the view's meshes and lines need only three
-        # shader programs (flat-shaded bones, lit spheres, lines), each compiled once per view when it first draws
-        spheres = three.MeshLambertMaterial(vertexColors="VertexColors")
-        lines = three.LineBasicMaterial(vertexColors="VertexColors", linewidth=2)
+        # shader programs (flat-shaded bones, lit spheres, lines), each compiled once per view when it first draws;
+        # and every view holds the same three material models (shared.material): joints and markers, selected or
+        # not, one sphere material; the selected joint is coloured by its rows of the colour array (highlight)
+        spheres = shared_material(three.MeshLambertMaterial, vertexColors="VertexColors")
+        lines = shared_material(three.LineBasicMaterial, vertexColors="VertexColors", linewidth=2)
         self._materials = [_bone_material(), spheres, spheres, spheres, lines, lines]
         self.bones = self.joints = self.targets = self.looks = self.rays = self.triads = None
         self.counts = None
@@ -309,9 +320,12 @@ class Figure:
         for part, rgb in self._marker_rgb.items():
             self._colours[rows[part]] = rgb
         self._colour_joints()
-        old = list(self._shared.values())
+        old = [self._shared[k] for k in ("position", "color") if k in self._shared]  # this view's own arrays
+        old_normal = self._shared.get("normal")
+        # the normals and every part's triangle indices depend only on the skeleton and the counts: one model for
+        # every view that shows as many markers (constant_attribute: released with the geometry that held it)
         self._shared = {"position": attribute(self._positions.astype(np.float32)),
-                        "normal": attribute(normals),
+                        "normal": constant_attribute(normals),
                         "color": attribute(self._colours.copy())}  # a copy: highlight() changes _colours
         corner = rows["corners"].start  # an empty part draws one degenerate triangle (or line) on a corner
         first = {p: rows[p].start for p in rows}
@@ -323,17 +337,19 @@ class Figure:
                    "triads": np.arange(6 * R * len(TRIAD_STRANDS)) + first["triads"] if R else np.full(2, corner)}
         kinds = [three.Mesh] * 4 + [three.LineSegments] * 2
         for name, kind, material in zip(indices, kinds, self._materials):
-            index = attribute(np.asarray(indices[name], np.uint32).reshape(-1))
+            index = constant_attribute(np.asarray(indices[name], np.uint32).reshape(-1))
             shape = geometry(attributes={**self._shared, "index": index})
             mesh = getattr(self, name)
             if mesh is None:
                 setattr(self, name, kind(shape, material))
             else:  # the same mesh (what pickers and groups hold), a new geometry; the old one closed
                 previous, mesh.geometry = mesh.geometry, shape
-                previous.attributes["index"].close()
+                release(previous.attributes["index"])
                 previous.close()
         for a in old:
             a.close()
+        if old_normal is not None:
+            release(old_normal)
         for mesh, shown in ((self.targets, T), (self.looks, L), (self.rays, L), (self.triads, R)):
             mesh.visible = bool(shown)
 

@@ -24,6 +24,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .shared import widget
+
 __all__ = ["TargetSliders"]
 
 
@@ -62,15 +64,28 @@ class TargetSliders:
         self._shown = None  # (joint, handle kind) the current sliders were made for; None: disabled
         self._sliders_due = False  # a change to show once the drag ends
         self.slider_generation = 0
-        self.slider_box = w.VBox([])
+        self.slider_box = widget(w.VBox, [])
         self.sliders = []
         self._make_sliders(None)
-        self.handle_choice = w.ToggleButtons(options=[("target", "target"), ("look-at", "look_at")], value="target",
-                                             description="sliders move", style={"button_width": "70px"},
-                                             layout=w.Layout(display="none"))
+        # a layout of its own (shown for a joint with both handles), a shared style
+        self.handle_choice = widget(w.ToggleButtons, options=[("target", "target"), ("look-at", "look_at")],
+                                    value="target", description="sliders move", style={"button_width": "70px"},
+                                    layout=w.Layout(display="none"))
         self.handle_choice.observe(lambda ch: self._sync_sliders(recentre=True), names="value")
 
+    def _forget_replaced_sliders(self):
+        """Close the replaced slider sets at once, for a view that no browser has shown yet (an editor or a studio
+        just built): no press can be on its way from them."""
+        for old in self._old_sliders if self._controls_made else ():
+            for s in old:
+                self._browser_value.pop(s.model_id, None)
+                s.close()
+        if self._controls_made:
+            self._old_sliders = []
+
     def _show_handle_choice(self):
+        if not self._controls_made:  # a view whose controls are not made yet: they show the handle when they are
+            return
         both = self.selected is not None and self.selected in self.targets and self.selected in self.look_targets
         self.handle_choice.layout.display = None if both else "none"
 
@@ -99,9 +114,9 @@ class TargetSliders:
                 value = float(np.round(point[axis] / step) * step)
                 lo = float(np.floor((point[axis] - self.SLIDER_SPAN) / step) * step)
                 hi = float(np.ceil((point[axis] + self.SLIDER_SPAN) / step) * step)
-            s = w.FloatSlider(value=value, min=lo, max=hi, step=step, description=f"target {a}",
-                              continuous_update=True, readout_format=".3f", disabled=point is None,
-                              readout=point is not None, layout=w.Layout(width="480px"))
+            s = widget(w.FloatSlider, value=value, min=lo, max=hi, step=step, description=f"target {a}",
+                       continuous_update=True, readout_format=".3f", disabled=point is None,
+                       readout=point is not None, layout={"width": "480px"})
             s.add_class(f"posekit-target-{a}")
             s.add_class(f"posekit-sliders-{self.slider_generation}")
             self._browser_value[s.model_id] = (axis, value)
@@ -120,6 +135,8 @@ class TargetSliders:
         """Show the selected joint's handle (:meth:`_handle`) on the sliders: new slider models when the joint,
         the handle or its point changed otherwise than by these sliders (or ``recentre``); during a drag in 3D,
         once the mouse is released. With no selection the sliders are disabled and show no number."""
+        if not self._controls_made:
+            return
         self._show_handle_choice()
         if self.selected is None:
             if self._shown is not None:

@@ -37,6 +37,7 @@ from .studio_export import StudioExport, link
 from .studio_messages import BUSY_SIGN, WRAP, StudioMessages
 from .studio_timeline import StudioTimeline
 from .setup_file import SetupError, parse_setup, save_setup
+from .shared import widget
 from .viewer import show_widget
 
 __all__ = ["PosingStudio", "MIN_SOLVERS", "MAX_SOLVERS"]
@@ -105,66 +106,66 @@ class PosingStudio(StudioExport, StudioTimeline):
         self.keys, self.frames, self.timeline_viewer = [], [], None
         self._restoring, self._last_move = False, (None, -1e9)
 
-        self.checks = {n: w.Checkbox(value=False, description=n, indent=False, layout=w.Layout(width="175px"))
+        # every widget's layout and style shared with the widgets that have the same (posekit.viz.shared)
+        self.checks = {n: widget(w.Checkbox, value=False, description=n, indent=False, layout={"width": "175px"})
                        for n in self.available}
-        self.choose = w.GridBox(list(self.checks.values()),
-                                layout=w.Layout(grid_template_columns="repeat(auto-fill, 175px)",
-                                                width="min(900px, 100%)"))
-        self.compare_button = w.Button(description="compare", button_style="info",
-                                       tooltip=f"pose with the ticked {MIN_SOLVERS}-{MAX_SOLVERS} solvers")
+        self.choose = widget(w.GridBox, list(self.checks.values()),
+                             layout={"grid_template_columns": "repeat(auto-fill, 175px)", "width": "min(900px, 100%)"})
+        self.compare_button = widget(w.Button, description="compare", button_style="info",
+                                     tooltip=f"pose with the ticked {MIN_SOLVERS}-{MAX_SOLVERS} solvers")
         self.compare_button.on_click(lambda _: self._safely(lambda: self.set_solvers(self.chosen), "solvers"))
-        self.busy = w.HTML()
-        self.summary = w.HTML()
+        self.busy = widget(w.HTML)
+        self.summary = widget(w.HTML)
         self.message = StudioMessages()
         lines = self.message.lines
-        self.undo_button = w.Button(description="undo", icon="undo", disabled=True, layout=w.Layout(width="90px"))
-        self.redo_button = w.Button(description="redo", icon="repeat", disabled=True, layout=w.Layout(width="90px"))
+        self.undo_button = widget(w.Button, description="undo", icon="undo", disabled=True, layout={"width": "90px"})
+        self.redo_button = widget(w.Button, description="redo", icon="repeat", disabled=True, layout={"width": "90px"})
         self.undo_button.on_click(lambda _: self.undo())
         self.redo_button.on_click(lambda _: self.redo())
-        self.setup_path = w.Text(value="setup.json" if self.own_folder else str(self.export_dir / "setup.json"),
-                                 description="setup file", layout=w.Layout(width="380px"))
-        self.save_button = w.Button(description="save setup")
+        self.setup_path = widget(w.Text, value="setup.json" if self.own_folder else str(self.export_dir / "setup.json"),
+                                 description="setup file", layout={"width": "380px"})
+        self.save_button = widget(w.Button, description="save setup")
         self.save_button.on_click(lambda _: self._safely(lambda: self.save(self.setup_file()), "setup"))
-        self.load_button = w.Button(description="load setup")
+        self.load_button = widget(w.Button, description="load setup")
         self.load_button.on_click(lambda _: self._safely(lambda: self.load(self.setup_file()), "setup"))
-        self.upload = w.FileUpload(accept=".json,.bvh", multiple=False, description="upload setup / BVH",
-                                   layout=w.Layout(width="auto"))
+        self.upload = widget(w.FileUpload, accept=".json,.bvh", multiple=False, description="upload setup / BVH",
+                             layout={"width": "auto"})
         self.upload.observe(self._on_upload, names="value")
-        self.export_solver = w.Dropdown(description="export", layout=w.Layout(width="260px"))
-        bvh = w.Button(description="pose as BVH")
+        self.export_solver = widget(w.Dropdown, description="export", layout={"width": "260px"})
+        bvh = widget(w.Button, description="pose as BVH")
         bvh.on_click(lambda _: self._safely(lambda: self.export_bvh(), "export"))
-        png = w.Button(description="views as PNG")
+        png = widget(w.Button, description="views as PNG")
         png.on_click(lambda _: self._safely(lambda: self.export_png(), "export"))
-        self.inbetweens = w.BoundedIntText(value=10, min=0, max=120, description="in-betweens",
-                                           layout=w.Layout(width="180px"))
-        self.ease = w.Dropdown(options=["smooth", "linear"], value="smooth", description="ease",
-                               layout=w.Layout(width="180px"))
-        add_key = w.Button(description="add key", icon="key")
+        self.inbetweens = widget(w.BoundedIntText, value=10, min=0, max=120, description="in-betweens",
+                                 layout={"width": "180px"})
+        self.ease = widget(w.Dropdown, options=["smooth", "linear"], value="smooth", description="ease",
+                           layout={"width": "180px"})
+        add_key = widget(w.Button, description="add key", icon="key")
         add_key.on_click(lambda _: self._safely(self.add_key, "timeline"))
-        clear = w.Button(description="clear keys")
+        clear = widget(w.Button, description="clear keys")
         clear.on_click(lambda _: self._safely(self.clear_keys, "timeline"))
-        build = w.Button(description="build animation", button_style="info")
+        build = widget(w.Button, description="build animation", button_style="info")
         build.on_click(lambda _: self._safely(self.build_animation, "timeline"))
-        anim = w.Button(description="animation as BVH")
+        anim = widget(w.Button, description="animation as BVH")
         anim.on_click(lambda _: self._safely(lambda: self.export_animation(), "timeline"))
-        self.keys_label = w.HTML("no keys yet")
-        self.timeline_box = w.VBox([])
-        self.views_box = w.VBox([])
-        row = lambda *ws: w.HBox(list(ws), layout=w.Layout(**WRAP))  # noqa: E731
-        self.widget = w.VBox([
-            w.HTML(f"<b>Solvers</b> — tick {MIN_SOLVERS} to {MAX_SOLVERS}, then compare"),
-            row(self.choose, w.VBox([self.compare_button, self.busy, lines["solvers"]])),
+        self.keys_label = widget(w.HTML, "no keys yet")
+        self.timeline_box = widget(w.VBox, [])
+        self.views_box = widget(w.VBox, [])
+        row = lambda *ws: widget(w.HBox, list(ws), layout=WRAP)  # noqa: E731
+        self.widget = widget(w.VBox, [
+            widget(w.HTML, f"<b>Solvers</b> — tick {MIN_SOLVERS} to {MAX_SOLVERS}, then compare"),
+            row(self.choose, widget(w.VBox, [self.compare_button, self.busy, lines["solvers"]])),
             self.views_box,
-            w.HTML("<b>All solvers</b>"), self.summary,
+            widget(w.HTML, "<b>All solvers</b>"), self.summary,
             row(self.undo_button, self.redo_button, self.setup_path, self.save_button, self.load_button, self.upload,
                 lines["setup"]),
             row(self.export_solver, bvh, png, lines["export"]),
-            w.HTML("<b>Timeline</b> — key setups; in-betweens posed by the export solver"),
+            widget(w.HTML, "<b>Timeline</b> — key setups; in-betweens posed by the export solver"),
             row(add_key, clear, self.inbetweens, self.ease, build, anim, lines["timeline"]), self.keys_label,
-            self.timeline_box], layout=w.Layout(max_width="100%"))
-        for widget, name in ((self.summary, "summary"), (self.choose, "solver-choice"), (self.busy, "busy"),
+            self.timeline_box], layout={"max_width": "100%"})
+        for part, name in ((self.summary, "summary"), (self.choose, "solver-choice"), (self.busy, "busy"),
                              (self.compare_button, "compare"), (self.views_box, "views")):
-            widget.add_class(f"posekit-{name}")  # for a browser test (and a stylesheet)
+            part.add_class(f"posekit-{name}")  # for a browser test (and a stylesheet)
         self.editor = None
         self.set_solvers(solvers, effectors=effectors)
         self.history, self.position = [self.editor.setup()], 0
@@ -238,6 +239,7 @@ class PosingStudio(StudioExport, StudioTimeline):
         editor.on_before_change(self._before_change)
         if self.editor is not None and self.editor.first.selected is not None:
             editor.first.select(self.editor.first.selected)  # keep the joint the sliders move
+        editor.first._forget_replaced_sliders()  # the new views are not shown yet
         self.editor = editor
         self.views_box.children = (editor.widget,)
         for n, c in self.checks.items():

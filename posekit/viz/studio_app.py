@@ -133,6 +133,7 @@ def app_studio(data: str | None = None, solvers=None, export_dir=None):
     for v in studio.editor.viewers.values():
         v.set_ghost(goal)
     studio.editor.first.select(skeleton.names[skeleton.index(effectors[0].joint)])
+    studio.editor.first._forget_replaced_sliders()  # not shown yet: no press can come from the sliders replaced
     return studio, refused
 
 
@@ -220,7 +221,9 @@ def kept_label(editor):
 
     from ipywidgets import HTML
 
-    label = HTML()
+    from .shared import widget
+
+    label = widget(HTML)
     label.counts = {}
 
     def count(*_):

@@ -26,7 +26,9 @@ class StudioMessages:
     def __init__(self):
         import ipywidgets as w
 
-        self.lines = {r: w.HTML(layout=w.Layout(margin="0 0 0 8px")) for r in self.ROWS}
+        from .shared import widget
+
+        self.lines = {r: widget(w.HTML, layout={"margin": "0 0 0 8px"}) for r in self.ROWS}
         for r, line in self.lines.items():
             line.add_class("posekit-message")
             line.add_class(f"posekit-message-{r}")

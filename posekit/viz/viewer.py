@@ -46,6 +46,7 @@ from ..skeleton import Skeleton
 from .camera import FramedCamera, orthographic_matrix, perspective_matrix, translation_matrix
 from .drag import DragTargets
 from .meshes import Bones, Figure, Spheres, icosphere
+from .shared import layout, model, widget
 from .sliders import TargetSliders
 
 __all__ = ["SkeletonViewer", "antialias_default", "icosphere", "show_widget", "TARGET_COLOUR", "LOOK_COLOUR"]
@@ -76,14 +77,16 @@ def _sun(target):
     the browser makes both (three.js lights carry them) and opens three new models in the kernel for every view as a
     page opens; the shadow camera's projection is given as three.js computes it
     (:func:`~posekit.viz.camera.orthographic_matrix` of its default box), so the browser has nothing to report. No
-    shadow is drawn."""
+    shadow is drawn, so every view's light holds the same shadow model (:func:`~posekit.viz.shared.model`)."""
     import pythreejs as three
 
-    box = (-5.0, 5.0, 5.0, -5.0, 0.5, 500.0)  # three.js' DirectionalLightShadow: left, right, top, bottom, near, far
-    camera = three.OrthographicCamera(*box, projectionMatrix=orthographic_matrix(*box))
+    box = dict(zip(("left", "right", "top", "bottom", "near", "far"), (-5.0, 5.0, 5.0, -5.0, 0.5, 500.0)))
+    # three.js' DirectionalLightShadow's box
+    camera = model(three.OrthographicCamera, **box, projectionMatrix=orthographic_matrix(*box.values()))
     # matrixWorldNeedsUpdate as three.js leaves it for a light it has placed: nothing to report back either
     return three.DirectionalLight(color="#ffffff", position=[3, 5, 4], intensity=0.75, target=target,
-                                  shadow=three.DirectionalLightShadow(camera=camera), matrixWorldNeedsUpdate=True)
+                                  shadow=model(three.DirectionalLightShadow, camera=camera),
+                                  matrixWorldNeedsUpdate=True)
 
 
 def antialias_default() -> bool:
@@ -114,7 +117,10 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
     joint_radius : float
         Joint sphere radius in metres (bones are 0.7 of it).
     controls : bool
-        Show the joint selector, the drag toggle, the X/Y/Z target sliders and the status table.
+        Show the joint selector, the drag toggle, the X/Y/Z target sliders and the status table. Without them
+        (``False``) they are made only when first asked for (:attr:`controls`, :attr:`widget` ...), hidden: the
+        second to fourth views of a panel or of the studio, shown by their canvases alone, cost no widget models for
+        controls another view holds.
     follow : bool
         Re-centre the view when a pose leaves the framed region.
     antialias : bool, optional
@@ -142,7 +148,6 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
                  height: int = 420, joint_radius: float = 0.025, controls: bool = True,
                  background: str = "#f7f7f2", floor: bool = True, follow: bool = True, antialias: bool | None = None,
                  selectable=None):
-        import ipywidgets as w
         import pythreejs as three
 
         from ..kinematics import rest_pose
@@ -195,30 +200,67 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         self.orbit = three.OrbitControls(controlling=self.camera)
         self.picker = three.Picker(controlling=f.joints, event="dblclick")
         self.picker.observe(self._on_pick, names=["point"])
+        # a view without controls shows no drag switch: its drag pickers are made if code ever turns dragging on
         self.renderer = three.Renderer(camera=self.camera, scene=self.scene,
-                                       controls=[self.orbit, self.picker, *self._drag_pickers()],
-                                       width=width, height=height,
+                                       controls=[self.orbit, self.picker, *(self._drag_pickers() if controls else [])],
+                                       width=width, height=height, layout=layout(),
+                                       shadowMap=model(three.WebGLShadowMap),  # no shadow drawn: one for every view
                                        antialias=antialias_default() if antialias is None else bool(antialias))
 
-        self.status = w.HTML(value="double-click a joint to select it")
-        # "" stands for no selection: a Dropdown whose value is None shows a blank box
-        self.joint_select = w.Dropdown(options=[("(none)", "")] + [(skeleton.names[j],) * 2 for j in self.selectable],
-                                       value="", description="selected", layout=w.Layout(width="230px"))
-        self.joint_select.observe(lambda ch: self.select(ch["new"] or None), names="value")
-        self.drag_mode = self._drag_toggle()
-        self.reset_button = w.Button(description="reset view", icon="home", layout=w.Layout(width="110px"),
-                                     tooltip="frame the pose again, seen from the front")
-        self.reset_button.on_click(lambda _: self.reset_view())
-        self._init_sliders()
-        self.controls = w.VBox([w.HBox([self.joint_select, self.drag_mode, self.reset_button]), self.handle_choice,
-                                self.slider_box, self.status])
-        self.controls.layout.display = None if controls else "none"
-        self._extra = w.VBox([])
-        self.widget = w.VBox([self.renderer, self.controls, self._extra])
+        self._show_controls, self._controls_made, self._sliders_due = bool(controls), False, False
+        if controls:
+            self._make_controls()
+            self._make_widget()
 
         self.set_pose(self.pose)
         self.set_ghost(ghost)
         self.set_targets(targets or {})
+
+    _LAZY = {**dict.fromkeys(("controls", "status", "joint_select", "drag_mode", "reset_button", "handle_choice",
+                              "slider_box", "sliders", "slider_generation"), "_make_controls"),
+             "widget": "_make_widget", "_extra": "_make_widget"}
+    """The parts a view without controls makes when first asked for, and the method that makes them."""
+
+    def __getattr__(self, name):
+        make = SkeletonViewer._LAZY.get(name)
+        made = self.__dict__.get("_controls_made")
+        if make is None or made is None or (made and make == "_make_controls"):  # not lazy, in __init__, or made
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+        getattr(self, make)()
+        return self.__dict__[name]
+
+    def _make_controls(self):
+        """The joint selector, the drag toggle, *reset view*, the target sliders and the status table, showing the
+        view as it is now (made in ``__init__`` with ``controls``, else when first asked for)."""
+        import ipywidgets as w
+
+        self._controls_made = True
+        skeleton = self.skeleton
+        self.status = widget(w.HTML, value="double-click a joint to select it")
+        # "" stands for no selection: a Dropdown whose value is None shows a blank box
+        self.joint_select = widget(w.Dropdown,
+                                   options=[("(none)", "")] + [(skeleton.names[j],) * 2 for j in self.selectable],
+                                   value=self.selected or "", description="selected", layout={"width": "230px"})
+        self.joint_select.observe(lambda ch: self.select(ch["new"] or None), names="value")
+        self.drag_mode = self._drag_toggle()
+        self.reset_button = widget(w.Button, description="reset view", icon="home", layout={"width": "110px"},
+                                   tooltip="frame the pose again, seen from the front")
+        self.reset_button.on_click(lambda _: self.reset_view())
+        self._init_sliders()
+        # a layout of its own: showing or hiding the controls changes it
+        self.controls = widget(w.VBox, [widget(w.HBox, [self.joint_select, self.drag_mode, self.reset_button]),
+                                        self.handle_choice, self.slider_box, self.status],
+                               layout=w.Layout(display=None if self._show_controls else "none"))
+        if self.selected is not None:  # made after a selection: the sliders and the readout show it
+            self._sync_sliders(recentre=True)
+            self._update_status()
+
+    def _make_widget(self):
+        """What to display: the canvas, the controls (shown or not) and room for a lesson's own controls."""
+        import ipywidgets as w
+
+        self._extra = widget(w.VBox, [])
+        self.widget = widget(w.VBox, [self.renderer, self.controls, self._extra])
 
     # ------------------------------------------------------------------ helpers
     def _check(self, pos, what):
@@ -345,7 +387,7 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
             raise ValueError(f"{name} is not offered in this view: choose one of {self._offered()}")
         self.selected = name
         self._show_handle_choice()
-        if self.joint_select.value != (name or ""):
+        if self._controls_made and self.joint_select.value != (name or ""):
             self.joint_select.value = name or ""
         self._figure.highlight(None if name is None else self.skeleton.index(name))
         self._draw()  # the selected joint drawn larger
@@ -367,6 +409,8 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
 
     def _refuse(self, name):
         """Say in the status line that ``name`` (clicked or pressed on) is not offered here."""
+        if not self._controls_made:
+            return
         self.status.value = (f"<span style='color:#b03a2e'>{html.escape(name)} is not offered here (no solver of this "
                              f"view takes it): choose {html.escape(self._offered())}</span>")
 
@@ -443,6 +487,8 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         self._target_callbacks.append(callback)
 
     def _update_status(self):
+        if not self._controls_made:  # written when the controls are made
+            return
         if self._held:  # written once, when the drawing_once block ends
             self._status_due = True
             return
@@ -487,12 +533,12 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
             raise ValueError(f"frames: expected shape (F, {self.skeleton.n_joints}, 3), got {frames.shape}")
         if not np.all(np.isfinite(frames)):
             raise ValueError("frames contain NaN or inf")
-        play = w.Play(value=0, min=0, max=len(frames) - 1, step=1, interval=max(int(frame_time * 1000), 15),
-                      description="play")
-        slider = w.IntSlider(value=0, min=0, max=len(frames) - 1, description=description)
+        play = widget(w.Play, value=0, min=0, max=len(frames) - 1, step=1,
+                      interval=max(int(frame_time * 1000), 15), description="play")
+        slider = widget(w.IntSlider, value=0, min=0, max=len(frames) - 1, description=description)
         w.jslink((play, "value"), (slider, "value"))
         slider.observe(lambda ch: self.set_pose(frames[ch["new"]]), names="value")
-        box = w.HBox([play, slider])
+        box = widget(w.HBox, [play, slider])
         self.frame_camera(frames)
         self.set_pose(frames[0])
         self.add_controls(box)
