@@ -77,7 +77,7 @@ def build_slides(out=DEFAULT_OUT, only=None, progress: bool = True) -> list[dict
     done = []
     for lesson in _progress(only or lessons(), "slides", progress):
         nb = read_notebook(lesson.path)
-        page = slide_rules.export(nb, "slides", static="../_static")
+        page = slide_rules.export(nb, "slides", static="../_static", lesson=lesson)
         path = out / "slides" / f"{lesson.stem}.html"
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(page, encoding="utf-8")

@@ -1,0 +1,613 @@
+"""A lesson laid out as a lecture deck: every slide fits the screen, code stays in the notebook, notes for the speaker.
+
+:func:`lecture_notebook` turns a lesson (marked by the slide convention of :mod:`posekit.course.slides`) into the
+notebook that reveal.js shows. Its rules:
+
+* **Code is hidden** on a slide; the cell's outputs (figure, table, printed result) stay. A cell tagged
+  :data:`SLIDE_CODE` (``slide-code``), or listed in :data:`POINT_CELLS`, is the point of its slide and shows its
+  code too.
+* **Every slide fits** :data:`~posekit.course.slides.SLIDE_WIDTH` x :data:`~posekit.course.slides.SLIDE_HEIGHT`.
+  Each slide's text, figures and tables are measured in estimated CSS pixels (the sizes set by the deck's
+  stylesheet, ``templates/posekit_reveal``); a slide that would be taller continues on the next one at a natural
+  break (a paragraph, a list, a cell), a figure shrinks to no less than :data:`MIN_FIGURE` px tall before it moves
+  on, a figure or table goes to its next slide *with its lead-in sentence*, and a printed table or report too long
+  for one slide shows its first rows and says where the whole is (the notebook's cell). Wide printed tables get a
+  smaller font rather than a cut edge. ``tests/test_slides_fit.py`` checks the result in Chromium.
+* **A figure fills its slide**: the height left on its slide goes to it.
+* **Speaker notes** (reveal.js ``s``) come from the lesson's own text: for a figure or table, the paragraphs that
+  follow it in the lesson (what it says); for an exercise, the instructor notes (open exercises,
+  ``posekit/exercises/solutions/nbNN.md``) or where its reference solution is; for a 3D view, which cell to run
+  live; on the first slide of each section, its time, and on the title slide, the whole plan. A section's time is
+  the lesson's planned time shared by the sections' weights (:func:`section_plan`).
+* **3D views** (widgets that live in a kernel) show the description the viewer stores with its output and the cell
+  to open live (``In [k]``).
+"""
+
+from __future__ import annotations
+
+import base64
+import copy
+import html
+import math
+import re
+import struct
+from dataclasses import dataclass, field
+
+from .slides import KEY_FIGURE, SLIDE_HEIGHT, SLIDE_WIDTH, WIDGET_VIEW, _PROGRESS, _source, strip_test_markers
+
+__all__ = ["SLIDE_CODE", "POINT_CELLS", "MIN_FIGURE", "lecture_notebook", "section_plan", "Page"]
+
+SLIDE_CODE = "slide-code"
+"""Cell tag: this code cell is the point of its slide, so its code is shown (at most :data:`MAX_CODE_LINES`)."""
+POINT_CELLS = {
+    "00": ["def my_fk("],
+    "01": ["def my_fabrik_chain("],
+    "05": ["def proto_residual("],
+}
+"""Code cells shown on the slides without a tag in the lesson: lesson number -> a line each such cell's source
+contains (``tests/test_slides.py`` checks each names exactly one code cell). Algorithms written by hand in front of
+the class, the part of the lesson that *is* code."""
+
+# ---- the deck's geometry: these numbers and the stylesheet in templates/posekit_reveal/index.html.j2 agree -------
+PAD_X, PAD_Y = 48, 20
+"""Slide padding (px): left/right, top/bottom."""
+WIDTH = SLIDE_WIDTH - 2 * PAD_X
+BUDGET = SLIDE_HEIGHT - 2 * PAD_Y - 24
+"""Height (px) a slide's content may take: the slide less its padding and a margin for estimation error."""
+TEXT_PX, TEXT_LINE = 24, 1.3
+CHARS = int(WIDTH / (0.56 * TEXT_PX))
+"""Characters of body text per line (a conservative mean glyph width)."""
+PRE_PX, PRE_MIN_PX, PRE_LINE = 17, 11, 1.25
+"""Printed output and shown code: font size, the smallest font a wide table may get, line height."""
+MONO = 0.61
+"""A monospace glyph's width in ems."""
+MIN_FIGURE = 300
+"""A figure is not drawn shorter than this (px) to share a slide; it moves to a slide of its own instead."""
+MAX_CODE_LINES = 30
+"""A shown code cell longer than this is cut (the notebook has it whole)."""
+_BLOCK_GAP = 14
+
+
+@dataclass
+class Block:
+    """One thing on a slide: a chunk of markdown, or one output (or shown code) of a code cell."""
+
+    kind: str  # "md", "png", "pre", "html", "code"
+    text: str = ""  # markdown, or preformatted text
+    height: float = 0.0  # estimated px at its preferred size
+    min_height: float = 0.0  # the least it may be drawn at (figures), else == height
+    cell: int = -1  # index of the lesson cell it comes from
+    data: str = ""  # png: base64
+    size: tuple = (0, 0)  # png: natural (w, h)
+    font: float = PRE_PX  # pre / code
+    note: str = ""  # pre: a line said after a cut
+    lead_in: bool = False  # md: a sentence that introduces what follows it
+
+    def __post_init__(self):
+        if not self.min_height:
+            self.min_height = self.height
+
+    @property
+    def is_output(self) -> bool:
+        return self.kind != "md"
+
+
+@dataclass
+class Page:
+    """One slide of the deck: its blocks, whether it opens a column (a ``## `` section or the key figure), its
+    section's title, and its speaker notes."""
+
+    blocks: list
+    opens_column: bool
+    section: str
+    continued: bool = False
+    notes: list = field(default_factory=list)
+    key: bool = False
+
+
+# ---- estimating sizes ------------------------------------------------------------------------------------------
+
+
+def _plain(md: str) -> str:
+    """Markdown as the characters a reader sees (roughly): links and emphasis markers out, TeX shortened."""
+    s = re.sub(r"\[([^\]]*)\]\([^)]*\)", r"\1", md)
+    s = re.sub(r"\$([^$]+)\$", lambda m: "x" * max(1, len(m.group(1)) // 2), s)
+    return s.replace("**", "").replace("`", "").replace("*", "")
+
+
+def _math_state(s: str, in_math: bool) -> bool:
+    """Whether a display formula (``$$ ... $$``) is still open after line ``s``."""
+    t = s.rstrip(".,;:")
+    if in_math:
+        return not t.endswith("$$")
+    if t.startswith("$$"):
+        return not (len(t) >= 4 and t.endswith("$$") and t != "$$")
+    return False
+
+
+def md_height(md: str, width_chars: int = CHARS) -> float:
+    """Estimated height (px) of a markdown chunk on a slide."""
+    h = 0.0
+    line_px = TEXT_PX * TEXT_LINE
+    in_math = False
+    for line in md.splitlines():
+        s = line.strip()
+        was = in_math
+        in_math = _math_state(s, in_math)
+        if was or s.startswith("$$"):
+            h += 14 if was else 60
+            continue
+        if not s:
+            h += 6
+        elif s.startswith("# "):
+            h += 46 * 1.2 * math.ceil(len(s) / 44) + 20
+        elif s.startswith("## "):
+            h += 36 * 1.2 * math.ceil(len(s) / 56) + 18
+        elif s.startswith("#"):
+            h += 30 * 1.2 * math.ceil(len(s) / 66) + 14
+        elif s.startswith("|"):
+            if not re.match(r"^\|[\s:|-]+\|$", s):  # a table row (20 px text): as tall as its longest cell
+                cols = [_plain(c).strip() for c in s.strip("|").split("|")]
+                per_col = max(4, int(WIDTH / (0.56 * 20) / len(cols)) - 2)
+                h += 26 * max(math.ceil(len(c) / per_col) or 1 for c in cols) + 8
+        else:
+            indent = 5 if re.match(r"^([-*+]|\d+\.)\s", s) else 0
+            h += line_px * max(1, math.ceil(len(_plain(s)) / (width_chars - indent)))
+    return h + 12
+
+
+def _png_size(b64: str) -> tuple[int, int]:
+    raw = base64.b64decode(b64[:64] + "=" * (-len(b64[:64]) % 4))
+    w, h = struct.unpack(">II", raw[16:24])
+    return int(w), int(h)
+
+
+def pre_font(lines: list[str]) -> float:
+    """The font (px) a block of preformatted lines gets so that its widest line fits the slide."""
+    widest = max((len(ln) for ln in lines), default=1)
+    return max(PRE_MIN_PX, min(PRE_PX, WIDTH / (MONO * max(widest, 1))))
+
+
+def pre_height(lines: list[str], font: float) -> float:
+    """Estimated height (px) of preformatted lines at ``font`` px (lines too wide even then wrap)."""
+    per_line = max(1, int(WIDTH / (MONO * font)))
+    rows = sum(max(1, math.ceil(len(ln) / per_line)) for ln in lines)
+    return rows * font * PRE_LINE + 16
+
+
+# ---- the lesson's cells as blocks ------------------------------------------------------------------------------
+
+
+def split_chunks(md: str) -> list[str]:
+    """A markdown cell's natural breaks: paragraphs, lists, tables and display formulas, each kept whole."""
+    chunks, cur, in_math, in_fence = [], [], False, False
+    for line in md.splitlines():
+        s = line.strip()
+        if s.startswith("```"):
+            in_fence = not in_fence
+        in_math = _math_state(s, in_math)
+        if not s and not in_math and not in_fence:
+            if cur:
+                chunks.append("\n".join(cur))
+                cur = []
+            continue
+        cur.append(line)
+    if cur:
+        chunks.append("\n".join(cur))
+    return chunks
+
+
+def _text(o) -> str:
+    t = o.get("text", "")
+    return t if isinstance(t, str) else "".join(t)
+
+
+def _data(d, key) -> str:
+    v = d.get(key, "")
+    return v if isinstance(v, str) else "".join(v)
+
+
+def widget_caption(plain: str) -> str:
+    """The description a viewer stores with its output (its text form), without the brackets."""
+    return plain.strip().strip("[]").strip()
+
+
+def output_blocks(cell, index: int, shown_code: bool, key: bool) -> list[Block]:
+    """The blocks a code cell puts on its slides: its code when it is the point, then its outputs."""
+    blocks = []
+    if shown_code:
+        lines = strip_test_markers(_source(cell)).splitlines()
+        note = ""
+        if len(lines) > MAX_CODE_LINES:
+            note = f"… {len(lines) - MAX_CODE_LINES} more lines in the notebook"
+            lines = lines[:MAX_CODE_LINES]
+        font = pre_font(lines)
+        blocks.append(Block("code", "\n".join(lines), pre_height(lines, font) + (30 if note else 0), cell=index,
+                            font=font, note=note))
+    outs = cell.get("outputs", [])
+    if key:  # the key figure's picture first: it opens the slide
+        outs = sorted(outs, key=lambda o: "image/png" not in o.get("data", {}))
+    for o in outs:
+        d = o.get("data", {})
+        if o.get("output_type") == "stream":
+            if o.get("name") == "stderr":
+                continue
+            lines = _text(o).rstrip("\n").splitlines()
+            if not lines:
+                continue
+            if blocks and blocks[-1].kind == "pre" and blocks[-1].cell == index:  # one printed block per cell
+                lines = blocks.pop().text.splitlines() + lines
+            font = pre_font(lines)
+            blocks.append(Block("pre", "\n".join(lines), pre_height(lines, font), cell=index, font=font))
+        elif WIDGET_VIEW in d:
+            plain = _data(d, "text/plain")
+            if _PROGRESS.search(plain):
+                continue
+            what = widget_caption(plain) or "an interactive widget"
+            text = (f"**Live in the notebook:** {what}.\n\nOpen the lesson in JupyterLab (`make lab`) and run cell "
+                    f"`In [{cell.get('execution_count') or '?'}]` to use it.")
+            blocks.append(Block("html", text, md_height(text) + 30, cell=index))
+        elif "image/png" in d:
+            b64 = _data(d, "image/png").strip()
+            w, h = _png_size(b64)
+            shown = h * min(1.0, WIDTH / w)
+            pref = min(shown * 1.25, BUDGET)  # small figures may grow a little to be read from the back
+            blocks.append(Block("png", height=pref, min_height=min(pref, MIN_FIGURE), cell=index, data=b64,
+                                size=(w, h)))
+        elif "text/markdown" in d:
+            md = _data(d, "text/markdown")
+            blocks.append(Block("html", md, md_height(md, int(CHARS * 1.15)), cell=index))
+        elif "text/html" in d:
+            blocks.append(Block("html", _data(d, "text/html"), 120, cell=index))
+        elif "text/plain" in d:
+            lines = _data(d, "text/plain").splitlines()
+            font = pre_font(lines)
+            blocks.append(Block("pre", "\n".join(lines), pre_height(lines, font), cell=index, font=font))
+    return blocks
+
+
+# ---- packing blocks into slides --------------------------------------------------------------------------------
+
+
+def _fit_alone(b: Block, room: float, where: str) -> list[Block]:
+    """A block too tall for a slide of its own, cut so it fits ``room`` px (printed text, markdown) — the rest
+    said to be in the notebook — or split into pieces that each fit (markdown lists)."""
+    if b.kind in ("pre", "code"):
+        lines = b.text.splitlines()
+        line_px = b.font * PRE_LINE
+        keep = max(3, int((room - 16 - 34) / line_px))
+        while keep > 3 and pre_height(lines[:keep], b.font) + 34 > room:
+            keep -= 1
+        note = f"… {len(lines) - keep} more lines: the whole is in the notebook ({where})"
+        return [Block(b.kind, "\n".join(lines[:keep]), pre_height(lines[:keep], b.font) + 34, cell=b.cell,
+                      font=b.font, note=note)]
+    if b.kind == "md":
+        lines, pieces, cur = b.text.splitlines(), [], []
+        for ln in lines:
+            if cur and md_height("\n".join(cur + [ln])) > room:
+                pieces.append("\n".join(cur))
+                cur = []
+            cur.append(ln)
+        pieces.append("\n".join(cur))
+        return [Block("md", p, md_height(p), cell=b.cell) for p in pieces]
+    if b.kind == "html":  # a markdown output (a report): its first lines
+        lines, keep = b.text.splitlines(), []
+        for ln in lines:
+            if md_height("\n".join(keep + [ln]), int(CHARS * 1.15)) > room - 40:
+                break
+            keep.append(ln)
+        rest = len(lines) - len(keep)
+        text = "\n".join(keep) + (f"\n\n*… {rest} more lines: the whole is in the notebook ({where}).*" if rest else "")
+        return [Block("html", text, md_height(text, int(CHARS * 1.15)), cell=b.cell)]
+    b.height = b.min_height = min(b.height, room)
+    return [b]
+
+
+def pack(blocks: list[Block], where) -> list[list[Block]]:
+    """Blocks into slides of at most :data:`BUDGET` px, in order; a figure or table moves with its lead-in.
+
+    ``where(cell)`` names a cell for "the whole is in the notebook" notes."""
+    pages, cur, used = [], [], 0.0
+    for b in blocks:
+        gap = _BLOCK_GAP if cur else 0
+        if used + gap + b.height <= BUDGET or (b.kind == "png" and used + gap + b.min_height <= BUDGET):
+            cur.append(b)
+            used += gap + min(b.height, BUDGET - used - gap)
+            continue
+        carry = []
+        if b.is_output and len(cur) > 1 and cur[-1].kind == "md" and cur[-1].lead_in:
+            carry = [cur.pop()]
+        if cur:
+            pages.append(cur)
+        cur = carry
+        used = sum(x.height for x in cur) + _BLOCK_GAP * len(cur)
+        room = BUDGET - used
+        if b.min_height > room:
+            if cur and b.min_height > BUDGET - 0:
+                pass
+            pieces = _fit_alone(b, room if room > BUDGET / 2 else BUDGET, where(b.cell))
+            if room <= BUDGET / 2 and cur:
+                pages.append(cur)
+                cur, used = [], 0.0
+            for p in pieces[:-1]:
+                pages.append(cur + [p])
+                cur, used = [], 0.0
+            b = pieces[-1]
+        cur.append(b)
+        used += b.height + (_BLOCK_GAP if len(cur) > 1 else 0)
+    if cur:
+        pages.append(cur)
+    return pages
+
+
+def size_figures(page: Page) -> None:
+    """Give a slide's figures the height its other blocks leave (each at least its least height)."""
+    figs = [b for b in page.blocks if b.kind == "png"]
+    if not figs:
+        return
+    other = sum(b.height for b in page.blocks if b.kind != "png") + _BLOCK_GAP * (len(page.blocks) - 1)
+    other += 34 if page.continued else 0
+    room = max(BUDGET - other, MIN_FIGURE * len(figs))
+    want = sum(b.height for b in figs)
+    for b in figs:
+        b.height = max(min(b.height * room / want if want > room else b.height * min(room / want, 1.6), BUDGET),
+                       min(b.min_height, room / len(figs)))
+        b.height = min(b.height, room / len(figs) if len(figs) > 1 else room)
+
+
+# ---- sections, time and notes ----------------------------------------------------------------------------------
+
+
+def section_plan(titles: list[str], weights: list[float], minutes: int) -> list[int]:
+    """Share ``minutes`` among sections in proportion to ``weights`` (whole minutes, largest remainders first,
+    at least one each); the shares add up to ``minutes``."""
+    total = sum(weights) or 1.0
+    raw = [minutes * w / total for w in weights]
+    whole = [max(1, int(r)) for r in raw]
+    order = sorted(range(len(raw)), key=lambda i: raw[i] - int(raw[i]), reverse=True)
+    k = 0
+    while sum(whole) < minutes and order:
+        whole[order[k % len(order)]] += 1
+        k += 1
+    while sum(whole) > minutes and max(whole) > 1:
+        whole[whole.index(max(whole))] -= 1
+    return whole
+
+
+_EXERCISE = re.compile(r"^\*\*Exercise (\d+)\b([^*]*)\*\*")
+
+
+def _where(cell) -> str:
+    n = cell.get("execution_count")
+    return f"cell In [{n}]" if n else "its cell"
+
+
+def _explanation(cells, after: int) -> list[str]:
+    """The lesson's prose that follows code cell ``after``: markdown cells up to the next code cell or section."""
+    out = []
+    for c in cells[after + 1:]:
+        if c["cell_type"] != "markdown" or _source(c).startswith("## ") or _EXERCISE.match(_source(c)):
+            break
+        out.append(_source(c))
+    return out
+
+
+def lecture_pages(nb, number: str, title: str, minutes: int, facts: str = "", exercise_notes=None,
+                  solutions_module: str | None = None) -> list[Page]:
+    """The lesson's slides as :class:`Page` s (see the module docstring)."""
+    cells = nb["cells"]
+    exercise_notes = exercise_notes or {}
+    points = POINT_CELLS.get(number, [])
+    groups = []  # (opens_column, section, [blocks], key, [notes])
+    section = title
+    for i, cell in enumerate(cells):
+        st = cell.get("metadata", {}).get("slideshow", {}).get("slide_type", "-")
+        tags = set(cell.get("metadata", {}).get("tags", []))
+        if st == "skip":
+            continue
+        src = _source(cell)
+        if cell["cell_type"] == "markdown":
+            if st == "notes":
+                if groups:
+                    groups[-1][4].append(src)
+                continue
+            if src.startswith("## "):
+                section = src.splitlines()[0][3:].strip()
+            chunks = split_chunks(src)
+            blocks = [Block("md", c, md_height(c), cell=i) for c in chunks]
+            if i == 0 and facts:
+                blocks.insert(1, Block("md", facts, md_height(facts), cell=i))
+            if blocks:
+                blocks[-1].lead_in = True
+            notes = []
+            m = _EXERCISE.match(src)
+            if m:
+                k = int(m.group(1))
+                if k in exercise_notes:
+                    notes.append(f"**Instructor notes — exercise {k}.** {exercise_notes[k]}")
+                elif solutions_module:
+                    notes.append(f"Exercise {k}: the reference solution is in `{solutions_module}` "
+                                 f"(`posekit exercises solutions {number}` runs it against its checker).")
+            if st in ("slide", "subslide") or not groups:
+                groups.append([st == "slide", section, blocks, False, notes])
+            else:
+                groups[-1][2].extend(blocks)
+                groups[-1][4].extend(notes)
+            continue
+        shown = SLIDE_CODE in tags or any(p in src for p in points)
+        key = KEY_FIGURE in tags
+        blocks = output_blocks(cell, i, shown, key)
+        if not blocks:
+            if st == "slide" and groups is not None:
+                groups.append([True, section, [], False, []])
+            continue
+        notes = []
+        expl = _explanation(cells, i)
+        if expl:
+            notes.append("What it shows (the lesson's text after it): " + "\n\n".join(expl))
+        if any(b.kind == "html" and b.text.startswith("**Live in the notebook") for b in blocks):
+            notes.append("Switch to JupyterLab for this one: run the lesson up to "
+                         f"{_where(cell)} and move the targets while the class watches.")
+        if st in ("slide", "subslide") or not groups:
+            groups.append([st == "slide", section, blocks, key, notes])
+        else:
+            groups[-1][2].extend(blocks)
+            groups[-1][3] = groups[-1][3] or key
+            groups[-1][4].extend(notes)
+    # a figure that opens its own slide takes its lead-in (a sentence ending in ':') from the slide before
+    for g in range(1, len(groups)):
+        prev, blocks = groups[g - 1][2], groups[g][2]
+        if (blocks and blocks[0].is_output and len(prev) > 1 and prev[-1].kind == "md"
+                and prev[-1].text.rstrip().endswith(":")):
+            blocks.insert(0, prev.pop())
+    pages = []
+    for opens, sec, blocks, key, notes in groups:
+        if not blocks:
+            continue
+        for k, chunk in enumerate(pack(blocks, lambda c: _where(cells[c]) if c >= 0 else "the notebook")):
+            page = Page(chunk, opens and k == 0, sec, continued=k > 0, key=key and k == 0)
+            if k == 0:
+                page.notes.extend(notes)
+            pages.append(page)
+    # an empty column start leaves its column to the next page
+    for p in pages:
+        size_figures(p)
+    return pages
+
+
+def _timing(pages: list[Page], minutes: int) -> list[tuple[str, int, int]]:
+    sections, weights = [], []
+    for p in pages:
+        if p.opens_column and not p.key or not sections:
+            sections.append(p.section)
+            weights.append(0.0)
+        figs = sum(b.is_output for b in p.blocks)
+        weights[-1] += 1.0 + 0.5 * figs
+    shares = section_plan(sections, weights, minutes)
+    plan, t = [], 0
+    for s, m in zip(sections, shares):
+        plan.append((s, m, t))
+        t += m
+    return plan
+
+
+# ---- pages as the notebook nbconvert's reveal template draws -----------------------------------------------------
+
+
+def _block_html(b: Block) -> str:
+    if b.kind == "png":
+        return (f'<img class="posekit-figure" src="data:image/png;base64,{b.data}" '
+                f'style="height:{int(b.height)}px" alt="figure">')
+    if b.kind in ("pre", "code"):
+        body = html.escape(b.text)
+        if b.kind == "code":
+            body = _highlight(b.text)
+        note = f'<p class="posekit-cut">{html.escape(b.note)}</p>' if b.note else ""
+        cls = "posekit-code" if b.kind == "code" else "posekit-out"
+        return f'<pre class="{cls}" style="font-size:{b.font:.1f}px">{body}</pre>{note}'
+    return ""
+
+
+def _highlight(code: str) -> str:
+    from pygments import highlight
+    from pygments.formatters import HtmlFormatter
+    from pygments.lexers import PythonLexer
+
+    out = highlight(code, PythonLexer(), HtmlFormatter(nowrap=True))
+    return out.rstrip("\n")
+
+
+def _cell(kind: str, source: str, slide_type: str, outputs=None):
+    import nbformat
+
+    if kind == "md":
+        c = nbformat.v4.new_markdown_cell(source)
+    else:
+        c = nbformat.v4.new_code_cell("")
+        c.outputs = outputs or []
+        c.metadata["transient"] = {"remove_source": True}
+    c.metadata["slideshow"] = {"slide_type": slide_type}
+    return c
+
+
+def pages_to_cells(pages: list[Page]) -> list:
+    """The pages as notebook cells typed for nbconvert's reveal.js template (``slide``, ``subslide``, ``-``,
+    ``notes``)."""
+    cells = []
+    for page in pages:
+        first = "slide" if page.opens_column or not cells else "subslide"
+        out = []
+        if page.continued:
+            out.append(_cell("md", f'<p class="posekit-cont">{html.escape(page.section)} (continued)</p>', first))
+        md = []
+
+        def flush():
+            if md:
+                out.append(_cell("md", "\n\n".join(md), first if not out else "-"))
+                md.clear()
+        for b in page.blocks:
+            if b.kind == "md":
+                md.append(b.text)
+                continue
+            flush()
+            if b.kind == "html" and b.text.lstrip().startswith(("<", "**Live")) is False:
+                outputs = [{"output_type": "display_data", "metadata": {}, "data": {"text/markdown": b.text}}]
+            elif b.kind == "html" and b.text.startswith("**Live"):
+                out.append(_cell("md", f'<div class="posekit-widget-note">\n\n{b.text}\n\n</div>',
+                                 first if not out else "-"))
+                continue
+            elif b.kind == "html":
+                outputs = [{"output_type": "display_data", "metadata": {}, "data": {"text/html": b.text}}]
+            else:
+                outputs = [{"output_type": "display_data", "metadata": {}, "data": {"text/html": _block_html(b)}}]
+            out.append(_cell("code", "", first if not out else "-", outputs))
+        flush()
+        if page.notes:
+            out.append(_cell("md", "\n\n".join(page.notes), "notes"))
+        cells.extend(out)
+    return cells
+
+
+def lecture_notebook(nb, lesson=None) -> dict:
+    """The lesson ``nb`` as the notebook its reveal.js deck is drawn from (see the module docstring).
+
+    Parameters
+    ----------
+    nb : dict
+        An executed lesson, marked by the slide convention.
+    lesson : posekit.course.lessons.Lesson, optional
+        Its facts (title, planned time, prerequisites, paper, open-exercise notes); read from ``nb`` when absent.
+    """
+    import nbformat
+
+    nb = copy.deepcopy(nb)
+    first = _source(nb["cells"][0]).splitlines()[0] if nb["cells"] else "# lesson"
+    number = (lesson.number if lesson else nb.get("metadata", {}).get("posekit", {}).get("lesson")) or "00"
+    title = lesson.title if lesson else first.lstrip("# ").split("—", 1)[-1].strip()
+    minutes = lesson.duration_min if lesson else int(nb.get("metadata", {}).get("posekit", {}).get("duration_min", 60))
+    facts = f"*Lesson {number} · about {minutes} min*"
+    notes, module = {}, None
+    if lesson is not None:
+        from .solutions import SOLUTIONS, notes as open_notes
+
+        prereq = ", ".join(lesson.prerequisites)
+        facts += f"*{' · after lesson' + ('s ' if len(lesson.prerequisites) > 1 else ' ') + prereq if prereq else ''}*"
+        if lesson.paper:
+            facts += f"\n\n*Reproduces:* {lesson.paper}"
+        notes = open_notes(lesson)
+        if (SOLUTIONS / f"nb{number}.py").is_file():
+            module = f"posekit/exercises/solutions/nb{number}.py"
+    pages = lecture_pages(nb, number, title, minutes, facts, notes, module)
+    plan = _timing(pages, minutes)
+    starts = {}
+    for s, m, t in plan:
+        starts.setdefault(s, (m, t))
+    for p in pages:
+        if p.opens_column and p.section in starts and not p.key:
+            m, t = starts.pop(p.section)
+            p.notes.insert(0, f"**Time:** about {m} min for this section (minutes {t}–{t + m} of {minutes}).")
+    pages[0].notes.insert(0, "**Plan** (the lesson's planned time shared by the sections' slides and figures):\n\n"
+                          + "\n".join(f"- {s}: {m} min (from minute {t})" for s, m, t in plan))
+    nb["cells"] = pages_to_cells(pages)
+    nb.setdefault("metadata", {})["title"] = f"{number} — {title}"
+    return nbformat.from_dict(nb)
