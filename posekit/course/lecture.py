@@ -55,17 +55,19 @@ WIDTH = SLIDE_WIDTH - 2 * PAD_X
 BUDGET = SLIDE_HEIGHT - 2 * PAD_Y - 24
 """Height (px) a slide's content may take: the slide less its padding and a margin for estimation error."""
 TEXT_PX, TEXT_LINE = 24, 1.3
-CHARS = int(WIDTH / (0.56 * TEXT_PX))
+CHARS = int(WIDTH / (0.6 * TEXT_PX))
 """Characters of body text per line (a conservative mean glyph width)."""
 PRE_PX, PRE_MIN_PX, PRE_LINE = 17, 11, 1.25
 """Printed output and shown code: font size, the smallest font a wide table may get, line height."""
-MONO = 0.61
+MONO = 0.66
 """A monospace glyph's width in ems."""
 MIN_FIGURE = 300
 """A figure is not drawn shorter than this (px) to share a slide; it moves to a slide of its own instead."""
 MAX_CODE_LINES = 30
 """A shown code cell longer than this is cut (the notebook has it whole)."""
 _BLOCK_GAP = 14
+CONT_PX = 34
+"""The "(continued)" line atop a slide that carries on a section."""
 
 
 @dataclass
@@ -151,7 +153,9 @@ def md_height(md: str, width_chars: int = CHARS) -> float:
                 per_col = max(4, int(WIDTH / (0.56 * 20) / len(cols)) - 2)
                 h += 26 * max(math.ceil(len(c) / per_col) or 1 for c in cols) + 8
         else:
-            indent = 5 if re.match(r"^([-*+]|\d+\.)\s", s) else 0
+            item = re.match(r"^([-*+]|\d+\.)\s", s)
+            indent = 5 if item else 0
+            h += 4 if item else 0
             h += line_px * max(1, math.ceil(len(_plain(s)) / (width_chars - indent)))
     return h + 12
 
@@ -250,9 +254,8 @@ def output_blocks(cell, index: int, shown_code: bool, key: bool) -> list[Block]:
         elif "image/png" in d:
             b64 = _data(d, "image/png").strip()
             w, h = _png_size(b64)
-            shown = h * min(1.0, WIDTH / w)
-            pref = min(shown * 1.25, BUDGET)  # small figures may grow a little to be read from the back
-            blocks.append(Block("png", height=pref, min_height=min(pref, MIN_FIGURE), cell=index, data=b64,
+            pref = min(h * 1.25, h * WIDTH / w, BUDGET)  # small figures may grow a little, up to the slide's width
+            blocks.append(Block("png", height=pref, min_height=min(pref, max(MIN_FIGURE, 0.6 * pref)), cell=index, data=b64,
                                 size=(w, h)))
         elif "text/markdown" in d:
             md = _data(d, "text/markdown")
@@ -320,18 +323,16 @@ def pack(blocks: list[Block], where) -> list[list[Block]]:
         if cur:
             pages.append(cur)
         cur = carry
-        used = sum(x.height for x in cur) + _BLOCK_GAP * len(cur)
+        used = CONT_PX + sum(x.height for x in cur) + _BLOCK_GAP * len(cur)
         room = BUDGET - used
         if b.min_height > room:
-            if cur and b.min_height > BUDGET - 0:
-                pass
-            pieces = _fit_alone(b, room if room > BUDGET / 2 else BUDGET, where(b.cell))
+            pieces = _fit_alone(b, room if room > BUDGET / 2 else BUDGET - CONT_PX, where(b.cell))
             if room <= BUDGET / 2 and cur:
                 pages.append(cur)
-                cur, used = [], 0.0
+                cur, used = [], CONT_PX
             for p in pieces[:-1]:
                 pages.append(cur + [p])
-                cur, used = [], 0.0
+                cur, used = [], CONT_PX
             b = pieces[-1]
         cur.append(b)
         used += b.height + (_BLOCK_GAP if len(cur) > 1 else 0)
@@ -346,13 +347,13 @@ def size_figures(page: Page) -> None:
     if not figs:
         return
     other = sum(b.height for b in page.blocks if b.kind != "png") + _BLOCK_GAP * (len(page.blocks) - 1)
-    other += 34 if page.continued else 0
+    other += CONT_PX if page.continued else 0
     room = max(BUDGET - other, MIN_FIGURE * len(figs))
     want = sum(b.height for b in figs)
     for b in figs:
         b.height = max(min(b.height * room / want if want > room else b.height * min(room / want, 1.6), BUDGET),
                        min(b.min_height, room / len(figs)))
-        b.height = min(b.height, room / len(figs) if len(figs) > 1 else room)
+        b.height = min(b.height, room / len(figs) if len(figs) > 1 else room, b.size[1] * WIDTH / b.size[0])
 
 
 # ---- sections, time and notes ----------------------------------------------------------------------------------
