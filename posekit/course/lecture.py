@@ -128,17 +128,29 @@ def _math_state(s: str, in_math: bool) -> bool:
 
 
 def md_height(md: str, width_chars: int = CHARS) -> float:
-    """Estimated height (px) of a markdown chunk on a slide."""
+    """Estimated height (px) of a markdown chunk on a slide (a paragraph's or list item's source lines are one
+    flowing text)."""
     h = 0.0
     line_px = TEXT_PX * TEXT_LINE
     in_math = False
+    para, indent = [], 0
+
+    def flush():
+        nonlocal h, para
+        if para:
+            h += line_px * max(1, math.ceil(len(_plain(" ".join(para))) / (width_chars - indent)))
+            para = []
     for line in md.splitlines():
         s = line.strip()
         was = in_math
         in_math = _math_state(s, in_math)
         if was or s.startswith("$$"):
+            flush()
             h += 14 if was else 60
             continue
+        item = re.match(r"^([-*+]|\d+\.)\s", s)
+        if not s or s.startswith(("#", "|")) or item:
+            flush()
         if not s:
             h += 6
         elif s.startswith("# "):
@@ -153,10 +165,13 @@ def md_height(md: str, width_chars: int = CHARS) -> float:
                 per_col = max(4, int(WIDTH / (0.56 * 20) / len(cols)) - 2)
                 h += 26 * max(math.ceil(len(c) / per_col) or 1 for c in cols) + 8
         else:
-            item = re.match(r"^([-*+]|\d+\.)\s", s)
-            indent = 5 if item else 0
-            h += 4 if item else 0
-            h += line_px * max(1, math.ceil(len(_plain(s)) / (width_chars - indent)))
+            if item:
+                indent = 5
+                h += 4
+            elif not para:
+                indent = 0
+            para.append(s)
+    flush()
     return h + 12
 
 
@@ -586,18 +601,20 @@ def lecture_notebook(nb, lesson=None) -> dict:
     number = (lesson.number if lesson else nb.get("metadata", {}).get("posekit", {}).get("lesson")) or "00"
     title = lesson.title if lesson else first.lstrip("# ").split("—", 1)[-1].strip()
     minutes = lesson.duration_min if lesson else int(nb.get("metadata", {}).get("posekit", {}).get("duration_min", 60))
-    facts = f"*Lesson {number} · about {minutes} min*"
+    facts = [f"Lesson {number}", f"about {minutes} min"]
+    paper = ""
     notes, module = {}, None
     if lesson is not None:
         from .solutions import SOLUTIONS, notes as open_notes
 
-        prereq = ", ".join(lesson.prerequisites)
-        facts += f"*{' · after lesson' + ('s ' if len(lesson.prerequisites) > 1 else ' ') + prereq if prereq else ''}*"
+        if lesson.prerequisites:
+            facts.append(f"after lesson{'s' if len(lesson.prerequisites) > 1 else ''} {', '.join(lesson.prerequisites)}")
         if lesson.paper:
-            facts += f"\n\n*Reproduces:* {lesson.paper}"
+            paper = f"\n\n*Reproduces:* {lesson.paper}"
         notes = open_notes(lesson)
         if (SOLUTIONS / f"nb{number}.py").is_file():
             module = f"posekit/exercises/solutions/nb{number}.py"
+    facts = f"*{' · '.join(facts)}*{paper}"
     pages = lecture_pages(nb, number, title, minutes, facts, notes, module)
     plan = _timing(pages, minutes)
     starts = {}
