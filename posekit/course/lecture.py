@@ -476,8 +476,20 @@ def lecture_pages(nb, number: str, title: str, minutes: int, facts: str = "", ex
         if (blocks and blocks[0].is_output and len(prev) > 1 and prev[-1].kind == "md"
                 and prev[-1].text.rstrip().endswith(":")):
             blocks.insert(0, prev.pop())
+    # a short step joins the slide before it when both fit on one (not a section's start, an exercise, the key figure)
+    merged = []
+    for g in groups:
+        opens, _, blocks, key, notes = g
+        prev = merged[-1] if merged else None
+        exercise = any(b.kind == "md" and _EXERCISE.match(b.text) for b in blocks)
+        if (prev and not opens and not key and not prev[3] and not exercise and blocks
+                and sum(b.height + _BLOCK_GAP for b in prev[2] + blocks) <= BUDGET):
+            prev[2].extend(blocks)
+            prev[4].extend(notes)
+        else:
+            merged.append(g)
     pages = []
-    for opens, sec, blocks, key, notes in groups:
+    for opens, sec, blocks, key, notes in merged:
         if not blocks:
             continue
         for k, chunk in enumerate(pack(blocks, lambda c: _where(cells[c]) if c >= 0 else "the notebook")):
