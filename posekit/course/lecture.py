@@ -59,6 +59,8 @@ CHARS = int(WIDTH / (0.6 * TEXT_PX))
 """Characters of body text per line (a conservative mean glyph width)."""
 PRE_PX, PRE_MIN_PX, PRE_LINE = 17, 11, 1.25
 """Printed output and shown code: font size, the smallest font a wide table may get, line height."""
+KEY_PRE_PX = 21
+"""The key table's largest font (px): it has its slide to itself."""
 MONO = 0.66
 """A monospace glyph's width in ems."""
 MIN_FIGURE = 300
@@ -181,10 +183,10 @@ def _png_size(b64: str) -> tuple[int, int]:
     return int(w), int(h)
 
 
-def pre_font(lines: list[str]) -> float:
+def pre_font(lines: list[str], largest: float = PRE_PX) -> float:
     """The font (px) a block of preformatted lines gets so that its widest line fits the slide."""
     widest = max((len(ln) for ln in lines), default=1)
-    return max(PRE_MIN_PX, min(PRE_PX, WIDTH / (MONO * max(widest, 1))))
+    return max(PRE_MIN_PX, min(largest, WIDTH / (MONO * max(widest, 1))))
 
 
 def pre_height(lines: list[str], font: float) -> float:
@@ -256,7 +258,7 @@ def output_blocks(cell, index: int, shown_code: bool, key: bool) -> list[Block]:
                 continue
             if blocks and blocks[-1].kind == "pre" and blocks[-1].cell == index:  # one printed block per cell
                 lines = blocks.pop().text.splitlines() + lines
-            font = pre_font(lines)
+            font = pre_font(lines, KEY_PRE_PX if key else PRE_PX)
             blocks.append(Block("pre", "\n".join(lines), pre_height(lines, font), cell=index, font=font))
         elif WIDGET_VIEW in d:
             plain = _data(d, "text/plain")
@@ -321,13 +323,14 @@ def _fit_alone(b: Block, room: float, where: str) -> list[Block]:
     return [b]
 
 
-def pack(blocks: list[Block], where) -> list[list[Block]]:
+def pack(blocks: list[Block], where, head: float = 0.0) -> list[list[Block]]:
     """Blocks into slides of at most :data:`BUDGET` px, in order; a figure or table moves with its lead-in.
 
-    ``where(cell)`` names a cell for "the whole is in the notebook" notes."""
-    pages, cur, used = [], [], 0.0
+    ``where(cell)`` names a cell for "the whole is in the notebook" notes; ``head`` px are taken on the first slide
+    (its "Key result" line)."""
+    pages, cur, used = [], [], head
     for b in blocks:
-        gap = _BLOCK_GAP if cur else 0
+        gap = _BLOCK_GAP if cur or used else 0
         if used + gap + b.height <= BUDGET or (b.kind == "png" and used + gap + b.min_height <= BUDGET):
             cur.append(b)
             used += gap + min(b.height, BUDGET - used - gap)
@@ -362,7 +365,7 @@ def size_figures(page: Page) -> None:
     if not figs:
         return
     other = sum(b.height for b in page.blocks if b.kind != "png") + _BLOCK_GAP * (len(page.blocks) - 1)
-    other += CONT_PX if page.continued else 0
+    other += CONT_PX if page.continued or page.key else 0
     room = max(BUDGET - other, MIN_FIGURE * len(figs))
     want = sum(b.height for b in figs)
     for b in figs:
@@ -492,7 +495,8 @@ def lecture_pages(nb, number: str, title: str, minutes: int, facts: str = "", ex
     for opens, sec, blocks, key, notes in merged:
         if not blocks:
             continue
-        for k, chunk in enumerate(pack(blocks, lambda c: _where(cells[c]) if c >= 0 else "the notebook")):
+        for k, chunk in enumerate(pack(blocks, lambda c: _where(cells[c]) if c >= 0 else "the notebook",
+                                       CONT_PX if key else 0.0)):
             page = Page(chunk, opens and k == 0, sec, continued=k > 0, key=key and k == 0)
             if k == 0:
                 page.notes.extend(notes)
@@ -565,7 +569,9 @@ def pages_to_cells(pages: list[Page]) -> list:
     for page in pages:
         first = "slide" if page.opens_column or not cells else "subslide"
         out = []
-        if page.continued:
+        if page.key:
+            out.append(_cell("md", f'<p class="posekit-key">Key result — {html.escape(page.section)}</p>', first))
+        elif page.continued:
             out.append(_cell("md", f'<p class="posekit-cont">{html.escape(page.section)} (continued)</p>', first))
         md = []
 
