@@ -401,6 +401,9 @@ def _where(cell) -> str:
     return f"cell In [{n}]" if n else "its cell"
 
 
+_SAYS = "**What it shows** (the lesson's text on it): "
+
+
 def _explanation(cells, after: int) -> list[str]:
     """The lesson's prose that follows code cell ``after``: markdown cells up to the next code cell or section."""
     out = []
@@ -412,9 +415,13 @@ def _explanation(cells, after: int) -> list[str]:
 
 
 def lecture_pages(nb, number: str, title: str, minutes: int, facts: str = "", exercise_notes=None,
-                  solutions_module: str | None = None) -> list[Page]:
-    """The lesson's slides as :class:`Page` s (see the module docstring)."""
+                  solutions_module: str | None = None, solutions=None) -> list[Page]:
+    """The lesson's slides as :class:`Page` s (see the module docstring).
+
+    ``exercise_notes``: open exercise number -> the instructor's notes; ``solutions``: checked exercise number ->
+    its reference solution's source (from ``solutions_module``)."""
     cells = nb["cells"]
+    solutions = solutions or {}
     exercise_notes = exercise_notes or {}
     points = POINT_CELLS.get(number, [])
     groups = []  # (opens_column, section, [blocks], key, [notes])
@@ -444,9 +451,10 @@ def lecture_pages(nb, number: str, title: str, minutes: int, facts: str = "", ex
                 k = int(m.group(1))
                 if k in exercise_notes:
                     notes.append(f"**Instructor notes — exercise {k}.** {exercise_notes[k]}")
-                elif solutions_module:
-                    notes.append(f"Exercise {k}: the reference solution is in `{solutions_module}` "
-                                 f"(`posekit exercises solutions {number}` runs it against its checker).")
+                elif k in solutions:
+                    notes.append(f"**Exercise {k}: reference solution** (`{solutions_module}`; "
+                                 f"`posekit exercises solutions {number}` runs it against its checker):\n\n"
+                                 f"```python\n{solutions[k]}\n```")
             if st in ("slide", "subslide") or not groups:
                 groups.append([st == "slide", section, blocks, False, notes])
             else:
@@ -463,7 +471,7 @@ def lecture_pages(nb, number: str, title: str, minutes: int, facts: str = "", ex
         notes = []
         expl = _explanation(cells, i)
         if expl:
-            notes.append("What it shows (the lesson's text after it): " + "\n\n".join(expl))
+            notes.append(_SAYS + "\n\n".join(expl))
         if any(b.kind == "html" and b.text.startswith("**Live in the notebook") for b in blocks):
             notes.append("Switch to JupyterLab for this one: run the lesson up to "
                          f"{_where(cell)} and move the targets while the class watches.")
@@ -499,7 +507,8 @@ def lecture_pages(nb, number: str, title: str, minutes: int, facts: str = "", ex
                                        CONT_PX if key else 0.0)):
             page = Page(chunk, opens and k == 0, sec, continued=k > 0, key=key and k == 0)
             if k == 0:
-                page.notes.extend(notes)
+                shown = " ".join(b.text for b in chunk if b.kind == "md")
+                page.notes.extend(n for n in notes if not (n.startswith(_SAYS) and n[len(_SAYS):][:60] in shown))
             pages.append(page)
     # an empty column start leaves its column to the next page
     for p in pages:
@@ -602,6 +611,23 @@ def pages_to_cells(pages: list[Page]) -> list:
     return cells
 
 
+def _solution_sources(lesson, nb) -> dict[int, str]:
+    """Checked exercise number -> its reference solution's source (exercises without one are left out)."""
+    import inspect
+    import textwrap
+
+    from .solutions import exercises, solution_function
+
+    found = {}
+    for ex in exercises(nb):
+        if not ex.open:
+            try:
+                found[ex.number] = textwrap.dedent(inspect.getsource(solution_function(lesson, ex.function))).rstrip()
+            except (LookupError, ImportError, OSError):
+                pass
+    return found
+
+
 def lecture_notebook(nb, lesson=None) -> dict:
     """The lesson ``nb`` as the notebook its reveal.js deck is drawn from (see the module docstring).
 
@@ -621,7 +647,7 @@ def lecture_notebook(nb, lesson=None) -> dict:
     minutes = lesson.duration_min if lesson else int(nb.get("metadata", {}).get("posekit", {}).get("duration_min", 60))
     facts = [f"Lesson {number}", f"about {minutes} min"]
     paper = ""
-    notes, module = {}, None
+    notes, module, solutions = {}, None, {}
     if lesson is not None:
         from .solutions import SOLUTIONS, notes as open_notes
 
@@ -632,8 +658,9 @@ def lecture_notebook(nb, lesson=None) -> dict:
         notes = open_notes(lesson)
         if (SOLUTIONS / f"nb{number}.py").is_file():
             module = f"posekit/exercises/solutions/nb{number}.py"
+            solutions = _solution_sources(lesson, nb)
     facts = f"*{' · '.join(facts)}*{paper}"
-    pages = lecture_pages(nb, number, title, minutes, facts, notes, module)
+    pages = lecture_pages(nb, number, title, minutes, facts, notes, module, solutions)
     plan = _timing(pages, minutes)
     starts = {}
     for s, m, t in plan:
