@@ -42,7 +42,8 @@ SLIDE_CODE = "slide-code"
 POINT_CELLS = {
     "00": ["def my_fk("],
     "01": ["def my_fabrik_chain("],
-    "05": ["def proto_residual("],
+    "03": ["class MyAutoencoder("],
+    "05": ["for r, block in enumerate(net.encoder.blocks"],
 }
 """Code cells shown on the slides without a tag in the lesson: lesson number -> a line each such cell's source
 contains (``tests/test_slides.py`` checks each names exactly one code cell). Algorithms written by hand in front of
@@ -425,6 +426,7 @@ def lecture_pages(nb, number: str, title: str, minutes: int, facts: str = "", ex
     exercise_notes = exercise_notes or {}
     points = POINT_CELLS.get(number, [])
     groups = []  # (opens_column, section, [blocks], key, [notes])
+    cell_notes = {}  # code cell -> notes for the slide that shows its output
     section = title
     for i, cell in enumerate(cells):
         st = cell.get("metadata", {}).get("slideshow", {}).get("slide_type", "-")
@@ -468,7 +470,7 @@ def lecture_pages(nb, number: str, title: str, minutes: int, facts: str = "", ex
             if st == "slide" and groups is not None:
                 groups.append([True, section, [], False, []])
             continue
-        notes = []
+        notes = cell_notes.setdefault(i, [])
         expl = _explanation(cells, i)
         if expl:
             notes.append(_SAYS + "\n\n".join(expl))
@@ -476,44 +478,47 @@ def lecture_pages(nb, number: str, title: str, minutes: int, facts: str = "", ex
             notes.append("Switch to JupyterLab for this one: run the lesson up to "
                          f"{_where(cell)} and move the targets while the class watches.")
         if st in ("slide", "subslide") or not groups:
-            groups.append([st == "slide", section, blocks, key, notes])
+            groups.append([st == "slide", section, blocks, key, []])
         else:
             groups[-1][2].extend(blocks)
             groups[-1][3] = groups[-1][3] or key
-            groups[-1][4].extend(notes)
     # a figure that opens its own slide takes its lead-in (a sentence ending in ':') from the slide before
     for g in range(1, len(groups)):
         prev, blocks = groups[g - 1][2], groups[g][2]
         if (blocks and blocks[0].is_output and len(prev) > 1 and prev[-1].kind == "md"
                 and prev[-1].text.rstrip().endswith(":")):
             blocks.insert(0, prev.pop())
-    # a short step joins the slide before it when both fit on one (not a section's start, an exercise, the key figure)
-    merged = []
-    for g in groups:
-        opens, _, blocks, key, notes = g
-        prev = merged[-1] if merged else None
-        exercise = any(b.kind == "md" and _EXERCISE.match(b.text) for b in blocks)
-        if (prev and not opens and not key and not prev[3] and not exercise and blocks
-                and sum(b.height + _BLOCK_GAP for b in prev[2] + blocks) <= BUDGET):
-            prev[2].extend(blocks)
-            prev[4].extend(notes)
-        else:
-            merged.append(g)
     pages = []
-    for opens, sec, blocks, key, notes in merged:
+    where = lambda c: _where(cells[c]) if c >= 0 else "the notebook"  # noqa: E731
+    for opens, sec, blocks, key, notes in groups:
         if not blocks:
             continue
-        for k, chunk in enumerate(pack(blocks, lambda c: _where(cells[c]) if c >= 0 else "the notebook",
-                                       CONT_PX if key else 0.0)):
+        exercise = any(b.kind == "md" and _EXERCISE.match(b.text) for b in blocks)
+        for k, chunk in enumerate(pack(blocks, where, CONT_PX if key else 0.0)):
             page = Page(chunk, opens and k == 0, sec, continued=k > 0, key=key and k == 0)
-            if k == 0:
-                shown = " ".join(b.text for b in chunk if b.kind == "md")
-                page.notes.extend(n for n in notes if not (n.startswith(_SAYS) and n[len(_SAYS):][:60] in shown))
-            pages.append(page)
-    # an empty column start leaves its column to the next page
-    for p in pages:
-        size_figures(p)
+            page.notes.extend(notes if k == 0 else [])
+            prev = pages[-1] if pages else None
+            # a short step joins the slide before it when both fit on one (not a section's start, an exercise or
+            # the key figure, nor a slide after the key figure)
+            if (k == 0 and prev and not page.opens_column and not key and not exercise and not prev.key
+                    and prev.section == sec and _used(prev) + _BLOCK_GAP + _used(page) <= BUDGET):
+                prev.blocks.extend(chunk)
+                prev.notes.extend(page.notes)
+            else:
+                pages.append(page)
+    for page in pages:
+        shown = " ".join(b.text for b in page.blocks if b.kind == "md")
+        for c in dict.fromkeys(b.cell for b in page.blocks if b.is_output):
+            page.notes.extend(n for n in cell_notes.get(c, [])
+                              if not (n.startswith(_SAYS) and n[len(_SAYS):][:60] in shown))
+            cell_notes.pop(c, None)
+        size_figures(page)
     return pages
+
+
+def _used(page: Page) -> float:
+    head = CONT_PX if page.continued or page.key else 0.0
+    return head + sum(b.height for b in page.blocks) + _BLOCK_GAP * (len(page.blocks) - 1)
 
 
 def _timing(pages: list[Page], minutes: int) -> list[tuple[str, int, int]]:
