@@ -229,6 +229,8 @@ def export(nb: dict, kind: str, static: str = "../_static", back: str | None = N
         node = lecture_notebook(nb, lesson)
     else:
         node = nbformat.from_dict(_presentable(nb))
+        if "title" not in node.metadata and node.cells and _source(node.cells[0]).startswith("# "):
+            node.metadata["title"] = _source(node.cells[0]).splitlines()[0][2:].strip()  # the tab names the lesson
     body, _ = exp.from_notebook_node(node, resources={"posekit_static": static, "posekit_back": back})
     return body
 
