@@ -142,3 +142,36 @@ def test_each_deck_is_a_lecture(number):
             if rules.WIDGET_VIEW in o.get("data", {}) and not rules._PROGRESS.search(plain):
                 assert lecture.widget_caption(plain)[:40] in page
                 assert f"In [{cell.execution_count}]" in page
+
+
+# ---- the 3D views as stills ------------------------------------------------------------------------------------
+
+
+def test_a_view_runs_only_the_cells_it_needs():
+    from posekit.course.stills import needed_cells
+
+    nb = _lesson(("md", "# 09 — t"), ("code", "import numpy as np"), ("code", "a = np.ones(3)"),
+                 ("code", "b = slow_benchmark()"), ("code", "a = a * 2\nc = 5"), ("code", "viewer = show(a)\nviewer"))
+    assert needed_cells(nb, 5) == [1, 2, 4, 5]
+
+
+@pytest.mark.parametrize("number", [le.number for le in lessons()])
+def test_every_3d_view_has_a_fresh_still_on_its_slide(number):
+    from posekit.course.stills import load, view_cells
+
+    le = find_lesson(number)
+    nb = read_notebook(le.path)
+    views = view_cells(nb)
+    assert views, f"lesson {number} has no 3D view"
+    for v in views:
+        still, state = load(number, nb, v)
+        assert state == "ok", (f"lesson {number}, cell {v}: still {state} — run `python -m posekit.course.stills "
+                               f"{number}`")
+        assert still["views"] and all(len(view["pose"]) == len(still["parents"]) for view in still["views"])
+    page = rules.export(nb, "slides", lesson=le)
+    assert page.count("A still of the view as its cell draws it") == len(views)
+    leaves = re.findall(r"<section\b[^>]*>((?:(?!<section).)*?)</section>", page, re.S)
+    for v in views:  # the still, its caption and the cell to open live share one slide
+        n = nb.cells[v].execution_count
+        slide = next(s for s in leaves if f"In [{n}]" in s and "A still of the view" in s)
+        assert "data:image/png;base64," in slide

@@ -34,6 +34,7 @@ import struct
 from dataclasses import dataclass, field
 
 from .slides import KEY_FIGURE, SLIDE_HEIGHT, SLIDE_WIDTH, WIDGET_VIEW, _PROGRESS, _source, strip_test_markers
+from .stills import load as load_still, render_png
 
 __all__ = ["SLIDE_CODE", "POINT_CELLS", "MIN_FIGURE", "lecture_notebook", "section_plan", "Page"]
 
@@ -234,8 +235,10 @@ def widget_caption(plain: str) -> str:
     return plain.strip().strip("[]").strip()
 
 
-def output_blocks(cell, index: int, shown_code: bool, key: bool) -> list[Block]:
-    """The blocks a code cell puts on its slides: its code when it is the point, then its outputs."""
+def output_blocks(cell, index: int, shown_code: bool, key: bool, still=None) -> list[Block]:
+    """The blocks a code cell puts on its slides: its code when it is the point, then its outputs.
+
+    ``still(index)``: the recorded still of a 3D view and its state (:func:`posekit.course.stills.load`)."""
     blocks = []
     if shown_code:
         lines = strip_test_markers(_source(cell)).splitlines()
@@ -266,9 +269,22 @@ def output_blocks(cell, index: int, shown_code: bool, key: bool) -> list[Block]:
             if _PROGRESS.search(plain):
                 continue
             what = widget_caption(plain) or "an interactive widget"
+            data, state = still(index) if still is not None else (None, "none")
             text = (f"**Live in the notebook:** {what}.\n\nOpen the lesson in JupyterLab (`make lab`) and run cell "
                     f"`In [{cell.get('execution_count') or '?'}]` to use it.")
-            blocks.append(Block("html", text, md_height(text) + 30, cell=index))
+            if data is not None:
+                text = (f"*A still of the view as its cell draws it (targets as red crosses).* {what}. Live: cell "
+                        f"`In [{cell.get('execution_count') or '?'}]` in JupyterLab (`make lab`).")
+            elif state == "stale":
+                text += " *(Its still is out of date: `python -m posekit.course.stills` records it again.)*"
+            caption = Block("html", text, md_height(text) + 30, cell=index, lead_in=data is not None)
+            blocks.append(caption)  # the caption first: it travels with its still, as a lead-in does
+            if data is not None:
+                b64 = render_png(data)
+                w, h = _png_size(b64)
+                pref = min(h * WIDTH / w, BUDGET - caption.height - _BLOCK_GAP - CONT_PX)
+                blocks.append(Block("png", height=pref, min_height=min(pref, max(MIN_FIGURE, 0.6 * pref)),
+                                    cell=index, data=b64, size=(w, h)))
         elif "image/png" in d:
             b64 = _data(d, "image/png").strip()
             w, h = _png_size(b64)
@@ -337,7 +353,7 @@ def pack(blocks: list[Block], where, head: float = 0.0) -> list[list[Block]]:
             used += gap + min(b.height, BUDGET - used - gap)
             continue
         carry = []
-        if b.is_output and len(cur) > 1 and cur[-1].kind == "md" and cur[-1].lead_in:
+        if b.is_output and cur and cur[-1].lead_in:
             carry = [cur.pop()]
         if cur:
             pages.append(cur)
@@ -402,6 +418,7 @@ def _where(cell) -> str:
     return f"cell In [{n}]" if n else "its cell"
 
 
+_LIVE = ("**Live in the notebook", "*A still of the view")
 _SAYS = "**What it shows** (the lesson's text on it): "
 
 
@@ -416,7 +433,7 @@ def _explanation(cells, after: int) -> list[str]:
 
 
 def lecture_pages(nb, number: str, title: str, minutes: int, facts: str = "", exercise_notes=None,
-                  solutions_module: str | None = None, solutions=None) -> list[Page]:
+                  solutions_module: str | None = None, solutions=None, stills: bool = True) -> list[Page]:
     """The lesson's slides as :class:`Page` s (see the module docstring).
 
     ``exercise_notes``: open exercise number -> the instructor's notes; ``solutions``: checked exercise number ->
@@ -465,7 +482,7 @@ def lecture_pages(nb, number: str, title: str, minutes: int, facts: str = "", ex
             continue
         shown = SLIDE_CODE in tags or any(p in src for p in points)
         key = KEY_FIGURE in tags
-        blocks = output_blocks(cell, i, shown, key)
+        blocks = output_blocks(cell, i, shown, key, (lambda k: load_still(number, nb, k)) if stills else None)
         if not blocks:
             if st == "slide" and groups is not None:
                 groups.append([True, section, [], False, []])
@@ -474,7 +491,7 @@ def lecture_pages(nb, number: str, title: str, minutes: int, facts: str = "", ex
         expl = _explanation(cells, i)
         if expl:
             notes.append(_SAYS + "\n\n".join(expl))
-        if any(b.kind == "html" and b.text.startswith("**Live in the notebook") for b in blocks):
+        if any(b.kind == "html" and b.text.startswith(_LIVE) for b in blocks):
             notes.append("Switch to JupyterLab for this one: run the lesson up to "
                          f"{_where(cell)} and move the targets while the class watches.")
         if st in ("slide", "subslide") or not groups:
@@ -598,14 +615,14 @@ def pages_to_cells(pages: list[Page]) -> list:
                 md.append(b.text)
                 continue
             flush()
-            if b.kind == "html" and b.text.lstrip().startswith(("<", "**Live")) is False:
-                outputs = [{"output_type": "display_data", "metadata": {}, "data": {"text/markdown": b.text}}]
-            elif b.kind == "html" and b.text.startswith("**Live"):
+            if b.kind == "html" and b.text.startswith(_LIVE):
                 out.append(_cell("md", f'<div class="posekit-widget-note">\n\n{b.text}\n\n</div>',
                                  first if not out else "-"))
                 continue
-            elif b.kind == "html":
+            elif b.kind == "html" and b.text.lstrip().startswith("<"):
                 outputs = [{"output_type": "display_data", "metadata": {}, "data": {"text/html": b.text}}]
+            elif b.kind == "html":
+                outputs = [{"output_type": "display_data", "metadata": {}, "data": {"text/markdown": b.text}}]
             else:
                 outputs = [{"output_type": "display_data", "metadata": {}, "data": {"text/html": _block_html(b)}}]
             out.append(_cell("code", "", first if not out else "-", outputs))
