@@ -102,7 +102,7 @@ def test_a_long_printed_table_is_cut_and_points_to_the_notebook():
 
 
 def test_a_wide_table_gets_a_smaller_font_not_a_cut_edge():
-    wide = "x" * 150
+    wide = "name" + "   1.25" * 15  # a row of a table: columns that must not wrap
     font = lecture.pre_font([wide])
     assert font < lecture.PRE_PX and lecture.MONO * font * len(wide) <= lecture.WIDTH + 1
 

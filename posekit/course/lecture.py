@@ -185,9 +185,13 @@ def _png_size(b64: str) -> tuple[int, int]:
     return int(w), int(h)
 
 
+_TABULAR = re.compile(r"\S {2,}\S|^\s+\S")
+"""A line laid out in columns (a run of spaces inside it, or indented): its width must not wrap."""
+
+
 def pre_font(lines: list[str], largest: float = PRE_PX) -> float:
     """The font (px) a block of preformatted lines gets so that its widest line fits the slide."""
-    widest = max((len(ln) for ln in lines), default=1)
+    widest = max((len(ln) for ln in lines if _TABULAR.search(ln)), default=1)  # a sentence may wrap, a table not
     return max(PRE_MIN_PX, min(largest, WIDTH / (MONO * max(widest, 1))))
 
 
@@ -502,9 +506,13 @@ def lecture_pages(nb, number: str, title: str, minutes: int, facts: str = "", ex
     # a figure that opens its own slide takes its lead-in (a sentence ending in ':') from the slide before
     for g in range(1, len(groups)):
         prev, blocks = groups[g - 1][2], groups[g][2]
-        if (blocks and blocks[0].is_output and len(prev) > 1 and prev[-1].kind == "md"
+        if (blocks and blocks[0].is_output and prev and prev[-1].kind == "md"
                 and prev[-1].text.rstrip().endswith(":")):
             blocks.insert(0, prev.pop())
+            if not prev:  # the lead-in was the whole slide: its place (a column's start) goes with it
+                groups[g][0] = groups[g][0] or groups[g - 1][0]
+                groups[g][1] = groups[g - 1][1]
+                groups[g][4] = groups[g - 1][4] + groups[g][4]
     pages = []
     where = lambda c: _where(cells[c]) if c >= 0 else "the notebook"  # noqa: E731
     for opens, sec, blocks, key, notes in groups:

@@ -51,19 +51,23 @@ def view_cells(nb) -> list[int]:
 
 
 def _names(source: str) -> tuple[set, set]:
-    """(names a cell reads that it does not define itself, names it defines)."""
+    """(names a cell reads before it defines them itself, names it defines)."""
     code = "\n".join(ln for ln in source.splitlines() if not ln.lstrip().startswith(("%", "!")))
-    used, defined = set(), set()
+    loads, stores = {}, {}
     for n in ast.walk(ast.parse(code)):
+        line = getattr(n, "lineno", 0)
         if isinstance(n, ast.Name):
-            (used if isinstance(n.ctx, ast.Load) else defined).add(n.id)
+            d = loads if isinstance(n.ctx, ast.Load) else stores
+            d[n.id] = min(d.get(n.id, line), line)
         elif isinstance(n, (ast.FunctionDef, ast.ClassDef)):
-            defined.add(n.name)
+            stores[n.name] = min(stores.get(n.name, line), line)
         elif isinstance(n, ast.alias):
-            defined.add((n.asname or n.name).split(".")[0])
+            name = (n.asname or n.name).split(".")[0]
+            stores[name] = min(stores.get(name, line), line)
         elif isinstance(n, ast.arg):
-            defined.add(n.arg)
-    return used - _BUILTINS - defined, defined
+            stores[n.arg] = 0  # a parameter: defined where it is read
+    used = {k for k, at in loads.items() if k not in stores or at <= stores[k]}
+    return used - _BUILTINS, set(stores)
 
 
 def needed_cells(nb, view: int) -> list[int]:
