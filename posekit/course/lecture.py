@@ -277,6 +277,7 @@ def output_blocks(cell, index: int, shown_code: bool, key: bool, still=None) -> 
             text = (f"**Live in the notebook:** {what}.\n\nOpen the lesson in JupyterLab (`make lab`) and run cell "
                     f"`In [{cell.get('execution_count') or '?'}]` to use it.")
             if data is not None:
+                what = " ".join(p for p in re.split(r"(?<=\.)\s+", what) if "kernel" not in p).rstrip(".")
                 text = (f"*A still of the view as its cell draws it (targets as red crosses).* {what}. Live: cell "
                         f"`In [{cell.get('execution_count') or '?'}]` in JupyterLab (`make lab`).")
             elif state == "stale":
