@@ -360,6 +360,8 @@ def pack(blocks: list[Block], where, head: float = 0.0) -> list[list[Block]]:
         carry = []
         if b.is_output and cur and cur[-1].lead_in:
             carry = [cur.pop()]
+            while cur and _heading(cur[-1]):  # a heading does not stay behind alone
+                carry.insert(0, cur.pop())
         if cur:
             pages.append(cur)
         cur = carry
@@ -526,7 +528,8 @@ def lecture_pages(nb, number: str, title: str, minutes: int, facts: str = "", ex
             prev = pages[-1] if pages else None
             # a short step joins the slide before it when both fit on one (not a section's start, an exercise or
             # the key figure, nor a slide after the key figure)
-            if (k == 0 and prev and not page.opens_column and not key and not exercise and not prev.key
+            alone = prev is not None and all(_heading(b) for b in prev.blocks)  # a section's bare heading
+            if (k == 0 and prev and not page.opens_column and not key and (not exercise or alone) and not prev.key
                     and prev.section == sec and _used(prev) + _BLOCK_GAP + _used(page) <= BUDGET):
                 prev.blocks.extend(chunk)
                 prev.notes.extend(page.notes)
@@ -540,6 +543,10 @@ def lecture_pages(nb, number: str, title: str, minutes: int, facts: str = "", ex
             cell_notes.pop(c, None)
         size_figures(page)
     return pages
+
+
+def _heading(b: Block) -> bool:
+    return b.kind == "md" and b.text.lstrip().startswith("#") and "\n" not in b.text.strip()
 
 
 def _used(page: Page) -> float:
