@@ -324,12 +324,18 @@ def _fit_alone(b: Block, room: float, where: str) -> list[Block]:
         return [Block(b.kind, "\n".join(lines[:keep]), pre_height(lines[:keep], b.font) + 34, cell=b.cell,
                       font=b.font, note=note)]
     if b.kind == "md":
-        lines, pieces, cur = b.text.splitlines(), [], []
-        for ln in lines:
-            if cur and md_height("\n".join(cur + [ln])) > room:
+        units = []  # list items (with their wrapped source lines), else single lines
+        for ln in b.text.splitlines():
+            if units and not re.match(r"^\s*([-*+]|\d+\.)\s", ln) and re.match(r"^\s*([-*+]|\d+\.)\s", units[-1][0]):
+                units[-1].append(ln)
+            else:
+                units.append([ln])
+        pieces, cur, limit = [], [], room
+        for unit in units:
+            if cur and md_height("\n".join(cur + unit)) > limit:
                 pieces.append("\n".join(cur))
-                cur = []
-            cur.append(ln)
+                cur, limit = [], BUDGET - CONT_PX
+            cur.extend(unit)
         pieces.append("\n".join(cur))
         return [Block("md", p, md_height(p), cell=b.cell) for p in pieces]
     if b.kind == "html":  # a markdown output (a report): its first lines
@@ -357,6 +363,17 @@ def pack(blocks: list[Block], where, head: float = 0.0) -> list[list[Block]]:
             cur.append(b)
             used += gap + min(b.height, BUDGET - used - gap)
             continue
+        if b.kind == "md" and cur and all(_heading(x) for x in cur) and BUDGET - used - gap > 3 * TEXT_PX * TEXT_LINE:
+            pieces = _fit_alone(b, BUDGET - used - gap, where(b.cell))  # a heading keeps the text it heads
+            if len(pieces) > 1:
+                pages.append(cur + [pieces[0]])
+                cur, used = [], CONT_PX
+                for p in pieces[1:-1]:
+                    pages.append([p])
+                b = pieces[-1]
+                cur.append(b)
+                used += b.height
+                continue
         carry = []
         if b.is_output and cur and cur[-1].lead_in:
             carry = [cur.pop()]
