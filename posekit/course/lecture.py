@@ -318,8 +318,12 @@ def _fit_alone(b: Block, room: float, where: str) -> list[Block]:
         lines = b.text.splitlines()
         line_px = b.font * PRE_LINE
         keep = max(3, int((room - 16 - 34) / line_px))
+        keep = min(keep, len(lines))
         while keep > 3 and pre_height(lines[:keep], b.font) + 34 > room:
             keep -= 1
+        if keep == len(lines):  # the lines fit (they only wrapped on the estimate's side)
+            return [Block(b.kind, b.text, pre_height(lines, b.font) + (30 if b.note else 0), cell=b.cell, font=b.font,
+                          note=b.note)]
         note = f"… {len(lines) - keep} more lines: the whole is in the notebook ({where})"
         return [Block(b.kind, "\n".join(lines[:keep]), pre_height(lines[:keep], b.font) + 34, cell=b.cell,
                       font=b.font, note=note)]
