@@ -132,6 +132,10 @@ def test_course_build_writes_every_part(course):
     for target in re.findall(r'href="([^"#]+)"', index):
         assert (course / target).is_file(), f"index.html links to a missing {target}"
     assert "CC BY-NC 4.0" in index
+    for le in LESSONS:  # every lesson's page, slides and solutions, linked with titles that name the lesson
+        for part in ("lessons", "slides", "solutions"):
+            assert re.search(rf'href="{part}/{le.stem}.html" title="{re.escape(html.escape(le.number + " — " + le.title))}',
+                             index), f"index.html does not link {part}/{le.stem}.html with the lesson's name"
 
 
 @pytest.mark.slow
@@ -198,6 +202,18 @@ def test_make_course_and_slides_targets(tmp_path, course):
     assert len(list((out / "slides").glob("*.html"))) == len(LESSONS)
     # make course: the fixture ran it
     assert (course / "index.html").is_file() and len(list((course / "lessons").glob("*.html"))) == len(LESSONS)
+
+
+def test_solutions_pages_hold_the_solutions_and_notes(tmp_path):
+    from posekit.course.build import build_solutions
+
+    le = find_lesson("01")
+    (path,) = build_solutions(tmp_path, only=[le], progress=False)
+    page = path.read_text(encoding="utf-8")
+    assert re.search(r"<title>\s*01 — FABRIK[^<]*instructor version", page)
+    assert "Instructor notes — exercise 3" in page and "exercise_fabrik_chain" in page
+    assert "raise NotImplementedError" not in page  # the stubs are replaced by the solutions
+    assert "Not executed here" in page
 
 
 # ---- solutions ------------------------------------------------------------------------------------------

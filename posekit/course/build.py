@@ -5,7 +5,8 @@ slides and pages show the measured numbers. The output folder opens from disk wi
 
     build/course/index.html             the course page: lessons, slides, the benchmark report
     build/course/lessons/NN_name.html   each lesson as one page
-    build/course/slides/NN_name.html    each lesson as reveal.js slides
+    build/course/slides/NN_name.html    each lesson as reveal.js slides (a lecture deck: posekit/course/lecture.py)
+    build/course/solutions/NN_name.html each lesson's instructor version: solutions and notes pasted in, not run
     build/course/report/bench_all.html  lesson 06's benchmark report (data_samples/results)
     build/course/_static/               reveal.js and MathJax, copied from ``make course-assets``
 """
@@ -20,7 +21,8 @@ from ..paths import course_assets_dir, samples_dir
 from . import slides as slide_rules
 from .lessons import Lesson, lessons, read_notebook
 
-__all__ = ["copy_assets", "build_slides", "build_pages", "build_report", "build_course", "DEFAULT_OUT"]
+__all__ = ["copy_assets", "build_slides", "build_pages", "build_solutions", "build_report", "build_course",
+           "DEFAULT_OUT"]
 
 DEFAULT_OUT = Path("build") / "course"
 _REVEAL = ("dist", "plugin/notes")
@@ -77,7 +79,7 @@ def build_slides(out=DEFAULT_OUT, only=None, progress: bool = True) -> list[dict
     done = []
     for lesson in _progress(only or lessons(), "slides", progress):
         nb = read_notebook(lesson.path)
-        page = slide_rules.export(nb, "slides", static="../_static")
+        page = slide_rules.export(nb, "slides", static="../_static", lesson=lesson)
         path = out / "slides" / f"{lesson.stem}.html"
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(page, encoding="utf-8")
@@ -98,6 +100,34 @@ def build_pages(out=DEFAULT_OUT, only=None, progress: bool = True) -> list[Path]
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(slide_rules.export(read_notebook(lesson.path), "page", static="../_static",
                                                  back="../index.html"), encoding="utf-8")
+        paths.append(path)
+    return paths
+
+
+SOLUTIONS_NOTE = ("**Not executed here**: the reference solutions and instructor notes are pasted in; "
+                  "`make solutions` (or `posekit exercises solutions {n} --html`) runs this version and checks every "
+                  "solution against its checker.")
+
+
+def build_solutions(out=DEFAULT_OUT, only=None, progress: bool = True) -> list[Path]:
+    """Write every lesson's instructor version as a page, ``out/solutions/NN_name.html``: the reference solutions
+    and open-exercise notes pasted in (:func:`posekit.course.solutions.instructor_notebook`), not executed, so the
+    course page stays quick to build; ``make solutions`` runs them."""
+    import nbformat
+
+    from .solutions import instructor_notebook
+
+    out = Path(out)
+    copy_assets(out)
+    paths = []
+    for lesson in _progress(only or lessons(), "solutions", progress):
+        nb = instructor_notebook(lesson)
+        note = nbformat.v4.new_markdown_cell(SOLUTIONS_NOTE.format(n=lesson.number))
+        nb.cells.insert(2, note)
+        nb.metadata["title"] = f"{lesson.number} — {lesson.title}: instructor version"
+        path = out / "solutions" / f"{lesson.stem}.html"
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(slide_rules.export(nb, "page", static="../_static", back="../index.html"), encoding="utf-8")
         paths.append(path)
     return paths
 
@@ -158,8 +188,12 @@ def _row(lesson: Lesson, n_slides) -> str:
     source = e(lesson.paper) if lesson.paper else "—"
     if lesson.reading:
         source += f"<br><small>{e(lesson.reading)}</small>"
-    return (f"<tr><td>{lesson.number}</td><td><a href=\"lessons/{lesson.stem}.html\">{e(lesson.title)}</a></td>"
-            f"<td><a href=\"slides/{lesson.stem}.html\">slides</a> ({n_slides})</td>"
+    name = e(f"{lesson.number} — {lesson.title}")
+    return (f"<tr><td>{lesson.number}</td><td><a href=\"lessons/{lesson.stem}.html\" title=\"{name}: the lesson as one "
+            f"page\">{e(lesson.title)}</a></td>"
+            f"<td><a href=\"slides/{lesson.stem}.html\" title=\"{name}: lecture slides\">slides</a> ({n_slides})</td>"
+            f"<td><a href=\"solutions/{lesson.stem}.html\" title=\"{name}: reference solutions and instructor "
+            f"notes\">solutions</a></td>"
             f"<td>{lesson.duration_min} min</td><td>{_minutes(lesson.run_s)}</td><td>{prereq}</td>"
             f"<td>{source}</td></tr>")
 
@@ -170,6 +204,7 @@ def build_course(out=DEFAULT_OUT, progress: bool = True) -> Path:
     all_ = lessons()
     slides = {s["lesson"]: s["slides"] for s in build_slides(out, all_, progress)}
     build_pages(out, all_, progress)
+    build_solutions(out, all_, progress)
     build_report(out)
     rows = "\n".join(_row(le, slides[le.number]) for le in all_)
     body = f"""<h1>posekit — data-driven character posing, a course in notebooks</h1>
@@ -180,13 +215,16 @@ running notebook: <code>make lab</code> opens the lessons in JupyterLab, <code>m
 lesson 06 as a browser app.</p>
 <h2>Lessons</h2>
 <table class="posekit-lessons">
-<thead><tr><th>#</th><th>lesson (one page)</th><th>slides</th><th>planned time</th>
+<thead><tr><th>#</th><th>lesson (one page)</th><th>lecture slides</th><th>for instructors</th><th>planned time</th>
 <th>runs in<br><small>measured, CPU</small></th><th>prerequisites</th><th>paper it reproduces</th></tr></thead>
 <tbody>
 {rows}
 </tbody>
 </table>
-<p><small><em>Planned time</em>: lecture and practical together, the authors' plan. <em>Runs in</em>: from the
+<p><small><em>Lecture slides</em>: press <code>s</code> for the speaker notes (what each figure shows, the
+exercises' solutions and notes, a time per section). <em>Solutions</em>: the lesson with its reference solutions
+and instructor notes pasted in, not run here (<code>make solutions</code> runs and checks them).
+<em>Planned time</em>: lecture and practical together, the authors' plan. <em>Runs in</em>: from the
 first cell to the last when the stored outputs were made (one CPU thread, a 2-core machine).</small></p>
 <h2>Benchmark</h2>
 <p><a href="report/bench_all.html">Every solver on the same held-out cases, speed against quality</a>
@@ -200,5 +238,5 @@ lessons 00–02: see <code>data_samples/README.md</code>. reveal.js (MIT) and Ma
 <code>_static/</code> with their licences.</p>
 """
     index = out / "index.html"
-    index.write_text(_page("posekit course", body), encoding="utf-8")
+    index.write_text(_page("posekit course: lessons, lecture slides and solutions", body), encoding="utf-8")
     return index

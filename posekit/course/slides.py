@@ -31,6 +31,9 @@ import re
 from pathlib import Path
 
 KEY_FIGURE = "key-figure"
+SLIDE_WIDTH, SLIDE_HEIGHT = 1280, 720
+"""The slide size reveal.js lays every slide out at (CSS pixels; it scales the whole slide to the screen): a
+1280x720 projector shows it one to one."""
 OVERRIDES = {"slide-skip": "skip", "slide-notes": "notes"}
 _SPLIT = re.compile(r"^(?=## |\*\*Exercise \d)", re.MULTILINE)
 
@@ -191,7 +194,7 @@ def _presentable(nb: dict) -> dict:
     return nb
 
 
-def export(nb: dict, kind: str, static: str = "../_static", back: str | None = None) -> str:
+def export(nb: dict, kind: str, static: str = "../_static", back: str | None = None, lesson=None) -> str:
     """One lesson as HTML with posekit's templates: ``kind`` ``"slides"`` (reveal.js) or ``"page"``.
 
     Parameters
@@ -203,6 +206,8 @@ def export(nb: dict, kind: str, static: str = "../_static", back: str | None = N
         Relative URL of the course's ``_static`` folder (reveal.js, MathJax) from the written file.
     back : str, optional
         Relative URL of the course page, linked at the top of a page.
+    lesson : posekit.course.lessons.Lesson, optional
+        The lesson's facts for its slides (title slide, time plan, exercise notes: :mod:`posekit.course.lecture`).
     """
     import nbformat
     from nbconvert import HTMLExporter, SlidesExporter
@@ -213,12 +218,19 @@ def export(nb: dict, kind: str, static: str = "../_static", back: str | None = N
         exp.reveal_url_prefix = f"{static}/reveal.js"
         exp.reveal_theme = "white"
         exp.reveal_transition = "none"
-        exp.reveal_width, exp.reveal_height = "1280", "800"
+        exp.reveal_width, exp.reveal_height = str(SLIDE_WIDTH), str(SLIDE_HEIGHT)
     elif kind == "page":
         exp = HTMLExporter(template_name="posekit_lab", extra_template_basedirs=[templates], extra_template_paths=[templates])
     else:
         raise ValueError(f"kind must be 'slides' or 'page', not {kind!r}")
-    node = nbformat.from_dict(_presentable(nb))
+    if kind == "slides":
+        from .lecture import lecture_notebook
+
+        node = lecture_notebook(nb, lesson)
+    else:
+        node = nbformat.from_dict(_presentable(nb))
+        if "title" not in node.metadata and node.cells and _source(node.cells[0]).startswith("# "):
+            node.metadata["title"] = _source(node.cells[0]).splitlines()[0][2:].strip()  # the tab names the lesson
     body, _ = exp.from_notebook_node(node, resources={"posekit_static": static, "posekit_back": back})
     return body
 

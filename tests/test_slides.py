@@ -1,0 +1,177 @@
+"""The lecture layout of the slides (posekit/course/lecture.py): code hidden unless it is the point, a figure with
+its lead-in, long printed tables cut with a pointer to the notebook, speaker notes from the lesson's own text and a
+time per section, a title slide that names the lesson. The browser check that every slide fits the screen is
+tests/test_slides_fit.py."""
+
+from __future__ import annotations
+
+import base64
+import io
+import re
+
+import nbformat
+import pytest
+
+from posekit.course import lecture
+from posekit.course import slides as rules
+from posekit.course.lessons import find_lesson, lessons, read_notebook
+
+
+def _png(w=800, h=400) -> str:
+    from PIL import Image
+
+    buf = io.BytesIO()
+    Image.new("RGB", (w, h), "white").save(buf, format="PNG")
+    return base64.b64encode(buf.getvalue()).decode()
+
+
+def _lesson(*cells, minutes=60):
+    nb = nbformat.v4.new_notebook()
+    nb.metadata["posekit"] = {"lesson": "09", "duration_min": minutes, "prerequisites": []}
+    out = []
+    for kind, text, *rest in cells:
+        if kind == "md":
+            c = nbformat.v4.new_markdown_cell(text)
+        else:
+            c = nbformat.v4.new_code_cell(text)
+            c.execution_count = len(out) + 1
+            c.outputs = rest[0] if rest else []
+        if len(rest) > 1:
+            c.metadata["tags"] = rest[1]
+        out.append(c)
+    nb.cells = out
+    return rules.mark(nb)
+
+
+def _stream(text):
+    return [nbformat.v4.new_output("stream", name="stdout", text=text)]
+
+
+def _figure():
+    return [nbformat.v4.new_output("display_data", data={"image/png": _png(), "text/plain": "<Figure>"})]
+
+
+def _slides(nb):
+    """The deck's slides as the HTML of each leaf <section>, and its notes."""
+    page = rules.export(nb, "slides")
+    leaves = re.findall(r"<section\b[^>]*>((?:(?!<section).)*?)</section>", page, re.S)
+    return page, leaves
+
+
+BASE = (("md", "# 09 — A test lesson\n\n**Aim.** Learn."), ("code", "import numpy as np"))
+
+
+def test_code_is_hidden_unless_it_is_the_point():
+    nb = _lesson(*BASE, ("md", "## 1. A figure\n\nThe curve below:"),
+                 ("code", "plot_the_curve_secretly()", _figure()),
+                 ("md", "A table."), ("code", "print_the_table_quietly()", _stream("a b\n1 2\n3 4\n")),
+                 ("md", "The algorithm, by hand."), ("code", "def my_algorithm_by_hand(x):\n    return x", [], ["slide-code"]))
+    page, _ = _slides(nb)
+    assert "plot_the_curve_secretly" not in page and "print_the_table_quietly" not in page
+    assert "data:image/png;base64," in page and "3 4" in page  # their outputs stay
+    assert "my_algorithm_by_hand" in page  # tagged slide-code: the code is the point
+
+
+def test_point_cells_name_one_code_cell_each():
+    for number, needles in lecture.POINT_CELLS.items():
+        nb = read_notebook(find_lesson(number).path)
+        for needle in needles:
+            hits = [c for c in nb.cells if c.cell_type == "code" and needle in c.source]
+            assert len(hits) == 1, f"lesson {number}: {needle!r} names {len(hits)} code cells, expected one"
+
+
+def test_a_figure_keeps_its_lead_in_and_explanation_goes_to_the_notes():
+    long_text = "\n\n".join(f"Paragraph {k}: " + "words " * 60 for k in range(4))
+    nb = _lesson(*BASE, ("md", f"## 1. Results\n\n{long_text}\n\nThe figure shows the error against time:"),
+                 ("code", "plot()", _figure()),
+                 ("md", "What the figure says: the error falls by half within the first minute."))
+    _, leaves = _slides(nb)
+    with_fig = [s for s in leaves if "data:image/png" in s]
+    assert len(with_fig) == 1
+    assert "the error against time:" in with_fig[0], "the figure's slide lost its lead-in sentence"
+    notes = re.search(r'<aside class="notes">(.*?)</aside>', with_fig[0], re.S)
+    assert notes and "falls by half" in notes.group(1)
+
+
+def test_a_long_printed_table_is_cut_and_points_to_the_notebook():
+    table = "\n".join(f"row {k:3d}   {k * 1.5:8.2f}" for k in range(120))
+    nb = _lesson(*BASE, ("md", "## 1. A long table"), ("code", "print(t)", _stream(table)))
+    page, leaves = _slides(nb)
+    assert "row   0" in page and "row 119" not in page
+    assert re.search(r"more lines: the whole is in the notebook \(cell In \[\d+\]\)", page)
+
+
+def test_a_wide_table_gets_a_smaller_font_not_a_cut_edge():
+    wide = "name" + "   1.25" * 15  # a row of a table: columns that must not wrap
+    font = lecture.pre_font([wide])
+    assert font < lecture.PRE_PX and lecture.MONO * font * len(wide) <= lecture.WIDTH + 1
+
+
+def test_section_times_share_the_planned_time():
+    assert lecture.section_plan(["a", "b", "c"], [1, 1, 2], 60) == [15, 15, 30]
+    shares = lecture.section_plan(list("abcdefg"), [3, 1, 4, 1, 5, 9, 2], 90)
+    assert sum(shares) == 90 and min(shares) >= 1
+
+
+def test_checked_and_open_exercises_bring_their_instructor_notes():
+    le = find_lesson("01")
+    page = rules.export(read_notebook(le.path), "slides", lesson=le)
+    notes = " ".join(re.findall(r'<aside class="notes">(.*?)</aside>', page, re.S))
+    assert "reference solution" in notes and "exercise_fabrik_chain" in notes  # a checked exercise: its reference solution
+    assert "Instructor notes — exercise 3" in notes  # an open one: posekit/exercises/solutions/nb01.md
+
+
+@pytest.mark.parametrize("number", [le.number for le in lessons()])
+def test_each_deck_is_a_lecture(number):
+    le = find_lesson(number)
+    nb = read_notebook(le.path)
+    page = rules.export(nb, "slides", lesson=le)
+    assert re.search(r"<title>\s*" + re.escape(f"{le.number} — {le.title}"), page), "the tab does not name the lesson"
+    notes = re.findall(r'<aside class="notes">(.*?)</aside>', page, re.S)
+    times = [int(m) for m in re.findall(r"about (\d+) min for this section", " ".join(notes))]
+    assert times and sum(times) == le.duration_min, f"lesson {number}: section times {times}"
+    assert "Plan" in notes[0]
+    first = re.search(r"<section\b[^>]*>(.*?)</section>", page, re.S).group(1)
+    assert f"about {le.duration_min} min" in first
+    # code stays in the notebook: no code cell's input is drawn, except the ones that are the point
+    assert "jp-CodeMirrorEditor" not in page.split("</head>", 1)[1]
+    # a 3D view says what it shows (the viewer's own description) and where to run it
+    for cell in nb.cells:
+        for o in cell.get("outputs", []):
+            plain = o.get("data", {}).get("text/plain", "")
+            if rules.WIDGET_VIEW in o.get("data", {}) and not rules._PROGRESS.search(plain):
+                assert lecture.widget_caption(plain).split(". ")[0] in page
+                assert f"In [{cell.execution_count}]" in page
+
+
+# ---- the 3D views as stills ------------------------------------------------------------------------------------
+
+
+def test_a_view_runs_only_the_cells_it_needs():
+    from posekit.course.stills import needed_cells
+
+    nb = _lesson(("md", "# 09 — t"), ("code", "import numpy as np"), ("code", "a = np.ones(3)"),
+                 ("code", "b = slow_benchmark()"), ("code", "a = a * 2\nc = 5"), ("code", "viewer = show(a)\nviewer"))
+    assert needed_cells(nb, 5) == [1, 2, 4, 5]
+
+
+@pytest.mark.parametrize("number", [le.number for le in lessons()])
+def test_every_3d_view_has_a_fresh_still_on_its_slide(number):
+    from posekit.course.stills import load, view_cells
+
+    le = find_lesson(number)
+    nb = read_notebook(le.path)
+    views = view_cells(nb)
+    assert views, f"lesson {number} has no 3D view"
+    for v in views:
+        still, state = load(number, nb, v)
+        assert state == "ok", (f"lesson {number}, cell {v}: still {state} — run `python -m posekit.course.stills "
+                               f"{number}`")
+        assert still["views"] and all(len(view["pose"]) == len(still["parents"]) for view in still["views"])
+    page = rules.export(nb, "slides", lesson=le)
+    assert page.count("A still of the view as its cell draws it") == len(views)
+    leaves = re.findall(r"<section\b[^>]*>((?:(?!<section).)*?)</section>", page, re.S)
+    for v in views:  # the still, its caption and the cell to open live share one slide
+        n = nb.cells[v].execution_count
+        slide = next(s for s in leaves if f"In [{n}]" in s and "A still of the view" in s)
+        assert "data:image/png;base64," in slide
