@@ -114,3 +114,42 @@ def test_one_pose_rotations_are_the_batched_ones(mini):
         two = rotations_from_positions(s, np.concatenate([L0, L0]), np.concatenate([P[:, 0]] * 2),
                                        np.concatenate([P, P]))[0]
         np.testing.assert_allclose(one[0], two[0], atol=1e-12)
+
+
+def test_a_finish_whose_learned_stage_refuses_says_whose_refusal_and_what_answers(cases):
+    """lesson 03's networks exist for fixed joint sets only: a mixed set (positions on a foot, an upper arm and the
+    pelvis) has no learned pose to finish, and the refusal names the stage, the sets and the solvers that answer."""
+    s = cases.skeleton
+    true = cases.target_pos[0]
+    effs = [Effector(j, true[s.index(j)]) for j in ("Foot_L", "UpperArm_R", "Hips")]
+    with pytest.raises(ValueError) as err:
+        make_solver("neural+dls", s).solve(cases.pose(0), effs)
+    msg = str(err.value)
+    assert msg.startswith("neural+dls: its learned stage 'neural' cannot read these effectors")
+    assert "hands: left_hand, right_hand" in msg and "Foot_L, UpperArm_R, Hips" in msg
+    assert "'dls' alone" in msg and "'protores+dls'" in msg and "'latent-opt+dls'" in msg
+
+
+def test_dls_pull_keeps_the_joints_nearer_the_start_and_still_meets_the_effectors(cases):
+    """``pull``: the null-space term turns joints back toward their rotations in the start pose where the effectors
+    leave them free; the effectors are met all the same."""
+    from posekit.ik.dls import DLSSolver
+    from posekit.rotations import quat_to_matrix
+
+    def turned_deg(pose, start):  # the sum over joints of each local rotation's angle from the start's
+        A, B = quat_to_matrix(np.asarray(pose.local_rot)), quat_to_matrix(np.asarray(start.local_rot))
+        return np.degrees(np.arccos(np.clip((np.einsum("jab,jab->j", A, B) - 1) / 2, -1, 1))).sum()
+
+    s = cases.skeleton
+    plain, pulled = DLSSolver(s), DLSSolver(s, pull=0.1)
+    turned = []
+    for i in range(6):
+        effs = effector_set(s, "5", cases.target_pos[i])
+        start = cases.pose(i)
+        a, b = plain.solve(start, effs), pulled.solve(start, effs)
+        assert a.converged and b.converged
+        turned.append((turned_deg(a.pose, start), turned_deg(b.pose, start)))
+    turned = np.array(turned)
+    assert (turned[:, 1] < turned[:, 0]).all() and turned[:, 1].sum() < 0.97 * turned[:, 0].sum()
+    with pytest.raises(ValueError, match=r"pull must be a share in \[0, 1\]"):
+        DLSSolver(s, pull=1.5)
