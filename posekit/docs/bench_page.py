@@ -179,8 +179,12 @@ def _protores_speed(name: str, d: dict) -> str:
         "ProtoRes and its baselines against the roofline (lesson 05), one thread, 5-point poses: the multiply-adds "
         "of one pose counted from the layer sizes, the float32 GEMM rate measured on each network's own matrix "
         "shapes for a batch of 1,000 poses, the poses/s that rate allows (ideal), the network's measured pass on "
-        "that batch, and one pose: its products alone, then a whole pose through `solve` (medians of every round).",
-        _provenance(name, d),
+        "that batch, and one pose: its products alone, then a whole pose through `solve` (medians of every round, "
+        "in the thread's CPU time).",
+        _provenance(name, d) + (f"\n\n*The 1-minute load average when the run began: "
+                                f"{_num(d['load_avg_1min_before'])} on {_num((d.get('machine') or {}).get('cpu_count'))} "
+                                "CPUs; other work slows every timing, so each is a median.*"
+                                if d.get("load_avg_1min_before") is not None else ""),
         _table(d["rows"], ["method", "width", "macs_per_pose", "gemm_gmacs", "ideal_poses_per_s", "poses_per_s",
                            "fraction_of_ideal", "fraction_met", "ms_products_one", "ms_solve_median", "ms_met"],
                labels)])
