@@ -88,7 +88,7 @@ def _error_rows(Pg, Rg, eff_idx, codes, targets, trot, axis, weights, angle_scal
 
 @njit
 def _dls(Rl, root_pos, local_pos, parents, cols, ancestor, eff_idx, codes, targets, trot, axis, tols, weights,
-         angle_scale, damping, max_step, max_iter, Rref, pull):
+         angle_scale, damping, max_step, max_iter):
     J = parents.shape[0]
     K = eff_idx.shape[0]
     n = cols.shape[0]
@@ -102,8 +102,6 @@ def _dls(Rl, root_pos, local_pos, parents, cols, ancestor, eff_idx, codes, targe
     V = np.zeros((K, 3))
     L = np.ones(K)
     B = np.empty((3, 3))
-    z = np.zeros(3 * n)
-    M = np.empty((3, 3))
     it = 0
     while True:
         errors_into(Pg, Rg, eff_idx, codes, targets, trot, axis, err)
@@ -165,25 +163,6 @@ def _dls(Rl, root_pos, local_pos, parents, cols, ancestor, eff_idx, codes, targe
                             Jac[3 * k + i, 3 * c + m] = s * B[i, m]
         A = Jac @ Jac.T + damping * damping * np.eye(3 * K)
         dtheta = Jac.T @ np.linalg.solve(A, dx)
-        if pull > 0.0:
-            # the secondary task: each column's world rotation vector back to the reference's local rotation,
-            # projected onto what the effectors leave free, (I - J^+ J) z
-            for c in range(n):
-                j = cols[c]
-                for a in range(3):
-                    for b in range(3):
-                        M[a, b] = Rref[j, a, 0] * Rl[j, b, 0] + Rref[j, a, 1] * Rl[j, b, 1] + Rref[j, a, 2] * Rl[j, b, 2]
-                rx, ry, rz = log_rotation(M)
-                p = parents[j]
-                if p < 0:
-                    z[3 * c], z[3 * c + 1], z[3 * c + 2] = rx, ry, rz
-                else:
-                    for a in range(3):
-                        z[3 * c + a] = Rg[p, a, 0] * rx + Rg[p, a, 1] * ry + Rg[p, a, 2] * rz
-            # the projector is nearly exact (a millimetre's damping, not lambda's): a damped one would leak the
-            # pull into the effectors' rows and hold them off their targets
-            P = Jac @ Jac.T + 1e-6 * np.eye(3 * K)
-            dtheta += pull * (z - Jac.T @ np.linalg.solve(P, Jac @ z))
         big = np.abs(dtheta).max()
         if big > max_step:
             dtheta *= max_step / big
@@ -212,13 +191,6 @@ class DLSSolver(SolverBase):
         it moves the start as a whole onto its target first (:func:`posekit.ik.api.base_on_target`).
     angle_scale : float, metres per radian
         Weight of the angular rows relative to position rows (:data:`ANGLE_SCALE`).
-    pull : float in [0, 1]
-        A secondary task (the null-space term of Liegeois 1977, as in Buss 2004 Sec. 6): each step also turns
-        every free joint back toward its rotation in the start pose by this share of the way, projected onto
-        what the effectors leave free, ``(I - J^T (J J^T + eps^2 I)^-1 J) z`` (``eps`` 1 mm, so that the pull
-        does not leak into the effectors' rows). 0 (the default) is plain DLS;
-        the exact finish (:mod:`posekit.ik.finish`) starts from a learned pose and pulls toward it, so the
-        joints no effector needs keep the network's choice.
     """
 
     name = "dls"
@@ -226,7 +198,7 @@ class DLSSolver(SolverBase):
     needs_start = True
 
     def __init__(self, skeleton: Skeleton, damping: float = 0.05, max_iter: int = 100, max_step: float = 0.3,
-                 base: str | None = None, angle_scale: float = ANGLE_SCALE, pull: float = 0.0):
+                 base: str | None = None, angle_scale: float = ANGLE_SCALE):
         self.skeleton = skeleton
         self.damping = float(damping)
         self.max_iter = int(max_iter)
@@ -235,9 +207,6 @@ class DLSSolver(SolverBase):
         if not angle_scale > 0:
             raise ValueError(f"angle_scale must be a positive number of metres per radian, got {angle_scale!r}")
         self.angle_scale = float(angle_scale)
-        if not 0.0 <= pull <= 1.0:
-            raise ValueError(f"pull must be a share in [0, 1], got {pull!r}")
-        self.pull = float(pull)
 
     def _solve(self, start, res) -> IKResult:
         Rl, root, local_pos = rotations_of(self.skeleton, start, "DLS")
@@ -248,10 +217,9 @@ class DLSSolver(SolverBase):
         for k, e in enumerate(res.joints):
             chain = set(self.skeleton.chain(int(e), 0)[:-1])
             ancestor[k] = [1 if c in chain else (2 if c == e and turns_self[k] else 0) for c in cols]
-        Rref = Rl.copy() if self.pull > 0 else Rl[:1]
         Pg, Rg, it, _ = _dls(Rl, root, local_pos, self.skeleton.parents, cols, ancestor, res.joints, res.codes,
                              np.ascontiguousarray(res.position), res.rotation, res.axis, res.tolerance, res.weight,
-                             self.angle_scale, self.damping, self.max_step, self.max_iter, Rref, self.pull)
+                             self.angle_scale, self.damping, self.max_step, self.max_iter)
         return self.result(pose_from(Rl, root, Pg, start.local_pos), res, it, global_rot=Rg)
 
 

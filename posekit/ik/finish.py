@@ -50,12 +50,6 @@ __all__ = ["FinishedSolver", "finished_name", "FINISHED"]
 FINISHED = ("neural", "latent-opt", "protores")
 """The learned solvers (lessons 03, 04, 05) registered with an exact finish, ``NAME+dls``."""
 
-PULL = 0.0
-"""DLS's pull toward the learned pose (:class:`~posekit.ik.dls.DLSSolver`'s ``pull``) in the finish."""
-
-LEARNED_OPTIONS = {}
-"""Options each learned solver gets by default when a finish follows it (``make_solver`` keywords)."""
-
 
 def finished_name(learned: str) -> str:
     """The registered name of ``learned`` with the exact finish: ``"protores"`` -> ``"protores+dls"``."""
@@ -97,11 +91,10 @@ class FinishedSolver(SolverBase):
 
     kinds = KINDS
 
-    def __init__(self, skeleton, learned: str, max_iter: int = 100, pull: float | None = None, **learned_options):
+    def __init__(self, skeleton, learned: str, max_iter: int = 100, **learned_options):
         self.skeleton = skeleton
-        self.learned = make_solver(learned, skeleton, **{**LEARNED_OPTIONS.get(learned, {}), **learned_options})
-        self.finisher = DLSSolver(skeleton, max_iter=max_iter, pull=PULL if pull is None else pull)
-        self.fallback = DLSSolver(skeleton, max_iter=max_iter)
+        self.learned = make_solver(learned, skeleton, **learned_options)
+        self.finisher = DLSSolver(skeleton, max_iter=max_iter)
         self.name = finished_name(learned)
         self.needs_start = self.learned.needs_start
         self.batch_atol = max(self.learned.batch_atol, 1e-9) * 10
@@ -132,7 +125,7 @@ class FinishedSolver(SolverBase):
                 "finish_iterations": fr.iterations}
         if not fr.converged and start is not None and start.local_rot is not None:
             # stuck near the learned pose (a limb stretched to its end, a local minimum): DLS from the start too
-            fs = self.fallback.solve(start, res)
+            fs = self.finisher.solve(start, res)
             info["finish_ms"] = (time.perf_counter() - t1) * 1e3
             if fs.converged or not _worse(fs.effector_error, fr.effector_error, res.codes):
                 info["kept"] = "start"

@@ -129,27 +129,3 @@ def test_a_finish_whose_learned_stage_refuses_says_whose_refusal_and_what_answer
     assert "hands: left_hand, right_hand" in msg and "Foot_L, UpperArm_R, Hips" in msg
     assert "'dls' alone" in msg and "'protores+dls'" in msg and "'latent-opt+dls'" in msg
 
-
-def test_dls_pull_keeps_the_joints_nearer_the_start_and_still_meets_the_effectors(cases):
-    """``pull``: the null-space term turns joints back toward their rotations in the start pose where the effectors
-    leave them free; the effectors are met all the same."""
-    from posekit.ik.dls import DLSSolver
-    from posekit.rotations import quat_to_matrix
-
-    def turned_deg(pose, start):  # the sum over joints of each local rotation's angle from the start's
-        A, B = quat_to_matrix(np.asarray(pose.local_rot)), quat_to_matrix(np.asarray(start.local_rot))
-        return np.degrees(np.arccos(np.clip((np.einsum("jab,jab->j", A, B) - 1) / 2, -1, 1))).sum()
-
-    s = cases.skeleton
-    plain, pulled = DLSSolver(s), DLSSolver(s, pull=0.1)
-    turned = []
-    for i in range(6):
-        effs = effector_set(s, "5", cases.target_pos[i])
-        start = cases.pose(i)
-        a, b = plain.solve(start, effs), pulled.solve(start, effs)
-        assert a.converged and b.converged
-        turned.append((turned_deg(a.pose, start), turned_deg(b.pose, start)))
-    turned = np.array(turned)
-    assert (turned[:, 1] < turned[:, 0]).all() and turned[:, 1].sum() < 0.97 * turned[:, 0].sum()
-    with pytest.raises(ValueError, match=r"pull must be a share in \[0, 1\]"):
-        DLSSolver(s, pull=1.5)
