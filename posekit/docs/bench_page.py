@@ -168,6 +168,28 @@ def _protores(name: str, d: dict) -> str:
     return "\n\n".join(parts)
 
 
+def _protores_speed(name: str, d: dict) -> str:
+    """``posekit bench protores --speed-only --out``: each network's speed against the machine's arithmetic."""
+    labels = {"method": "network", "macs_per_pose": "multiply-adds per pose", "gemm_gmacs": "GEMM rate GMAC/s",
+              "ideal_poses_per_s": "ideal poses/s", "poses_per_s": "measured poses/s",
+              "fraction_of_ideal": "of ideal", "fraction_met": f"goal >= {_num(d.get('goal_fraction'))} met",
+              "ms_products_one": "one pose: products ms", "ms_solve_median": "one pose: solve ms (median)",
+              "ms_met": f"goal <= {_num(d.get('goal_ms'))} ms met"}
+    return "\n\n".join([
+        "ProtoRes and its baselines against the roofline (lesson 05), one thread, 5-point poses: the multiply-adds "
+        "of one pose counted from the layer sizes, the float32 GEMM rate measured on each network's own matrix "
+        "shapes for a batch of 1,000 poses, the poses/s that rate allows (ideal), the network's measured pass on "
+        "that batch, and one pose: its products alone, then a whole pose through `solve` (medians of every round, "
+        "in the thread's CPU time).",
+        _provenance(name, d) + (f"\n\n*The 1-minute load average when the run began: "
+                                f"{_num(d['load_avg_1min_before'])} on {_num((d.get('machine') or {}).get('cpu_count'))} "
+                                "CPUs; other work slows every timing, so each is a median.*"
+                                if d.get("load_avg_1min_before") is not None else ""),
+        _table(d["rows"], ["method", "width", "macs_per_pose", "gemm_gmacs", "ideal_poses_per_s", "poses_per_s",
+                           "fraction_of_ideal", "fraction_met", "ms_products_one", "ms_solve_median", "ms_met"],
+               labels)])
+
+
 def _ae_scale(name: str, d: dict) -> str:
     data = d.get("data") or {}
     size = (f" ({data['frames']} frames, {data['clips']} clips)"
@@ -199,6 +221,7 @@ def _nbgrader(name: str, d: dict) -> str:
 SECTIONS = [
     ("bench_all.json", "Every solver on the same cases", _bench_all),
     (STUDIO_SESSIONS, "The studio for a class: sizing", _studio),
+    ("bench_protores.json", "ProtoRes: speed against the roofline", _protores_speed),
     ("protores_ablation.json", "ProtoRes: ablations and width", _protores),
     ("protores_scaling.json", "ProtoRes: scaling", _protores),
     ("ae_scale_full.json", "Lesson 03 at full scale", _ae_scale),

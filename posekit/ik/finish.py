@@ -103,7 +103,13 @@ class FinishedSolver(SolverBase):
         t0 = time.perf_counter()
         mine = np.array([k in self.learned.kinds for k in res.kinds])
         if mine.any():
-            lr = self.learned.solve(start, _subset(res, mine))
+            try:
+                lr = self.learned.solve(start, _subset(res, mine))
+            except ValueError as err:  # no learned pose to finish: say whose refusal it is, and what answers
+                others = ", ".join(repr(finished_name(n)) for n in FINISHED if n != self.learned.name)
+                raise ValueError(f"{self.name}: its learned stage {self.learned.name!r} cannot read these effectors, "
+                                 f"so there is no learned pose to finish ({err}); 'dls' alone, or a finish whose "
+                                 f"learned stage reads any set ({others}), answers them") from None
             pose, learned_conv = lr.pose, bool(lr.converged) and mine.all()
         else:  # nothing the learned solver reads: the finish starts from the start pose
             pose, learned_conv = start, False

@@ -114,3 +114,18 @@ def test_one_pose_rotations_are_the_batched_ones(mini):
         two = rotations_from_positions(s, np.concatenate([L0, L0]), np.concatenate([P[:, 0]] * 2),
                                        np.concatenate([P, P]))[0]
         np.testing.assert_allclose(one[0], two[0], atol=1e-12)
+
+
+def test_a_finish_whose_learned_stage_refuses_says_whose_refusal_and_what_answers(cases):
+    """lesson 03's networks exist for fixed joint sets only: a mixed set (positions on a foot, an upper arm and the
+    pelvis) has no learned pose to finish, and the refusal names the stage, the sets and the solvers that answer."""
+    s = cases.skeleton
+    true = cases.target_pos[0]
+    effs = [Effector(j, true[s.index(j)]) for j in ("Foot_L", "UpperArm_R", "Hips")]
+    with pytest.raises(ValueError) as err:
+        make_solver("neural+dls", s).solve(cases.pose(0), effs)
+    msg = str(err.value)
+    assert msg.startswith("neural+dls: its learned stage 'neural' cannot read these effectors")
+    assert "hands: left_hand, right_hand" in msg and "Foot_L, UpperArm_R, Hips" in msg
+    assert "'dls' alone" in msg and "'protores+dls'" in msg and "'latent-opt+dls'" in msg
+
