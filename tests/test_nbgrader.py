@@ -1,9 +1,10 @@
 """The lessons as an nbgrader course (``posekit course nbgrader``), graded by nbgrader's own commands.
 
 The fast tests read the source notebooks and the screening of bad folders; the slow ones run nbgrader
-(``generate_assignment`` for every lesson; ``autograde`` and ``export`` on lessons 00 and 06 with a class of
-made-up submissions: right, untouched, one wrong answer, a deleted cell, an answer that raises at import, an
-endless loop, and three folders nbgrader cannot grade).
+itself on one course of every lesson: ``generate_assignment``; ``autograde`` of a class for each lesson (the
+source version, the released one, one answer wrong), graded with one ``autograde`` per lesson; for lesson 00
+also a deleted cell, an answer that raises at import, an endless loop and three folders nbgrader cannot grade;
+``export`` of the grade book.
 """
 
 from __future__ import annotations
@@ -32,6 +33,8 @@ ROOT = Path(__file__).resolve().parents[1]
 LESSONS = lessons()
 STEMS = [le.stem for le in LESSONS]
 ENV = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+if os.environ.get("PYTEST_XDIST_WORKER"):  # two workers on two cores: the grading kernels take one thread each
+    ENV.update(OMP_NUM_THREADS="1", MKL_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
 
 
 def _grading(cell) -> dict:
@@ -164,7 +167,7 @@ def course(tmp_path_factory):
 
     scripts_on_path()  # nbgrader's grade book runs `alembic` by name, also when the venv is not activated
     root = tmp_path_factory.mktemp("course")
-    _run([sys.executable, "-m", "posekit", "course", "nbgrader", "--out", str(root), "--cell-timeout", "120"], ROOT)
+    _run([sys.executable, "-m", "posekit", "course", "nbgrader", "--out", str(root)], ROOT)
     config = PyFileConfigLoader("nbgrader_config.py", path=str(root)).load_config()
     config.CourseDirectory.root = str(root)
     api = NbGraderAPI(config=config)
@@ -194,15 +197,60 @@ def _answer(nb, function) -> nbformat.NotebookNode:
     return next(c for c in nb.cells if _grading(c).get("grade_id") == function)
 
 
+def _copy(nb) -> nbformat.NotebookNode:
+    return nbformat.from_dict(json.loads(json.dumps(nb)))
+
+
+def _checked(stem) -> list:
+    return [ex for ex in exercises(read_notebook(ROOT / "notebooks" / f"{stem}.ipynb")) if not ex.open]
+
+
+def _wrong_exercise(stem) -> str:
+    """The exercise a lesson's "wrong" student gets wrong: the first, a middle or the last, by lesson number."""
+    checked = _checked(stem)
+    return checked[int(stem[:2]) % len(checked)].function
+
+
+_SLIP = """
+
+def {function}(*args, **kwargs):  # the student's slip: every number of the answer 0.01 off
+    return _off(_{function}_right(*args, **kwargs))
+
+
+def _off(value):
+    import numpy as np
+
+    if value is None:
+        return None
+    if isinstance(value, tuple):
+        return tuple(_off(v) for v in value)
+    return np.asarray(value, dtype=float) + 0.01
+"""
+
+
+def _slip(answer_source: str, function: str) -> str:
+    """The answer, right in shape and type, wrong in value: the reference solution's result 0.01 off."""
+    renamed, n = re.subn(rf"\bdef {function}\(", f"def _{function}_right(", answer_source, count=1)
+    assert n == 1, answer_source[:200]
+    return renamed + _SLIP.format(function=function)
+
+
+HANDED_IN = "2026-01-05 09:00:00.000000 UTC"
+
+
 def _class(course, stem) -> dict[str, str]:
-    """A class's submissions of ``stem``; returns what each student did."""
+    """Hand in a class's submissions of ``stem``: for every lesson the source version ("right"), the released
+    one ("untouched") and the source with one exercise wrong ("wrong"); for lesson 00 also a deleted cell, an
+    answer raising at import, an endless loop and three folders nbgrader cannot grade. Returns the exercises
+    the mistakes are in."""
     src = nbformat.read(str(course / "source" / stem / f"{stem}.ipynb"), as_version=4)
     released = course / "release" / stem / f"{stem}.ipynb"
-    checked = [ex for ex in exercises(read_notebook(ROOT / "notebooks" / f"{stem}.ipynb")) if not ex.open]
+    checked = _checked(stem)
 
     def hand_in(student, nb=None, raw=None, name=f"{stem}.ipynb"):
         d = course / "submitted" / student / stem
         d.mkdir(parents=True, exist_ok=True)
+        (d / "timestamp.txt").write_text(HANDED_IN)  # as `nbgrader collect` leaves it
         if raw is not None:
             (d / name).write_text(raw, encoding="utf-8")
         elif nb is not None:
@@ -210,28 +258,66 @@ def _class(course, stem) -> dict[str, str]:
 
     hand_in("right", src)
     shutil.copytree(released.parent, course / "submitted" / "untouched" / stem)
-    if stem != STEMS[0]:
-        return {}
-    first, second = checked[0].function, checked[1].function
-    wrong = nbformat.from_dict(json.loads(json.dumps(src)))
-    cell = _answer(wrong, second)  # returns a number where the checker expects an array
-    cell.source = cell.source.replace("### BEGIN SOLUTION\n", "### BEGIN SOLUTION\n    return 0.0\n")
+    (course / "submitted" / "untouched" / stem / "timestamp.txt").write_text(HANDED_IN)
+    slip = _wrong_exercise(stem)
+    wrong = _copy(src)
+    _answer(wrong, slip).source = _slip(_answer(wrong, slip).source, slip)
     hand_in("wrong", wrong)
-    deleted = nbformat.from_dict(json.loads(json.dumps(src)))   # the first tests cell and the second answer gone
+    if stem != STEMS[0]:
+        return {"wrong": slip}
+    first, second = checked[0].function, checked[1].function
+    deleted = _copy(src)   # the first tests cell and the second answer gone
     deleted.cells = [c for c in deleted.cells if _grading(c).get("grade_id") not in (f"{first}_tests", second)]
     hand_in("deleted", deleted)
-    raises = nbformat.from_dict(json.loads(json.dumps(src)))
+    raises = _copy(src)
     _answer(raises, first).source = "import posekit_has_no_such_module\n\n" + _answer(raises, first).source
     hand_in("raises", raises)
-    loops = nbformat.from_dict(json.loads(json.dumps(src)))
+    loops = _copy(src)  # loops forever, asleep: the timeout ends it, without a busy core meanwhile
     _answer(loops, second).source = _answer(loops, second).source.replace(
-        "### BEGIN SOLUTION\n", "### BEGIN SOLUTION\n    while True:\n        pass\n")
+        "### BEGIN SOLUTION\n", "### BEGIN SOLUTION\n    import time\n    while True:\n        time.sleep(1)\n")
     hand_in("loops", loops)
     hand_in("other", nbformat.read(str(course / "release" / STEMS[1] / f"{STEMS[1]}.ipynb"), as_version=4))
     hand_in("broken", raw='{"cells": [\n  {"cell_type": "code",\n  oops\n')
-    (course / "submitted" / "empty" / stem).mkdir(parents=True)
+    hand_in("empty")
     (course / "submitted" / "empty" / stem / "notes.txt").write_text("I forgot")
-    return {"first": first, "second": second}
+    return {"wrong": slip, "first": first, "second": second}
+
+
+CLASS_00 = ("right", "untouched", "wrong", "deleted", "raises", "loops", "other", "broken", "empty")
+LOOP_TIMEOUT_S = 30
+"""Lesson 00's cells take seconds: a 30 s limit (not the course's 300 s) bounds what its endless loop costs."""
+
+
+@pytest.fixture(scope="module")
+def graded(course):
+    """``grade(stem)``: hands in the class of ``stem`` (:func:`_class`) and autogrades all of it with one
+    ``posekit course autograde`` (nbgrader's ``autograde`` behind the screening), once per lesson.
+    Returns ``(the course folder, what the class did, the finished command)``."""
+    from nbgrader.api import Gradebook
+
+    done = {}
+
+    def grade(stem):
+        if stem not in done:
+            did = _class(course, stem)
+            with Gradebook(f"sqlite:///{course / 'gradebook.db'}") as gb:  # the class list
+                for student in CLASS_00:
+                    gb.update_or_create_student(student)
+            extra = ["--cell-timeout", str(LOOP_TIMEOUT_S)] if stem == STEMS[0] else []
+            proc = _run([sys.executable, "-m", "posekit", "course", "autograde", stem, "--course", str(course),
+                         *extra], ROOT, ok=False)
+            done[stem] = course, did, proc
+        return done[stem]
+
+    grade.done = done
+    return grade
+
+
+def _points(course, stem) -> dict[str, float]:
+    """The autograded cells of ``stem`` and their points, as the source version gives them."""
+    src = nbformat.read(str(course / "source" / stem / f"{stem}.ipynb"), as_version=4)
+    return {_grading(c)["grade_id"]: float(_grading(c)["points"]) for c in src.cells
+            if c.cell_type == "code" and _grading(c).get("grade")}
 
 
 def _grades(course) -> dict[tuple[str, str], dict]:
@@ -248,6 +334,14 @@ def _cell_scores(course, stem, student) -> dict[str, float]:
         return {g.name: g.auto_score for g in nb.grades if g.cell.cell_type == "code"}
 
 
+def _code_score(course, stem, student) -> tuple[float, float]:
+    from nbgrader.api import Gradebook
+
+    with Gradebook(f"sqlite:///{course / 'gradebook.db'}") as gb:
+        sub = gb.find_submission(stem, student)
+        return sub.code_score, sub.max_code_score
+
+
 def _errors(course, stem, student) -> list[str]:
     nb = nbformat.read(str(course / "autograded" / student / stem / f"{stem}.ipynb"), as_version=4)
     return [f"{_grading(c).get('grade_id')}: {o.get('ename')}" for c in nb.cells if c.cell_type == "code"
@@ -262,59 +356,63 @@ def _outputs(course, stem, student, grade_id) -> str:
 
 
 @pytest.mark.slow
-def test_autograde_and_export_grade_a_class_of_lesson_00_and_06(course):
-    a, b = STEMS[0], STEMS[6]
-    did = _class(course, a)
-    _class(course, b)
-    from nbgrader.api import Gradebook
+@pytest.mark.parametrize("stem", STEMS)
+def test_autograde_gives_the_source_full_marks_the_released_none_and_one_wrong_answer_loses_its_points(graded, stem):
+    course, did, proc = graded(stem)
+    assert proc.returncode == (1 if stem == STEMS[0] else 0), proc.stdout + proc.stderr  # 00: 3 folders refused
+    points = _points(course, stem)
+    total = sum(points.values())
+    assert len(points) == len(_checked(stem)) and total > 0
+    # the source version earns every autograded point, and runs top to bottom without an error
+    assert _cell_scores(course, stem, "right") == points
+    assert _code_score(course, stem, "right") == (total, total)
+    assert _errors(course, stem, "right") == []
+    # the released version earns none: each answer is "not attempted yet", and it too runs without an error
+    assert _cell_scores(course, stem, "untouched") == dict.fromkeys(points, 0)
+    assert _code_score(course, stem, "untouched") == (0, total)
+    assert _errors(course, stem, "untouched") == []
+    for test in points:
+        assert "not attempted yet" in _outputs(course, stem, "untouched", test)
+    # one answer wrong in value (right in shape): exactly that exercise's points are lost, the checker says why
+    slip = f"{did['wrong']}_tests"
+    assert _cell_scores(course, stem, "wrong") == {**points, slip: 0}
+    assert _code_score(course, stem, "wrong") == (total - points[slip], total)
+    assert _errors(course, stem, "wrong") == []
+    assert "✗ check_" in _outputs(course, stem, "wrong", slip)
 
-    with Gradebook(f"sqlite:///{course / 'gradebook.db'}") as gb:  # the class list
-        for student in ("right", "untouched", "wrong", "deleted", "raises", "loops", "other", "broken", "empty"):
-            gb.update_or_create_student(student)
-    # lesson 00's cells are short: a 45 s limit (not the course's 120 s) bounds what the endless loop costs
-    proc = _run([sys.executable, "-m", "posekit", "course", "autograde", a, "--course", str(course),
-                 "--cell-timeout", "45"], ROOT, ok=False)
-    assert proc.returncode == 1, proc.stdout + proc.stderr  # graded, but three folders refused
-    for student in ("other", "broken", "empty"):
+
+@pytest.mark.slow
+def test_autograde_reports_a_students_mistakes_and_bad_folders_and_export_writes_every_grade(graded):
+    a = STEMS[0]
+    course, did, proc = graded(a)
+    for student in ("other", "broken", "empty"):  # named on the terminal, each with its reason
         assert re.search(rf"refused {student}: .*submitted/{student}/{a}.*counts as missing", proc.stderr), \
             proc.stderr
-    _run([sys.executable, "-m", "posekit", "course", "autograde", "06", "--course", str(course)], ROOT)
-    grades = _grades(course)
-    n_a = len([e for e in exercises(read_notebook(ROOT / "notebooks" / f"{a}.ipynb")) if not e.open])
-    n_b = len([e for e in exercises(read_notebook(ROOT / "notebooks" / f"{b}.ipynb")) if not e.open])
-
-    def score(stem, student):
-        return float(grades[(stem, student)]["raw_score"])
-
-    # the source version earns every autograded point; the released one none (open answers wait for a person)
-    for stem, n in ((a, n_a), (b, n_b)):
-        scores = _cell_scores(course, stem, "right")
-        assert len(scores) == n and all(v == 1 for v in scores.values()), scores
-        assert score(stem, "right") == n
-        assert set(_cell_scores(course, stem, "untouched").values()) == {0} and score(stem, "untouched") == 0
-        # both run top to bottom: no cell of the lesson, the answers or the tests raised
-        assert _errors(course, stem, "right") == [] and _errors(course, stem, "untouched") == []
-        for test in (g for g in scores if g.endswith("_tests")):
-            assert "not attempted yet" in _outputs(course, stem, "untouched", test)
-    first, second = did["first"], did["second"]
-    # one wrong answer loses exactly that exercise's point
-    wrong = _cell_scores(course, a, "wrong")
-    assert wrong[f"{second}_tests"] == 0 and sum(wrong.values()) == n_a - 1, wrong
-    assert "✗ check_" in _outputs(course, a, "wrong", f"{second}_tests")
+    assert re.search(r"refused broken: .*not JSON: .* at line 3", proc.stderr), proc.stderr
+    assert re.search(r"refused other: .*lesson 01's notebook, expected lesson 00", proc.stderr), proc.stderr
+    points = _points(course, a)
+    total = sum(points.values())
+    first, second = f"{did['first']}_tests", f"{did['second']}_tests"
     # a deleted tests cell is put back by nbgrader and graded; a deleted answer is an error worth 0
-    deleted = _cell_scores(course, a, "deleted")
-    assert deleted[f"{first}_tests"] == 1 and deleted[f"{second}_tests"] == 0 and sum(deleted.values()) == n_a - 1
-    assert "NameError" in _outputs(course, a, "deleted", f"{second}_tests")
+    assert _cell_scores(course, a, "deleted") == {**points, second: 0}
+    assert "NameError" in _outputs(course, a, "deleted", second)
     # an answer raising at import: its error is shown, the rest is graded
-    raises = _cell_scores(course, a, "raises")
-    assert raises[f"{first}_tests"] == 0 and sum(raises.values()) == n_a - 1
-    assert "ModuleNotFoundError" in _outputs(course, a, "raises", first)
+    assert _cell_scores(course, a, "raises") == {**points, first: 0}
+    assert "ModuleNotFoundError" in _outputs(course, a, "raises", did["first"])
     # an endless loop is interrupted after the per-cell timeout; the cells after it still run
-    loops = _cell_scores(course, a, "loops")
-    assert loops[f"{second}_tests"] == 0 and sum(loops.values()) == n_a - 1, loops
-    assert re.search(r"KeyboardInterrupt|CellTimeoutError", _outputs(course, a, "loops", f"{second}_tests"))
-    # the refused folders are graded as missing; export has a row for each
+    assert _cell_scores(course, a, "loops") == {**points, second: 0}
+    assert re.search(r"KeyboardInterrupt|CellTimeoutError", _outputs(course, a, "loops", second))
+    assert {e.split(":")[0] for e in _errors(course, a, "loops")} == {second}  # only that cell's error
+    # export: one row per student of the class list, the refused folders graded as missing (0, no timestamp)
+    grades = _grades(course)
+    expected = {"right": total, "untouched": 0, "wrong": total - points[f"{did['wrong']}_tests"],
+                "deleted": total - points[second], "raises": total - points[first], "loops": total - points[second],
+                "other": 0, "broken": 0, "empty": 0}
+    assert {s: float(grades[(a, s)]["raw_score"]) for s in CLASS_00} == expected
     for student in ("other", "broken", "empty"):
-        row = grades[(a, student)]
-        assert row["timestamp"] == "" and float(row["raw_score"]) == 0
+        assert grades[(a, student)]["timestamp"] == ""
         assert not (course / "autograded" / student / a).exists()
+    assert all(grades[(a, s)]["timestamp"].startswith(HANDED_IN[:10]) for s in CLASS_00[:6])
+    for stem in graded.done:  # and every other lesson graded in this course (all of them in a full run)
+        for student in ("right", "untouched", "wrong"):
+            assert float(grades[(stem, student)]["raw_score"]) == _code_score(course, stem, student)[0]
