@@ -121,6 +121,19 @@ def test_checked_and_open_exercises_bring_their_instructor_notes():
     assert "Instructor notes — exercise 3" in notes  # an open one: posekit/exercises/solutions/nb01.md
 
 
+def test_a_summary_keeps_its_key_points_on_the_slide_and_its_detail_in_the_notes():
+    detail = "\n".join(f"- Detail {k}: " + "words " * 30 for k in range(8))
+    nb = _lesson(*BASE, ("md", f"## 2. Summary\n\n**Key points**\n\n- One short point.\n- Another.\n\n"
+                               f"**In more detail**\n\n{detail}\n\n**Next:** lesson 10."))
+    _, leaves = _slides(nb)
+    last = leaves[-1]
+    shown, notes = last.split('<aside class="notes">', 1)
+    assert "One short point." in shown and "Another." in shown and "lesson 10" in shown
+    assert "Detail 0" not in shown and "Detail 7" in notes  # one slide: the whole detail went to the notes
+    assert not any("Summary (continued)" in s for s in leaves)
+    assert lecture.summary_slide("## 2. Summary\n\n- no key points") == ("## 2. Summary\n\n- no key points", "")
+
+
 @pytest.mark.parametrize("number", [le.number for le in lessons()])
 def test_each_deck_is_a_lecture(number):
     le = find_lesson(number)
@@ -133,6 +146,11 @@ def test_each_deck_is_a_lecture(number):
     assert "Plan" in notes[0]
     first = re.search(r"<section\b[^>]*>(.*?)</section>", page, re.S).group(1)
     assert f"about {le.duration_min} min" in first
+    # it ends on one summary slide: the key points on it, the lesson's detailed summary in its notes
+    leaves = re.findall(r"<section\b[^>]*>((?:(?!<section).)*?)</section>", page, re.S)
+    last, last_notes = leaves[-1].split('<aside class="notes">', 1)
+    assert "Summary" in last and "Key points" in last, f"lesson {number}: no summary slide"
+    assert "In more detail" in last_notes and "(continued)" not in leaves[-1]
     # code stays in the notebook: no code cell's input is drawn, except the ones that are the point
     assert "jp-CodeMirrorEditor" not in page.split("</head>", 1)[1]
     # a 3D view says what it shows (the viewer's own description) and where to run it

@@ -19,6 +19,8 @@ notebook that reveal.js shows. Its rules:
   ``posekit/exercises/solutions/nbNN.md``) or where its reference solution is; for a 3D view, which cell to run
   live; on the first slide of each section, its time, and on the title slide, the whole plan. A section's time is
   the lesson's planned time shared by the sections' weights (:func:`section_plan`).
+* **The summary slide**: a lesson's Summary opens with its :data:`KEY_POINTS`; the slide shows them and the
+  **Next:** line, the speaker notes the detailed list (:func:`summary_slide`).
 * **3D views** (widgets that live in a kernel) show the description the viewer stores with its output and the cell
   to open live (``In [k]``).
 """
@@ -34,7 +36,8 @@ from .layout import (BUDGET, CHARS, CONT_PX, KEY_PRE_PX, MIN_FIGURE, MONO, PRE_P
 from .slides import KEY_FIGURE, WIDGET_VIEW, _PROGRESS, _source, strip_test_markers
 from .stills import load as load_still, render_png
 
-__all__ = ["SLIDE_CODE", "POINT_CELLS", "MIN_FIGURE", "lecture_notebook", "section_plan", "Page"]
+__all__ = ["SLIDE_CODE", "POINT_CELLS", "KEY_POINTS", "MIN_FIGURE", "lecture_notebook", "section_plan", "summary_slide",
+           "Page"]
 
 SLIDE_CODE = "slide-code"
 """Cell tag: this code cell is the point of its slide, so its code is shown (at most :data:`MAX_CODE_LINES`)."""
@@ -170,6 +173,28 @@ _LIVE = ("**Live in the notebook", "*A still of the view")
 _SAYS = "**What it shows** (the lesson's text on it): "
 
 
+KEY_POINTS = "**Key points**"
+"""Opens the short list a lesson's Summary starts with; the list, the heading and the **Next:** line make the
+deck's summary slide (:func:`summary_slide`)."""
+_DETAIL = "**In more detail**"
+
+
+def summary_slide(src: str) -> tuple[str, str]:
+    """A Summary cell as its slide and its speaker notes: ``(slide, notes)``.
+
+    A cell holding :data:`KEY_POINTS` and ``**In more detail**`` keeps its heading, the key points and its
+    ``**Next:**`` line on the slide, and gives the detailed list to the notes. Any other cell is returned as it is,
+    with empty notes."""
+    if KEY_POINTS not in src or _DETAIL not in src:
+        return src, ""
+    head, rest = src.split(_DETAIL, 1)
+    nxt = ""
+    if "**Next:**" in rest:
+        rest, nxt = rest.split("**Next:**", 1)
+        nxt = "\n\n**Next:**" + nxt
+    return head.rstrip() + nxt, rest.strip()
+
+
 def _explanation(cells, after: int) -> list[str]:
     """The lesson's prose that follows code cell ``after``: markdown cells up to the next code cell or section."""
     out = []
@@ -206,13 +231,14 @@ def lecture_pages(nb, number: str, title: str, minutes: int, facts: str = "", ex
                 continue
             if src.startswith("## "):
                 section = src.splitlines()[0][3:].strip()
+            src, detail = summary_slide(src)
             chunks = split_chunks(src)
             blocks = [Block("md", c, md_height(c), cell=i) for c in chunks]
             if i == 0 and facts:
                 blocks.insert(1, Block("md", facts, md_height(facts), cell=i))
             if blocks:
                 blocks[-1].lead_in = True
-            notes = []
+            notes = [f"**In more detail** (the lesson's summary):\n\n{detail}"] if detail else []
             m = _EXERCISE.match(src)
             if m:
                 k = int(m.group(1))

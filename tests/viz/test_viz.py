@@ -635,3 +635,42 @@ def test_make_studio_keeps_one_kernel_preheated_or_studio_pool_of_them():
     assert dry.returncode == 0 and "--preheat_kernel=True --pool_size=1 " in dry.stdout, dry.stdout + dry.stderr
     dry = subprocess.run(["make", "-n", "-C", str(root), "studio", "STUDIO_POOL=30"], capture_output=True, text=True)
     assert "--preheat_kernel=True --pool_size=30 " in dry.stdout, dry.stdout
+
+
+# ---- the architecture diagram (lesson 05) ----------------------------------------------------------------------
+
+
+def _texts(ax):
+    return " ".join(t.get_text() for t in ax.texts)
+
+
+def test_the_protores_diagram_states_the_sizes_of_the_network_it_is_given():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from posekit.models.protores.blocks import ProtoResConfig
+    from posekit.viz.diagram import draw_protores
+
+    ax = draw_protores(ProtoResConfig(21, width=256, blocks=3, layers=3), n_effectors=5)
+    text = _texts(ax)
+    assert "5 effector tokens" in text and "71 numbers each" in text and "3 layers of 256" in text
+    assert "21 x 3 positions" in text and "21 x 6 rotations" in text and "width 256, 21 body joints" in text
+    assert sum("block\n" in t.get_text() for t in ax.texts) == 3  # one box per encoder block
+    plt.close("all")
+    other = draw_protores(ProtoResConfig(17, width=64, blocks=2, layers=4, embed=16), n_effectors=3)
+    text = _texts(other)
+    assert "3 effector tokens" in text and "39 numbers each" in text and "4 layers of 64" in text
+    assert "17 x 3 positions" in text and sum("block\n" in t.get_text() for t in other.texts) == 2
+    plt.close("all")
+
+
+def test_the_protores_diagram_refuses_another_architecture_and_an_empty_request():
+    from posekit.models.protores.blocks import ProtoResConfig
+    from posekit.viz.diagram import draw_protores
+
+    with pytest.raises(ValueError, match="expected a config with arch 'protores', got 'transformer'"):
+        draw_protores(ProtoResConfig(21, arch="transformer"))
+    with pytest.raises(ValueError, match="at least 1 effector, got 0"):
+        draw_protores(ProtoResConfig(21), n_effectors=0)
