@@ -121,6 +121,23 @@ def test_checked_and_open_exercises_bring_their_instructor_notes():
     assert "Instructor notes — exercise 3" in notes  # an open one: posekit/exercises/solutions/nb01.md
 
 
+def _markdown_output(text):
+    return [nbformat.v4.new_output("display_data", data={"text/markdown": text, "text/plain": "<Markdown>"})]
+
+
+def test_the_paper_beside_ours_gets_its_own_slide_after_the_key_result():
+    beside = "| claim | the paper | here |\n|---|---|---|\n| error | 2.07 | 1.52 |"
+    nb = _lesson(*BASE, ("md", "## 1. The benchmark\n\nShort."),
+                 ("code", "print_key_table()", _stream("method  error\nours    1.52\n"), ["key-figure"]),
+                 ("code", "show_the_paper_beside()", _markdown_output(beside), ["paper-beside"]))
+    _, leaves = _slides(nb)
+    key = [k for k, s in enumerate(leaves) if "Key result — 1. The benchmark" in s]
+    paper = [k for k, s in enumerate(leaves) if "The paper beside ours — 1. The benchmark" in s]
+    assert len(key) == 1 and paper == [key[0] + 1], "the paper's slide must follow the key result's"
+    assert "2.07" in leaves[paper[0]] and "ours    1.52" not in leaves[paper[0]]
+    assert "show_the_paper_beside" not in leaves[paper[0]]
+
+
 def test_a_summary_keeps_its_key_points_on_the_slide_and_its_detail_in_the_notes():
     detail = "\n".join(f"- Detail {k}: " + "words " * 30 for k in range(8))
     nb = _lesson(*BASE, ("md", f"## 2. Summary\n\n**Key points**\n\n- One short point.\n- Another.\n\n"

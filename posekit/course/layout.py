@@ -75,7 +75,8 @@ class Page:
     section: str
     continued: bool = False
     notes: list = field(default_factory=list)
-    key: bool = False
+    key: str = ""
+    """``"key"``: the key figure's slide; ``"paper"``: the paper beside ours; ``""``: any other."""
 
 
 # ---- estimating sizes ------------------------------------------------------------------------------------------

@@ -21,6 +21,9 @@ notebook that reveal.js shows. Its rules:
   the lesson's planned time shared by the sections' weights (:func:`section_plan`).
 * **The summary slide**: a lesson's Summary opens with its :data:`KEY_POINTS`; the slide shows them and the
   **Next:** line, the speaker notes the detailed list (:func:`summary_slide`).
+* **The paper beside ours**: a cell tagged :data:`~posekit.course.slides.PAPER_BESIDE` (``paper-beside``) shows
+  the paper's figures and the lesson's measured ones side by side, in columns of one table; it gets a slide of its
+  own, after the key result.
 * **3D views** (widgets that live in a kernel) show the description the viewer stores with its output and the cell
   to open live (``In [k]``).
 """
@@ -33,7 +36,7 @@ import re
 
 from .layout import (BUDGET, CHARS, CONT_PX, KEY_PRE_PX, MIN_FIGURE, MONO, PRE_PX, WIDTH, Block, Page, _BLOCK_GAP,  # noqa: F401
                      _heading, _png_size, _used, md_height, pack, pre_font, pre_height, size_figures, split_chunks)
-from .slides import KEY_FIGURE, WIDGET_VIEW, _PROGRESS, _source, strip_test_markers
+from .slides import KEY_FIGURE, PAPER_BESIDE, WIDGET_VIEW, _PROGRESS, _source, strip_test_markers
 from .stills import load as load_still, render_png
 
 __all__ = ["SLIDE_CODE", "POINT_CELLS", "KEY_POINTS", "MIN_FIGURE", "lecture_notebook", "section_plan", "summary_slide",
@@ -249,17 +252,17 @@ def lecture_pages(nb, number: str, title: str, minutes: int, facts: str = "", ex
                                  f"`posekit exercises solutions {number}` runs it against its checker):\n\n"
                                  f"```python\n{solutions[k]}\n```")
             if st in ("slide", "subslide") or not groups:
-                groups.append([st == "slide", section, blocks, False, notes])
+                groups.append([st == "slide", section, blocks, "", notes])
             else:
                 groups[-1][2].extend(blocks)
                 groups[-1][4].extend(notes)
             continue
         shown = SLIDE_CODE in tags or any(p in src for p in points)
-        key = KEY_FIGURE in tags
+        key = "key" if KEY_FIGURE in tags else "paper" if PAPER_BESIDE in tags else ""
         blocks = output_blocks(cell, i, shown, key, (lambda k: load_still(number, nb, k)) if stills else None)
         if not blocks:
             if st == "slide" and groups is not None:
-                groups.append([True, section, [], False, []])
+                groups.append([True, section, [], "", []])
             continue
         notes = cell_notes.setdefault(i, [])
         expl = _explanation(cells, i)
@@ -290,7 +293,7 @@ def lecture_pages(nb, number: str, title: str, minutes: int, facts: str = "", ex
             continue
         exercise = any(b.kind == "md" and _EXERCISE.match(b.text) for b in blocks)
         for k, chunk in enumerate(pack(blocks, where, CONT_PX if key else 0.0)):
-            page = Page(chunk, opens and k == 0, sec, continued=k > 0, key=key and k == 0)
+            page = Page(chunk, opens and k == 0, sec, continued=k > 0, key=key if k == 0 else "")
             page.notes.extend(notes if k == 0 else [])
             prev = pages[-1] if pages else None
             # a short step joins the slide before it when both fit on one (not a section's start, an exercise or
@@ -375,7 +378,8 @@ def pages_to_cells(pages: list[Page]) -> list:
         first = "slide" if page.opens_column or not cells else "subslide"
         out = []
         if page.key:
-            out.append(_cell("md", f'<p class="posekit-key">Key result — {html.escape(page.section)}</p>', first))
+            label = "Key result" if page.key == "key" else "The paper beside ours"
+            out.append(_cell("md", f'<p class="posekit-key">{label} — {html.escape(page.section)}</p>', first))
         elif page.continued:
             out.append(_cell("md", f'<p class="posekit-cont">{html.escape(page.section)} (continued)</p>', first))
         md = []

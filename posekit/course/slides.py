@@ -31,6 +31,9 @@ import re
 from pathlib import Path
 
 KEY_FIGURE = "key-figure"
+PAPER_BESIDE = "paper-beside"
+"""Cell tag: the cell shows the paper's figures beside the lesson's own (columns of one table); its slide follows the
+key figure's (:mod:`posekit.course.lecture`)."""
 SLIDE_WIDTH, SLIDE_HEIGHT = 1280, 720
 """The slide size reveal.js lays every slide out at (CSS pixels; it scales the whole slide to the screen): a
 1280x720 projector shows it one to one."""
