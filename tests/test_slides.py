@@ -107,6 +107,64 @@ def test_a_wide_table_gets_a_smaller_font_not_a_cut_edge():
     assert font < lecture.PRE_PX and lecture.MONO * font * len(wide) <= lecture.WIDTH + 1
 
 
+def _grid_png(rows=4, title=14, panel=300, gap=30, title_gap=8, labels=False):
+    """A figure drawn as the lessons' grids are: per row a title line, a gap, a panel; x labels under the last."""
+    from PIL import Image, ImageDraw
+
+    h = rows * (title + title_gap + panel + gap) + (40 if labels else 0)
+    img = Image.new("RGB", (900, h), "white")
+    d = ImageDraw.Draw(img)
+    y, spans = 0, []
+    for _ in range(rows):
+        d.rectangle((400, y, 500, y + title - 1), fill="black")  # the title
+        top = y
+        y += title + title_gap
+        d.rectangle((50, y, 850, y + panel - 1), outline="black", fill=(200, 220, 255))
+        y += panel
+        spans.append((top, y))
+        y += gap
+    if labels:
+        d.rectangle((300, y - gap + 6, 600, y - gap + 20), fill="black")
+    buf = io.BytesIO()
+    img.save(buf, format="PNG")
+    return base64.b64encode(buf.getvalue()).decode(), spans, h
+
+
+def _heights(parts):
+    from PIL import Image
+
+    return [Image.open(io.BytesIO(base64.b64decode(p))).height for p in parts]
+
+
+def test_a_tall_grid_is_cut_between_its_rows_with_each_title_on_its_panel():
+    from posekit.course.layout import split_tall_png
+
+    b64, spans, h = _grid_png()
+    parts = split_tall_png(b64, max_rows=720)
+    heights = _heights(parts)
+    assert len(parts) == 2 and sum(heights) == h and max(heights) <= 720
+    cut = heights[0]
+    assert spans[1][1] < cut < spans[2][0], "the cut must fall after a panel and before the next row's title"
+    # one row per part when a slide holds one; the x labels stay with the last panel
+    b64, spans, h = _grid_png(labels=True)
+    heights = _heights(split_tall_png(b64, max_rows=400))
+    assert len(heights) == 4 and heights[-1] > 340
+    assert split_tall_png(b64, max_rows=h) == [b64]  # it fits: whole
+    blank = _png(900, 2000)  # nothing drawn: nowhere to cut, so whole
+    assert split_tall_png(blank, max_rows=500) == [blank]
+
+
+def test_a_tall_figure_takes_slides_at_a_readable_size_and_keys_to_its_whole():
+    b64, spans, h = _grid_png()
+    fig = [nbformat.v4.new_output("display_data", data={"image/png": b64, "text/plain": "<Figure>"})]
+    nb = _lesson(*BASE, ("md", "## 1. A grid\n\nFour rows:"), ("code", "draw_grid()", fig))
+    _, leaves = _slides(nb)
+    with_fig = [s for s in leaves if "data:image/png" in s]
+    assert len(with_fig) >= 2, "a grid four slides tall was not cut"
+    assert all(f'data-figure="{b64[:40]}' in s for s in with_fig)  # each part names its whole figure
+    assert "Four rows:" in with_fig[0] and "(continued)" in with_fig[1]
+
+
 def test_section_times_share_the_planned_time():
     assert lecture.section_plan(["a", "b", "c"], [1, 1, 2], 60) == [15, 15, 30]
     shares = lecture.section_plan(list("abcdefg"), [3, 1, 4, 1, 5, 9, 2], 90)

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from .slides import SLIDE_HEIGHT, SLIDE_WIDTH
 
 __all__ = ["Block", "Page", "WIDTH", "BUDGET", "PRE_PX", "KEY_PRE_PX", "MONO", "MIN_FIGURE", "CONT_PX", "md_height",
-           "pre_font", "pre_height", "split_chunks", "pack", "size_figures"]
+           "pre_font", "pre_height", "split_chunks", "split_tall_png", "pack", "size_figures"]
 
 # ---- the deck's geometry: these numbers and the stylesheet in templates/posekit_reveal/index.html.j2 agree -------
 PAD_X, PAD_Y = 48, 20
@@ -55,6 +55,7 @@ class Block:
     font: float = PRE_PX  # pre / code
     note: str = ""  # pre: a line said after a cut
     lead_in: bool = False  # md: a sentence that introduces what follows it
+    origin: str = ""  # png cut from a taller figure: the head of the whole figure's base64 (its identity)
 
     def __post_init__(self):
         if not self.min_height:
@@ -151,6 +152,62 @@ def _png_size(b64: str) -> tuple[int, int]:
     raw = base64.b64decode(b64[:64] + "=" * (-len(b64[:64]) % 4))
     w, h = struct.unpack(">II", raw[16:24])
     return int(w), int(h)
+
+
+REACH = 1.5
+"""How far past ``max_rows`` :func:`split_tall_png` looks for the gap between two rows of panels (a part that ends
+there is drawn a little smaller to fit, rather than cut through a panel's labels)."""
+
+
+def split_tall_png(b64: str, max_rows: float, white: int = 245) -> list[str]:
+    """A tall figure cut across its white bands into parts each at most ``max_rows`` pixel rows high.
+
+    A grid of panels drawn much taller than a slide would have to shrink until its panels could not be read; cut between
+    its rows of panels (runs of rows whose every pixel is at least ``white`` in every channel), each part can take
+    a slide at a readable size. The figure is read as runs of drawn rows, panels and thin runs (lines of text);
+    between two panels the cut takes the widest gap that does not part a panel from the text right above it (its
+    title): the lowest such cut within ``max_rows``, else the nearest within :data:`REACH` times it.
+    A figure with no white band where one is needed is returned whole (``[b64]``), as is one that already fits.
+    """
+    import io
+
+    import numpy as np
+    from PIL import Image
+
+    img = Image.open(io.BytesIO(base64.b64decode(b64))).convert("RGB")
+    px = np.asarray(img)
+    h = px.shape[0]
+    if h <= max_rows:
+        return [b64]
+    blank = (px.min(axis=(1, 2)) >= white)
+    edges = np.flatnonzero(np.diff(np.r_[0, (~blank).astype(np.int8), 0]))
+    blocks = list(zip(edges[::2], edges[1::2]))  # runs of drawn rows: [start, end)
+    thin = max(8.0, 0.04 * h)  # a line of text (a title, tick labels), not a panel
+    big = [k for k, (a, b) in enumerate(blocks) if b - a >= thin]
+    if len(big) < 2:
+        return [b64]
+    allowed = []
+    for prev, k in zip(big, big[1:]):
+        # the gaps between two panels; the one right above a panel parts it from its own title, so it is left out
+        # when there is text between them, and the cut takes the widest of the rest (wider than a line's spacing)
+        gaps = [(blocks[j + 1][0] - blocks[j][1], (blocks[j][1] + blocks[j + 1][0]) // 2) for j in range(prev, k)]
+        allowed.append(max(gaps[:-1] or gaps)[1])
+    cuts, start = [], 0
+    while h - start > max_rows:
+        fits = [c for c in allowed if start + 0.25 * max_rows <= c <= start + max_rows]
+        near = [c for c in allowed if start + max_rows < c <= start + REACH * max_rows]
+        if not fits and not near:
+            break
+        start = max(fits) if fits else min(near)
+        cuts.append(start)
+    if not cuts:
+        return [b64]
+    parts = []
+    for a, b in zip([0] + cuts, cuts + [h]):
+        buf = io.BytesIO()
+        img.crop((0, a, img.width, b)).save(buf, format="PNG")
+        parts.append(base64.b64encode(buf.getvalue()).decode())
+    return parts
 
 
 _TABULAR = re.compile(r"\S {2,}\S|^\s+\S")

@@ -35,7 +35,8 @@ import html
 import re
 
 from .layout import (BUDGET, CHARS, CONT_PX, KEY_PRE_PX, MIN_FIGURE, MONO, PRE_PX, WIDTH, Block, Page, _BLOCK_GAP,  # noqa: F401
-                     _heading, _png_size, _used, md_height, pack, pre_font, pre_height, size_figures, split_chunks)
+                     _heading, _png_size, _used, md_height, pack, pre_font, pre_height, size_figures, split_chunks,
+                     split_tall_png)
 from .slides import KEY_FIGURE, PAPER_BESIDE, WIDGET_VIEW, _PROGRESS, _source, strip_test_markers
 from .stills import load as load_still, render_png
 
@@ -53,6 +54,10 @@ POINT_CELLS = {
 """Code cells shown on the slides without a tag in the lesson: lesson number -> a line each such cell's source
 contains (``tests/test_slides.py`` checks each names exactly one code cell). Algorithms written by hand in front of
 the class, the part of the lesson that *is* code."""
+
+TALL = 1.5
+"""A figure that would be drawn more than this many slide heights tall at the slide's width is cut between its rows
+of panels (:func:`~posekit.course.layout.split_tall_png`), one part per slide."""
 
 MAX_CODE_LINES = 30
 """A shown code cell longer than this is cut (the notebook has it whole)."""
@@ -130,9 +135,14 @@ def output_blocks(cell, index: int, shown_code: bool, key: bool, still=None) -> 
         elif "image/png" in d:
             b64 = _data(d, "image/png").strip()
             w, h = _png_size(b64)
-            pref = min(h * 1.25, h * WIDTH / w, BUDGET)  # small figures may grow a little, up to the slide's width
-            blocks.append(Block("png", height=pref, min_height=min(pref, max(MIN_FIGURE, 0.6 * pref)), cell=index, data=b64,
-                                size=(w, h)))
+            scale = min(1.25, WIDTH / w)  # small figures may grow a little, up to the slide's width
+            # a grid taller than a slide is cut between its rows of panels, a part per slide, rather than shrunk
+            parts = split_tall_png(b64, (BUDGET - CONT_PX) / scale) if h * scale > TALL * BUDGET else [b64]
+            for part in parts:
+                w, h = _png_size(part)
+                pref = min(h * scale, BUDGET)
+                blocks.append(Block("png", height=pref, min_height=min(pref, max(MIN_FIGURE, 0.6 * pref)), cell=index,
+                                    data=part, size=(w, h), origin=b64[:200] if len(parts) > 1 else ""))
         elif "text/markdown" in d:
             md = _data(d, "text/markdown")
             blocks.append(Block("html", md, md_height(md, int(CHARS * 1.15)), cell=index))
@@ -336,7 +346,8 @@ def _timing(pages: list[Page], minutes: int) -> list[tuple[str, int, int]]:
 
 def _block_html(b: Block) -> str:
     if b.kind == "png":
-        return (f'<img class="posekit-figure" src="data:image/png;base64,{b.data}" '
+        origin = f' data-figure="{html.escape(b.origin)}"' if b.origin else ""  # a part names its whole figure
+        return (f'<img class="posekit-figure" src="data:image/png;base64,{b.data}"{origin} '
                 f'style="height:{int(b.height)}px" alt="figure">')
     if b.kind in ("pre", "code"):
         body = html.escape(b.text)

@@ -16,6 +16,7 @@ exercise's text)
 a code cell right after a markdown cell           ``-``: on the slide of its explanation
 a code cell after another code cell               ``subslide``: a practical step of its own
 the cell tagged ``key-figure``                    ``slide``: the lesson's key figure or table
+a cell tagged ``paper-beside``                    ``subslide``: the paper's figures beside the lesson's
 a cell tagged ``slide-skip`` / ``slide-notes``    ``skip`` / ``notes`` (an instructor's override)
 ===============================================  =============================================
 
@@ -101,6 +102,8 @@ def slide_types(cells: list) -> list[str]:
             t = override[0]
         elif i == 0 or KEY_FIGURE in tags:
             t = "slide"
+        elif PAPER_BESIDE in tags:
+            t = "subslide"
         elif cell["cell_type"] == "markdown":
             t = "slide" if _source(cell).startswith("## ") else "subslide"
         elif i == 1:
