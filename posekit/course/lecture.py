@@ -480,6 +480,12 @@ def lecture_notebook(nb, lesson=None) -> dict:
         if p.opens_column and p.section in starts and not p.key:
             m, t = starts.pop(p.section)
             p.notes.insert(0, f"**Time:** about {m} min for this section (minutes {t}–{t + m} of {minutes}).")
+    beside = any(PAPER_BESIDE in c.get("metadata", {}).get("tags", []) for c in nb["cells"])
+    if lesson is not None and lesson.paper and not beside:
+        for p in pages:
+            if p.key == "key":
+                p.notes.append("**The paper beside ours:** this lesson sets no table of the paper's figures beside its "
+                               "own (no cell tagged `paper-beside`): its goals are the course's, as its Aim says.")
     pages[0].notes.insert(0, "**Plan** (the lesson's planned time shared by the sections' slides and figures):\n\n"
                           + "\n".join(f"- {s}: {m} min (from minute {t})" for s, m, t in plan))
     nb["cells"] = pages_to_cells(pages)
