@@ -81,8 +81,11 @@ def widget_caption(plain: str) -> str:
     return plain.strip().strip("[]").strip()
 
 
-def output_blocks(cell, index: int, shown_code: bool, key: bool, still=None) -> list[Block]:
+def output_blocks(cell, index: int, shown_code: bool, key: str, still=None) -> list[Block]:
     """The blocks a code cell puts on its slides: its code when it is the point, then its outputs.
+
+    ``key``: ``"key"`` (the key figure) or ``"paper"`` (the paper beside ours) for a cell with a slide to itself,
+    whose printed tables may take the larger font; ``""`` for any other.
 
     ``still(index)``: the recorded still of a 3D view and its state (:func:`posekit.course.stills.load`)."""
     blocks = []
