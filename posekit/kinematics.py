@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._jit import njit
 from .rotations import is_torch, quat_to_matrix
 from .skeleton import Skeleton
 
@@ -98,6 +99,8 @@ def _fk_numpy(skeleton, R, batch, root_pos, local_pos):
     Rl = R.reshape(N, J, 3, 3)
     Ol = None if local_pos is None else np.broadcast_to(np.asarray(local_pos, dtype=float), batch + (J, 3)).reshape(N, J, 3)
     Root = None if root_pos is None else np.broadcast_to(np.asarray(root_pos, dtype=float), batch + (3,)).reshape(N, 3)
+    if N <= _ONE:
+        return _fk_few(skeleton, Rl, batch, Root, Ol)
     if N < _SMALL:
         return _fk_small(skeleton, Rl, batch, Root, Ol)
     Rg_out = np.empty((N, J, 3, 3))
@@ -132,6 +135,45 @@ def _fk_numpy(skeleton, R, batch, root_pos, local_pos):
         Rg_out[a:b] = rg.transpose(3, 0, 1, 2)
         Pg_out[a:b] = pg.transpose(2, 0, 1)
     return Pg_out.reshape(batch + (J, 3)), Rg_out.reshape(batch + (J, 3, 3))
+
+
+_ONE = 4
+"""Up to this many poses the compiled :func:`_fk_poses` runs (numpy's per-call cost dominates a single pose)."""
+
+
+@njit
+def _fk_poses(parents, Rl, root, offsets, rg, pg):
+    """:func:`_fk_small` compiled, pose by pose, with the same order of sums (bit-identical): ``Rl`` (N, J, 3, 3),
+    ``root`` (N, 3), ``offsets`` (N, J, 3); writes ``rg`` (N, J, 3, 3) and ``pg`` (N, J, 3)."""
+    N, J = Rl.shape[:2]
+    for n in range(N):
+        for r in range(3):
+            pg[n, 0, r] = root[n, r]
+            for c in range(3):
+                rg[n, 0, r, c] = Rl[n, 0, r, c]
+        for j in range(1, J):
+            p = parents[j]
+            for r in range(3):
+                for c in range(3):
+                    rg[n, j, r, c] = (rg[n, p, r, 0] * Rl[n, j, 0, c] + rg[n, p, r, 1] * Rl[n, j, 1, c]) \
+                        + rg[n, p, r, 2] * Rl[n, j, 2, c]
+                pg[n, j, r] = ((rg[n, p, r, 0] * offsets[n, j, 0] + rg[n, p, r, 1] * offsets[n, j, 1])
+                               + rg[n, p, r, 2] * offsets[n, j, 2]) + pg[n, p, r]
+
+
+def _fk_few(skeleton, Rl, batch, Root, Ol):
+    """:func:`_fk_small` for at most :data:`_ONE` poses, compiled (:func:`_fk_poses`)."""
+    N, J = Rl.shape[:2]
+    off = np.broadcast_to(np.asarray(skeleton.offsets, dtype=float), (N, J, 3)) if Ol is None else Ol
+    if Root is not None:
+        root = Root
+    else:
+        root = off[:, 0]
+    rg = np.empty((N, J, 3, 3))
+    pg = np.empty((N, J, 3))
+    _fk_poses(np.asarray(skeleton.parents, dtype=np.int64), np.ascontiguousarray(Rl, dtype=float),
+              np.ascontiguousarray(root, dtype=float), np.ascontiguousarray(off, dtype=float), rg, pg)
+    return pg.reshape(batch + (J, 3)), rg.reshape(batch + (J, 3, 3))
 
 
 def _fk_small(skeleton, Rl, batch, Root, Ol):

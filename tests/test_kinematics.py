@@ -51,6 +51,24 @@ def test_fk_chunking_is_invisible(skel, rng):
     np.testing.assert_allclose(full[-5:], fk(skel, q[-5:])[0], atol=1e-12)
 
 
+def test_fk_of_a_few_poses_is_bit_identical_to_the_batched_paths(skel, rng):
+    """One pose (what a solver asks for) goes through a compiled kernel, a few hundred through numpy
+    broadcasts, thousands through the chunked layout: the same sums in the same order, the same bits."""
+    from posekit import kinematics
+
+    q = random_rotations((kinematics._SMALL + 3, skel.n_joints), rng)
+    root = rng.normal(size=(len(q), 3))
+    lp = np.asarray(skel.offsets) * (1 + 0.1 * rng.random((len(q), skel.n_joints, 1)))
+    for kw in ({}, {"root_pos": root}, {"local_pos": lp}, {"root_pos": root, "local_pos": lp}):
+        big = fk(skel, q, **kw)  # the chunked path
+        mid = fk(skel, q[:40], **{k: v[:40] for k, v in kw.items()})  # broadcasts
+        assert len(q) >= kinematics._SMALL and 40 > kinematics._ONE
+        for i in (0, 7, 39):
+            one = fk(skel, q[i], **{k: v[i] for k, v in kw.items()})  # compiled
+            for a, b, c in zip(one, (mid[0][i], mid[1][i]), (big[0][i], big[1][i])):
+                assert np.array_equal(a, b) and np.array_equal(a, c)
+
+
 def test_fk_reproduces_shipped_positions(sample):
     pos = fk(sample.skeleton, sample.local_rot, sample.root_pos)[0]
     np.testing.assert_allclose(pos, sample.global_pos, atol=1e-5)

@@ -115,7 +115,9 @@ class NaturalnessIndex:
 
     Poses are compared by :func:`pose_features` (own root frame, pelvis-relative, body joints). The
     ``candidates`` nearest training poses in Euclidean distance (scikit-learn ``NearestNeighbors``)
-    are re-ranked by the mean per-joint distance, so the reported value is MPJPE-style.
+    are re-ranked by the mean per-joint distance, so the reported value is MPJPE-style. A query of at most
+    :attr:`BRUTE_MAX` poses is answered by one matrix product over every kept pose instead (the same exact
+    search, without scikit-learn's per-call cost: what an IK solver pays to judge its own answers).
 
     Parameters
     ----------
@@ -133,9 +135,10 @@ class NaturalnessIndex:
         Which rows of ``global_pos`` are in the index.
     """
 
-    def __init__(self, skeleton, global_pos, max_poses: int = 20_000, seed: int = 0, candidates: int = 8):
-        from sklearn.neighbors import NearestNeighbors
+    BRUTE_MAX = 16
+    """Queries of at most this many poses skip scikit-learn (:meth:`distance`)."""
 
+    def __init__(self, skeleton, global_pos, max_poses: int = 20_000, seed: int = 0, candidates: int = 8):
         global_pos = np.asarray(global_pos, dtype=float)
         if len(global_pos) == 0:
             raise ValueError("NaturalnessIndex needs at least one training pose")
@@ -145,7 +148,8 @@ class NaturalnessIndex:
         self.skeleton = skeleton
         self.features = pose_features(skeleton, global_pos[self.kept])
         self.candidates = int(min(candidates, len(self.kept)))
-        self._nn = NearestNeighbors(n_neighbors=self.candidates).fit(self.features)
+        self._nn = None  # scikit-learn's tree, fitted at the first large query
+        self._sq = (self.features ** 2).sum(-1)  # (N,): |f|^2 of every kept pose, for the small-query path
 
     def __len__(self):
         return len(self.kept)
@@ -155,7 +159,17 @@ class NaturalnessIndex:
         global_pos = np.asarray(global_pos, dtype=float)
         batch = global_pos.shape[:-2]
         f = pose_features(self.skeleton, global_pos)
-        idx = self._nn.kneighbors(f, return_distance=False)  # (N, candidates)
+        if len(f) <= self.BRUTE_MAX:  # |f - g|^2 = |g|^2 - 2 f.g + |f|^2 against every kept pose
+            d2 = self._sq[None] - 2.0 * (f @ self.features.T)
+            k = self.candidates
+            idx = np.argpartition(d2, k - 1, axis=1)[:, :k] if k < d2.shape[1] else np.broadcast_to(
+                np.arange(d2.shape[1]), d2.shape)
+        else:
+            if self._nn is None:
+                from sklearn.neighbors import NearestNeighbors
+
+                self._nn = NearestNeighbors(n_neighbors=self.candidates).fit(self.features)
+            idx = self._nn.kneighbors(f, return_distance=False)  # (N, candidates)
         d = f[:, None, :] - self.features[idx]
         per_joint = np.linalg.norm(d.reshape(*d.shape[:2], -1, 3), axis=-1).mean(axis=-1)
         return per_joint.min(axis=1).reshape(batch)

@@ -61,9 +61,20 @@ def _kabsch(src, dst) -> np.ndarray:
     return np.swapaxes(Vt, -1, -2) @ D @ np.swapaxes(U, -1, -2)
 
 
+_BONE_CHILDREN: dict = {}
+
+
 def _bone_children(skeleton):
-    """Each joint's children with a bone (offset longer than 1e-9 m), as CSR arrays (start (J + 1,), index)."""
+    """Each joint's children with a bone (offset longer than 1e-9 m), as CSR arrays (start (J + 1,), index);
+    kept per skeleton (its parents and offsets), as the exact finish asks once per solve."""
     off = np.asarray(skeleton.offsets, dtype=float)
+    key = (np.asarray(skeleton.parents).tobytes(), off.tobytes())
+    if key not in _BONE_CHILDREN:
+        _BONE_CHILDREN[key] = _bone_children_of(skeleton, off)
+    return _BONE_CHILDREN[key]
+
+
+def _bone_children_of(skeleton, off):
     kids = [[c for c in skeleton.children(j) if np.linalg.norm(off[c]) > 1e-9] for j in range(skeleton.n_joints)]
     start = np.zeros(len(kids) + 1, dtype=np.int64)
     start[1:] = np.cumsum([len(k) for k in kids])

@@ -19,12 +19,23 @@ The stages
    (:func:`posekit.ik.bone_rotations.rotations_from_positions`; bone lengths are the skeleton's); DLS moves
    it as a whole onto a position effector on its base joint (the pelvis) first, as every solver that keeps a
    base in place does (:func:`posekit.ik.api.base_on_target`);
-3. :class:`~posekit.ik.dls.DLSSolver` from that pose with every effector; when it gets stuck there (a limb
-   stretched to its end, a local minimum), DLS from the start pose as well, and the better of the two
-   (``info["kept"] = "start"`` when it is the latter).
+3. :class:`~posekit.ik.dls.DLSSolver` from that pose with every effector, and DLS from the start pose as well:
+   two answers, each meeting the effectors (or not);
+4. ``choose="natural"`` (default): when both meet every effector, the more natural is kept — the one nearer a
+   training pose of the data the learned solver was trained on (:class:`posekit.data.metrics.NaturalnessIndex`
+   over :data:`JUDGE_POSES` of its training frames, the lesson 03-05 prior used as a judge); when one meets
+   them, that one; when neither, the one nearer its effectors. ``choose="learned"``: the answer from the learned
+   pose unless DLS got stuck there (a limb stretched to its end, a local minimum) and the start's answer is
+   no worse. ``info["kept"] = "start"`` when the start's answer is kept.
 
-``info`` says what each stage did: ``learned_ms`` and ``finish_ms`` (wall clock), ``learned_converged``,
-``finish_iterations``. Targets DLS cannot meet (out of reach, conflicting) give the best pose it found; when
+Why judge two answers. From a start that already resembles the target (the rest pose, five effectors on the
+body's ends), DLS from the start alone is often a better pose than the learned one finished; elsewhere the
+learned pose is. Neither is better everywhere, but a pose nearer the training poses is the better guess at the
+true one in most cases: lesson 06 measures each rule on held-out poses.
+
+``info`` says what each stage did: ``learned_ms`` and ``finish_ms`` (wall clock; the finish counts both DLS
+runs and the judge), ``learned_converged``, ``finish_iterations`` and, when the judge chose, ``natural_mm``
+(the two answers' distances to the nearest training pose: from the learned pose, from the start). Targets DLS cannot meet (out of reach, conflicting) give the best pose it found; when
 that pose is further from the effectors than the learned one (its worst effector, each kind in its own unit:
 position errors in metres, angles in radians, compared kind by kind), the learned pose is returned instead and
 ``info["kept"] = "learned"`` says so. Never NaN, never a hang: both stages have iteration limits.
@@ -45,10 +56,38 @@ from .registry import make_solver, register, solver_info
 from ..records import Pose
 from ..rotations import matrix_to_quat, quat_to_matrix
 
-__all__ = ["FinishedSolver", "finished_name", "FINISHED"]
+__all__ = ["FinishedSolver", "finished_name", "FINISHED", "CHOICES", "JUDGE_POSES", "judge_for"]
 
 FINISHED = ("neural", "latent-opt", "protores")
 """The learned solvers (lessons 03, 04, 05) registered with an exact finish, ``NAME+dls``."""
+
+CHOICES = ("natural", "learned")
+"""How the finish picks between its two answers (the module docstring, step 4)."""
+
+JUDGE_POSES = 2000
+"""Training poses the judge compares an answer with (a seeded subset: a query costs about 0.1 ms)."""
+
+_JUDGES: dict = {}
+
+
+def judge_for(data: str | None, skeleton):
+    """The naturalness judge of a learned solver trained on ``data`` (a data set's name): a
+    :class:`~posekit.data.metrics.NaturalnessIndex` over :data:`JUDGE_POSES` of its training frames
+    (:func:`posekit.data.cases.case_split`, the split the learned solvers were trained on; never a held-out
+    frame), built once per data set. None when there is no such set or its skeleton is not ``skeleton``."""
+    if not data:
+        return None
+    if data not in _JUDGES:
+        from ..data.cases import case_split
+        from ..data.metrics import NaturalnessIndex
+        from ..data.sources import open_dataset
+
+        motions = open_dataset(data)
+        train = case_split(motions)[0]
+        _JUDGES[data] = (motions.skeleton, NaturalnessIndex(motions.skeleton, motions.global_pos[train],
+                                                            max_poses=JUDGE_POSES, seed=0))
+    trained_on, index = _JUDGES[data]
+    return index if trained_on.same_as(skeleton) else None
 
 
 def finished_name(learned: str) -> str:
@@ -85,17 +124,25 @@ class FinishedSolver(SolverBase):
         A registered learned solver's name (``"neural"``, ``"latent-opt"``, ``"protores"`` ...).
     max_iter : int
         DLS iterations of the finish.
+    choose : {"natural", "learned"}
+        Which of the two answers is kept (the module docstring, step 4). ``"natural"`` needs the learned
+        solver's training data (:func:`judge_for`); without it (another skeleton) the rule is ``"learned"``,
+        and :attr:`choose` says so.
     **learned_options
         Passed to the learned solver (``make_solver(learned, skeleton, **learned_options)``).
     """
 
     kinds = KINDS
 
-    def __init__(self, skeleton, learned: str, max_iter: int = 100, **learned_options):
+    def __init__(self, skeleton, learned: str, max_iter: int = 100, choose: str = "natural", **learned_options):
+        if choose not in CHOICES:
+            raise ValueError(f"choose must be one of {', '.join(CHOICES)}, got {choose!r}")
         self.skeleton = skeleton
         self.learned = make_solver(learned, skeleton, **learned_options)
         self.finisher = DLSSolver(skeleton, max_iter=max_iter)
         self.name = finished_name(learned)
+        self.judge = judge_for(solver_info(learned).data, skeleton) if choose == "natural" else None
+        self.choose = "natural" if self.judge is not None else "learned"
         self.needs_start = self.learned.needs_start
         self.batch_atol = max(self.learned.batch_atol, 1e-9) * 10
 
@@ -123,11 +170,18 @@ class FinishedSolver(SolverBase):
         t2 = time.perf_counter()
         info = {"learned_ms": (t1 - t0) * 1e3, "finish_ms": (t2 - t1) * 1e3, "learned_converged": learned_conv,
                 "finish_iterations": fr.iterations}
-        if not fr.converged and start is not None and start.local_rot is not None:
-            # stuck near the learned pose (a limb stretched to its end, a local minimum): DLS from the start too
+        has_start = start is not None and start.local_rot is not None
+        if has_start and (self.judge is not None or not fr.converged):  # the second answer: DLS from the start
             fs = self.finisher.solve(start, res)
+            if fr.converged and fs.converged and self.judge is not None:  # both exact: the more natural
+                d = self.judge.distance(np.stack([fr.pose.global_pos, fs.pose.global_pos]))
+                info["natural_mm"] = (float(d[0]) * 1e3, float(d[1]) * 1e3)
+                take = bool(d[1] < d[0])
+            else:  # the one that meets its effectors; when neither, the start's unless it is further off
+                take = fs.converged if fr.converged or fs.converged else not _worse(
+                    fs.effector_error, fr.effector_error, res.codes)
             info["finish_ms"] = (time.perf_counter() - t1) * 1e3
-            if fs.converged or not _worse(fs.effector_error, fr.effector_error, res.codes):
+            if take:
                 info["kept"] = "start"
                 fr = fs
         if not fr.converged:

@@ -268,6 +268,20 @@ def test_naturalness_is_zero_on_training_poses_and_the_floor_is_below_a_perturbe
     assert np.all(index.distance(noisy) >= floor) and np.all(floor > 0)
 
 
+def test_naturalness_small_queries_find_what_scikit_learn_finds(mini):
+    """A query of a few poses (what an exact finish asks for each answer) skips scikit-learn and compares with
+    every kept pose at once; it must return the same distances as the tree search."""
+    train = mini.global_pos[mini.split.train]
+    index = NaturalnessIndex(mini.skeleton, train, max_poses=2000, seed=0)
+    cases = build_cases(mini, 60, seed=0)
+    poses = cases.target_pos + np.random.default_rng(1).normal(0, 0.02, cases.target_pos.shape)
+    big = index.distance(poses)  # 60 poses: scikit-learn
+    assert len(poses) > index.BRUTE_MAX
+    small = np.concatenate([index.distance(poses[i:i + 2]) for i in range(0, len(poses), 2)])
+    np.testing.assert_allclose(small, big, rtol=1e-12, atol=1e-12)
+    assert index.distance(poses[3]).shape == ()
+
+
 # ------------------------------------------------------------------------------- the bandai-mini command
 def test_bench_ik_on_bandai_mini_every_start_condition(solvers, capsys, monkeypatch):
     monkeypatch.setattr("posekit.bench.ik_methods.BATCH_SOLVES", 1000)  # throughput needs no 20,000 here

@@ -5,7 +5,7 @@ import pytest
 
 from posekit.data.cases import build_cases
 from posekit.ik import Effector, effector_set, make_solver, solver_info, solver_names
-from posekit.ik.finish import FINISHED, finished_name
+from posekit.ik.finish import FINISHED, JUDGE_POSES, finished_name, judge_for
 
 
 @pytest.fixture(scope="module")
@@ -61,7 +61,7 @@ def test_a_pelvis_target_is_met_from_the_learned_pose_not_only_from_the_start(le
     from posekit.bench.ik import case_effectors
 
     s = cases.skeleton
-    solver = make_solver(finished_name(learned), s)
+    solver = make_solver(finished_name(learned), s, choose="learned")  # the start's answer only when stuck
     effs = case_effectors(cases, "random")
     pelvis = s.names[s.pelvis()]
     finished = 0
@@ -129,3 +129,54 @@ def test_a_finish_whose_learned_stage_refuses_says_whose_refusal_and_what_answer
     assert "hands: left_hand, right_hand" in msg and "Foot_L, UpperArm_R, Hips" in msg
     assert "'dls' alone" in msg and "'protores+dls'" in msg and "'latent-opt+dls'" in msg
 
+
+
+@pytest.mark.parametrize("learned", FINISHED)
+def test_of_two_exact_answers_the_more_natural_is_kept(learned, cases):
+    """choose="natural" (the default): DLS from the learned pose and DLS from the start; when both meet every
+    effector, the one nearer a training pose is returned, and info says both distances."""
+    s = cases.skeleton
+    solver = make_solver(finished_name(learned), s)
+    assert solver.choose == "natural"
+    learned_only = make_solver(finished_name(learned), s, choose="learned")
+    judged = kept_start = 0
+    for i in range(len(cases)):
+        effs = effector_set(s, "5", cases.target_pos[i])
+        r = solver.solve(cases.pose(i), effs)
+        assert r.converged
+        if "natural_mm" in r.info:
+            judged += 1
+            from_learned, from_start = r.info["natural_mm"]
+            d = solver.judge.distance(r.pose.global_pos) * 1e3
+            if r.info.get("kept") == "start":
+                kept_start += 1
+                assert from_start < from_learned and d == pytest.approx(from_start)
+            else:
+                assert from_learned <= from_start and d == pytest.approx(from_learned)
+                # the answer from the learned pose is the one choose="learned" gives when it is not stuck there
+                r2 = learned_only.solve(cases.pose(i), effs)
+                if r2.info.get("kept") is None:
+                    np.testing.assert_allclose(r.pose.global_pos, r2.pose.global_pos, atol=1e-12)
+    # nearly always both are exact (else the exact one is kept, no judging); and both answers win somewhere
+    assert judged >= len(cases) - 2 and 0 < kept_start < judged
+
+
+def test_the_judge_knows_only_training_poses(mini):
+    """The judge compares with frames of the learned solvers' training split: never a held-out pose (a case's
+    true pose is not in it), and it refuses a skeleton its data was not recorded on."""
+    s = mini.skeleton
+    judge = judge_for("bandai-mini", s)
+    assert len(judge) == JUDGE_POSES
+    train = mini.global_pos[mini.split.train]
+    np.testing.assert_allclose(judge.distance(train[judge.kept[:3]]), 0, atol=1e-9)
+    test_cases = build_cases(mini, 30, seed=0, start="other-clip")
+    assert np.all(judge.distance(test_cases.target_pos) > 1e-3)
+    from posekit.data import load_sample
+
+    other = load_sample().skeleton
+    assert judge_for("bandai-mini", other) is None and judge_for(None, s) is None
+
+
+def test_an_unknown_rule_is_refused(cases):
+    with pytest.raises(ValueError, match="choose must be one of natural, learned"):
+        make_solver("neural+dls", cases.skeleton, choose="best")

@@ -207,7 +207,8 @@ def test_compiled_path_matches_numpy(mini, shipped):
     f_np, err_np, g_np = prob.loss(solver.net, z, np.arange(5))
     for i in range(5):
         err, g = np.zeros(len(joints)), np.zeros(32, np.float32)
-        f = LK.loss_grad(z[i], prob.columns, prob.target[i], prob.scale, *gen, work, err, g)
+        f = LK.loss_grad(z[i], prob.columns, prob.target[i], prob.scale, *gen,
+                        LK.needed_joints(prob.columns, gen[4], gen[5]), work, err, g)
         assert np.isclose(f, f_np[i], rtol=1e-4) and np.allclose(err, err_np[i], atol=1e-6)
         assert np.allclose(g, g_np[i], rtol=1e-3, atol=1e-5 * np.abs(g_np[i]).max())
     pos_b, _, it_b, _ = solver.predict(cases.start_pos, joints, cases.target_pos[:, joints])

@@ -18,11 +18,13 @@ import numpy as np
 
 from ..._jit import njit
 
-__all__ = ["flatten_generator", "loss_grad", "lbfgs_one", "adam_one"]
+__all__ = ["flatten_generator", "needed_joints", "loss_grad", "lbfgs_one", "adam_one"]
 
 
 def flatten_generator(net) -> tuple:
-    """The arrays the kernels read, from a :class:`~posekit.models.aegan.numpy_nets.NumpyAEGAN` (parent-only SPL)."""
+    """The arrays the kernels read, from a :class:`~posekit.models.aegan.numpy_nets.NumpyAEGAN` (parent-only SPL):
+    ``(W, b, U, c, order, par, A, V, bo, UT, WT)``, ``UT`` (J h, H) and ``WT`` (H, d) the first two layers
+    transposed, for the backward pass."""
     spl = net.g_spl
     J, h, o = spl.J, spl.hidden, spl.out
     A = np.zeros((J, o, h), np.float32)
@@ -38,30 +40,66 @@ def flatten_generator(net) -> tuple:
             V[j], bo[j] = Vl[r], bl[r, 0]
             if anc.shape[1]:
                 par[j], A[j] = int(anc[r, 0]), Al[r]
-    return (np.ascontiguousarray(net.g_W), np.ascontiguousarray(net.g_b), np.ascontiguousarray(spl.U),
-            np.ascontiguousarray(spl.c), np.array(order, np.int64), par, A, V, bo)
+    U = np.ascontiguousarray(spl.U)
+    W = np.ascontiguousarray(net.g_W)
+    return (W, np.ascontiguousarray(net.g_b), U, np.ascontiguousarray(spl.c), np.array(order, np.int64), par, A, V,
+            bo, np.ascontiguousarray(U.T), np.ascontiguousarray(W.T))
 
 
 @njit
-def _forward(z, W, b, U, c, order, par, A, V, bo, hin, a, r, o):
+def needed_joints(cols, order, par):
+    """The joints the loss reads — the targets' joints (feature column // 3) and their ancestors — in ``order``
+    (parents first), as an int array: the only ones the forward and backward passes compute."""
+    J = len(par)
+    need = np.zeros(J, np.bool_)
+    for i in range(len(cols)):
+        j = cols[i] // 3
+        while j >= 0 and not need[j]:
+            need[j] = True
+            j = par[j]
+    n = 0
+    for jj in range(J):
+        if need[order[jj]]:
+            n += 1
+    out = np.empty(n, np.int64)
+    n = 0
+    for jj in range(J):
+        if need[order[jj]]:
+            out[n] = order[jj]
+            n += 1
+    return out
+
+
+@njit
+def _forward(z, W, b, U, c, path, par, A, V, bo, acc, hin, a, r, o):
+    """The generator on code ``z`` (d,): its outputs ``o`` (J, 3) for the joints of ``path`` (parents first; the
+    other rows of ``o`` are left as they were). Every sum runs in the order of the plain matrix product, so a
+    joint's output does not depend on which others are computed. ``acc`` (H,) float64 holds the first layer's
+    sums before the ReLU; ``hin`` (H,), ``a`` (J h,) and ``r`` (J, h) the hidden activations."""
     d, H = W.shape
     for k in range(H):
-        s = b[k]
-        for i in range(d):
-            s += z[i] * W[i, k]
-        hin[k] = s if s > 0 else 0.0
-    a[:] = c
-    for i in range(H):
+        acc[k] = b[k]
+    for i in range(d):
+        zi = z[i]
+        for k in range(H):
+            acc[k] += zi * W[i, k]
+    for k in range(H):
+        hin[k] = acc[k] if acc[k] > 0 else 0.0
+    n = a.shape[0]
+    for k in range(n):
+        a[k] = c[k]
+    for i in range(H):  # every column: one long product per hidden unit is faster than a short one per joint
         hi = hin[i]
         if hi != 0.0:
-            for k in range(a.shape[0]):
+            for k in range(n):
                 a[k] += hi * U[i, k]
     J, h, no = V.shape
-    for jj in range(J):
-        j = order[jj]
+    for jj in range(len(path)):
+        j = path[jj]
         p = par[j]
+        lo = j * h
         for u in range(h):
-            s = a[j * h + u]
+            s = a[lo + u]
             if p >= 0:
                 for q in range(no):
                     s += o[p, q] * A[j, q, u]
@@ -74,11 +112,18 @@ def _forward(z, W, b, U, c, order, par, A, V, bo, hin, a, r, o):
 
 
 @njit
-def _backward(gx, W, U, order, par, A, V, hin, r, go, ga, gz):
+def _backward(gx, WT, UT, path, par, A, V, hin, r, go, ga, gh, gz):
+    """The gradient ``gz`` (d,) of the loss from its gradient ``gx`` (J 3,) on the outputs, through the joints of
+    ``path`` (the others have none); ``WT`` (H, d) and ``UT`` (J h, H) are the first two layers transposed, so
+    each product runs along contiguous rows, in the order of the plain matrix product."""
     J, h, no = V.shape
-    go[:, :] = gx.reshape(J, no)
-    for jj in range(J - 1, -1, -1):
-        j = order[jj]
+    ga[:] = 0.0
+    for jj in range(len(path)):
+        j = path[jj]
+        for q in range(no):
+            go[j, q] = gx[j * no + q]
+    for jj in range(len(path) - 1, -1, -1):
+        j = path[jj]
         p = par[j]
         for u in range(h):
             g = 0.0
@@ -92,22 +137,27 @@ def _backward(gx, W, U, order, par, A, V, hin, r, go, ga, gz):
                 for u in range(h):
                     s += A[j, q, u] * ga[j * h + u]
                 go[p, q] += s
-    d, H = W.shape
+    H, d = WT.shape
+    gh[:] = 0.0
+    for k in range(UT.shape[0]):  # a zero (a joint off the path, a unit the ReLU closed) adds nothing
+        gk = ga[k]
+        if gk != 0.0:
+            for i in range(H):
+                gh[i] += UT[k, i] * gk
     gz[:] = 0.0
     for i in range(H):
         if hin[i] > 0:
-            s = 0.0
-            for k in range(ga.shape[0]):
-                s += U[i, k] * ga[k]
+            s = gh[i]
             for m in range(d):
-                gz[m] += W[m, i] * s
+                gz[m] += WT[i, m] * s
 
 
 @njit
-def loss_grad(z, cols, target, scale, W, b, U, c, order, par, A, V, bo, work, err, gz):
-    """Eq. (6) of one code ``z`` (d,): returns the loss (m^2); fills ``err`` (K,) metres and ``gz`` (d,)."""
-    hin, a, r, o, go, ga, gx = work
-    _forward(z, W, b, U, c, order, par, A, V, bo, hin, a, r, o)
+def loss_grad(z, cols, target, scale, W, b, U, c, order, par, A, V, bo, UT, WT, path, work, err, gz):
+    """Eq. (6) of one code ``z`` (d,): returns the loss (m^2); fills ``err`` (K,) metres and ``gz`` (d,).
+    ``path``: :func:`needed_joints` of ``cols``."""
+    hin, a, r, o, go, ga, gx, gh = work
+    _forward(z, W, b, U, c, path, par, A, V, bo, gh, hin, a, r, o)
     J, no = o.shape
     gx[:] = 0.0
     x = o.reshape(J * no)
@@ -121,17 +171,17 @@ def loss_grad(z, cols, target, scale, W, b, U, c, order, par, A, V, bo, work, er
             gx[cols[i]] = 2.0 * dm * scale[i]
         err[k] = np.sqrt(e2)
         f += e2
-    _backward(gx, W, U, order, par, A, V, hin, r, go, ga, gz)
+    _backward(gx, WT, UT, path, par, A, V, hin, r, go, ga, gh, gz)
     return f
 
 
 def workspace(gen) -> tuple:
     """Scratch arrays for :func:`loss_grad` of a flattened generator."""
-    W, _, U, _, _, _, _, V, _ = gen
+    W, _, U, _, _, _, _, V, _, _, _ = gen
     J, h, o = V.shape
     f = np.float32
     return (np.zeros(W.shape[1], f), np.zeros(U.shape[1], f), np.zeros((J, h), f), np.zeros((J, o), f),
-            np.zeros((J, o), f), np.zeros(U.shape[1], f), np.zeros(J * o, f))
+            np.zeros((J, o), f), np.zeros(U.shape[1], f), np.zeros(J * o, f), np.zeros(W.shape[1], np.float64))
 
 
 @njit
@@ -143,14 +193,15 @@ def _done(err, tol):
 
 
 @njit
-def lbfgs_one(z0, cols, target, scale, tol, W, b, U, c, order, par, A, V, bo, work, max_iter, memory, patience,
+def lbfgs_one(z0, cols, target, scale, tol, W, b, U, c, order, par, A, V, bo, UT, WT, work, max_iter, memory, patience,
               stall, c1, backtracks):
     """:func:`posekit.models.aegan.latent_opt.lbfgs` for one problem: ``(best z (d,), iterations, errors (K,))``."""
     d = len(z0)
     K = len(tol)
+    path = needed_joints(cols, order, par)
     z = np.minimum(np.maximum(z0.astype(np.float32), -1.0), 1.0)
     err, g = np.zeros(K), np.zeros(d, np.float32)
-    f = loss_grad(z, cols, target, scale, W, b, U, c, order, par, A, V, bo, work, err, g)
+    f = loss_grad(z, cols, target, scale, W, b, U, c, order, par, A, V, bo, UT, WT, path, work, err, g)
     S, Y = np.zeros((memory, d), np.float32), np.zeros((memory, d), np.float32)
     count = 0
     best_z, best_f, best_err = z.copy(), f, err.copy()
@@ -206,7 +257,7 @@ def lbfgs_one(z0, cols, target, scale, tol, W, b, U, c, order, par, A, V, bo, wo
         for attempt in range(backtracks + 1):
             for i in range(d):
                 nz[i] = min(max(np.float64(z[i]) + step * dirn[i], -1.0), 1.0)
-            nf = loss_grad(nz, cols, target, scale, W, b, U, c, order, par, A, V, bo, work, nerr, ng)
+            nf = loss_grad(nz, cols, target, scale, W, b, U, c, order, par, A, V, bo, UT, WT, path, work, nerr, ng)
             dec = 0.0
             for i in range(d):
                 dec += g[i] * (nz[i] - z[i])
@@ -241,18 +292,19 @@ def lbfgs_one(z0, cols, target, scale, tol, W, b, U, c, order, par, A, V, bo, wo
 
 
 @njit
-def adam_one(z0, cols, target, scale, tol, W, b, U, c, order, par, A, V, bo, work, max_iter, lr, patience, stall,
+def adam_one(z0, cols, target, scale, tol, W, b, U, c, order, par, A, V, bo, UT, WT, work, max_iter, lr, patience, stall,
              b1, b2):
     """:func:`posekit.models.aegan.latent_opt.adam` for one problem: ``(best z (d,), iterations, errors (K,))``."""
     d = len(z0)
     K = len(tol)
+    path = needed_joints(cols, order, par)
     z = np.minimum(np.maximum(z0.astype(np.float32), -1.0), 1.0)
     m, v = np.zeros(d, np.float32), np.zeros(d, np.float32)
     err, g = np.zeros(K), np.zeros(d, np.float32)
     best_z, best_f, best_err = z.copy(), np.inf, np.full(K, np.inf)
     ref_f, since = np.inf, 0
     for t in range(1, max_iter + 2):
-        f = loss_grad(z, cols, target, scale, W, b, U, c, order, par, A, V, bo, work, err, g)
+        f = loss_grad(z, cols, target, scale, W, b, U, c, order, par, A, V, bo, UT, WT, path, work, err, g)
         if f < best_f:
             best_f, best_z, best_err = f, z.copy(), err.copy()
         since += 1
