@@ -311,7 +311,8 @@ def markdown(rows: list[dict], meta: dict) -> str:
            f"set ({set_list}). A case's target is a real pose of a test clip; the effectors are placed at it "
            "(positions, rotations and look-ats of the true pose), the solver gets the effectors of the kinds it "
            "honours and the case's start pose, is scored on every effector, and is timed one solve at a time on "
-           "one thread after a warm-up solve.", "",
+           "one thread after a warm-up solve, in the thread's CPU time (other work's turns on a shared core left "
+           "out).", "",
            "**Columns** (medians over the cases): *ms per solve*; *MPJPE mm*, the mean distance of the body "
            "joints to the true pose's, pelvis-relative; *effector mm*, the worst position effector of a case"
            + ("; *effector deg*, the worst rotation or look-at effector (n/a: the solver returns no rotations)"

@@ -19,7 +19,7 @@ What it runs
   a :class:`MethodContext`.
 
 Metrics (JSON keys; definitions in :mod:`posekit.evaluation.pose_scores`, the same code for every solver):
-``latency_ms_median`` (one solve, one thread), ``effector_error_mm_median`` (worst effector of a
+``latency_ms_median`` (one solve, one thread, in the thread's CPU time: :data:`posekit.bench.roofline.CLOCK`), ``effector_error_mm_median`` (worst effector of a
 case), ``mpjpe_mm_median`` (body joints, pelvis-relative), ``bone_length_error_mm_max``,
 ``rotation_error_deg_median`` (solvers that return rotations), ``natural_mm_median`` (distance to the
 nearest training pose) and ``natural_floor_mm_median`` (the true pose's own), ``converged_fraction``
@@ -31,7 +31,6 @@ one solve runs / the solver networks alone), ``solves_per_s`` and ``us_per_pose`
 
 from __future__ import annotations
 
-import time
 import tracemalloc
 import warnings
 from dataclasses import dataclass
@@ -47,6 +46,7 @@ from ..ik.api import EFFECTOR_SETS, effector_set
 from ..ik.registry import make_solver, solver_info, solver_names
 from ..plugins import Registry
 from .plugin import arg, register_benchmark
+from .roofline import CLOCK
 
 __all__ = ["Method", "MethodContext", "register_method", "unregister_method", "method_names", "get_method",
            "resolve_solvers", "evaluate_solver", "case_effectors", "effector_set_names", "SolverRefused", "RANDOM",
@@ -238,7 +238,8 @@ def _take(cases: Cases, idx) -> Cases:
 def evaluate_solver(solver, cases: Cases, effectors: str, tolerance: float = 1e-3,
                     natural: NaturalnessIndex | None = None, natural_floor=None, seed: int = 0) -> dict:
     """One row's numbers: every case solved once from its start pose, timed one solve at a time on
-    the calling thread, then scored by :func:`posekit.evaluation.pose_scores.score_poses`.
+    the calling thread (its CPU time, :data:`~posekit.bench.roofline.CLOCK`), then scored by
+    :func:`posekit.evaluation.pose_scores.score_poses`.
 
     A solver is given the effectors of the kinds it honours (``solver.kinds``) and scored on all of them:
     with ``random`` a positions-only solver's rotation and look-at misses count against it.
@@ -272,13 +273,13 @@ def evaluate_solver(solver, cases: Cases, effectors: str, tolerance: float = 1e-
         if i in reasons:
             continue
         start = cases.pose(i)
-        t = time.perf_counter()
+        t = CLOCK()
         try:
             res = solver.solve(start, given[i])
         except ValueError as err:
             reasons[i] = str(err)
             continue
-        lat.append(time.perf_counter() - t)
+        lat.append(CLOCK() - t)
         pos.append(res.pose.global_pos)
         rots.append(res.pose.local_rot)
         iters.append(res.iterations)
