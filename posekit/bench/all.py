@@ -322,9 +322,10 @@ def markdown(rows: list[dict], meta: dict) -> str:
            + "; *converged*, the share of cases with every effector within its tolerance (1 mm, 1 degree)"
            + ("; *refused*, the cases the solver refused (counted as not converged; the other columns are over the "
               "cases it solved)" if any(r.get("refused_cases") for r in rows) else "")
-           + ("; *learned kept*, for a learned solver with an exact finish (`+dls`), the share of cases finished "
-              "from the learned pose — the rest were finished by DLS from the start pose, so the learned pose was "
-              "discarded" if any(r.get("learned_kept_fraction") is not None for r in rows) else "")
+           + ("; *learned kept*, for a learned solver with an exact finish (`+dls`), the share of cases whose "
+              "answer is DLS's from the learned pose — in the rest DLS from the start pose gave the more natural "
+              "answer, or the only exact one, and the learned pose was discarded"
+              if any(r.get("learned_kept_fraction") is not None for r in rows) else "")
            + ". *lesson*: the notebook that introduces the solver.", "",
            f"Machine: {m['platform']}, {m['processor']}, {m['cpu_count']} CPUs"
            + (f"; made on {meta['date']}" if meta.get("date") else "") + "; the run took "

@@ -14,7 +14,8 @@ random benchmarks (:mod:`posekit.evaluation.effector_cases`) with one metric cod
   rate measured on the network's own matrix shapes for a batch of 1,000 poses, the ideal poses per second
   that implies, the measured poses per second of the network's pass on that batch and its fraction of the
   ideal (goal: at least half), and one pose through ``solve`` as the median of every round (goal for
-  ProtoRes: 1 ms; the paper reports about 10 ms, 100 FPS, in Unity);
+  ProtoRes: 1 ms; the paper reports about 10 ms, 100 FPS, in Unity); and one pose's products at the paper's
+  width (1,024), timed on random weights of its shapes;
 * **training** — each shipped model's size, steps, minutes and validation error (from its checkpoint);
 * **Table 2** — the ablations (no GPD; every joint weighted 1) and their 2,000-step reference, stored in
   ``data_samples/results/protores_ablation.json`` (written by ``posekit train protores-studies``), under
@@ -45,6 +46,8 @@ ROUNDS_ONE = 300
 """Timed single-pose solves; the row reports their median (every round, not the fastest)."""
 ROUNDS_BATCH = 7
 """Timed batched passes (and GEMM rounds); the row reports their median."""
+ROUNDS_PAPER = 31
+"""Timed rounds of one pose's products at the paper's width (about 10 ms each); the row reports their median."""
 RESULTS_FILE = "bench_protores.json"
 """The shipped speed results (``posekit bench protores --speed-only --out data_samples/results/...``)."""
 
@@ -141,7 +144,32 @@ def _speed_rows(solvers, five) -> list[dict]:
                      "gemm_gmacs_one": round(one["macs_per_s"] / 1e9, 2),
                      "ms_solve_median": ms, "goal_ms": GOAL_MS if single_goal else None,
                      "ms_met": bool(ms <= GOAL_MS) if single_goal else None, "paper_ms": PAPER_MS})
+    rows.append(_paper_width_row(solvers["protores"].net.config, n_eff))
     return rows
+
+
+PAPER_WIDTH = 1024
+"""The paper's ProtoRes width (its Appendix: 1,024 units per layer)."""
+
+
+def _paper_width_row(config, n_eff: int) -> dict:
+    """One pose's products at the paper's width, measured: ProtoRes's matrix shapes at :data:`PAPER_WIDTH` for
+    ``n_eff`` effectors (our skeleton's joints), random float32 weights of those shapes (no such network is
+    trained here), one thread, the median of every round. Its weights do not stay in the caches as ours do, so
+    the rate of our width's products does not transfer to it: this row times it."""
+    from dataclasses import replace
+
+    from ..learn.threads import limit_threads
+    from .roofline import gemm_rate, gemm_shapes, macs_per_pose, weight_bytes
+
+    cfg = replace(config, width=PAPER_WIDTH)
+    with limit_threads(1):
+        one = gemm_rate(gemm_shapes(cfg, n_eff, 1), rounds=ROUNDS_PAPER)
+    return {"table": "speed-paper", "method": f"ProtoRes at the paper's width ({PAPER_WIDTH})", "width": PAPER_WIDTH,
+            "effectors": n_eff, "macs_per_pose": macs_per_pose(cfg, n_eff),
+            "weights_mb": round(weight_bytes(cfg, n_eff) / 1e6, 1),
+            "ms_products_one": round(one["seconds_median"] * 1000, 3),
+            "gemm_gmacs_one": round(one["macs_per_s"] / 1e9, 2), "paper_ms": PAPER_MS}
 
 
 def _training_rows(solvers) -> list[dict]:
@@ -265,6 +293,10 @@ TABLES = [
      "the GEMM rate they reach), then a whole pose through solve",
      ["method", "ms_products_one", "gemm_gmacs_one", "ms_solve_median", "goal_ms", "ms_met", "paper_ms"],
      {"table": "speed"}),
+    ("The paper's width, one pose's products alone on one thread (its shapes with random weights; median of every\n"
+     "round): what the roofline allows a width-1,024 network here, against the paper's time per pose on its GPU",
+     ["method", "width", "effectors", "macs_per_pose", "weights_mb", "ms_products_one", "gemm_gmacs_one", "paper_ms"],
+     {"table": "speed-paper"}),
     ("Training (from each shipped checkpoint: processes of one thread each, minutes of each process)",
      ["method", "parameters", "kB", "steps", "processes", "train_min", "ms_per_step", "val_mpjpe_mm"],
      {"table": "training"}),

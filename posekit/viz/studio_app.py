@@ -214,8 +214,9 @@ def app_page():
 
 def kept_label(editor):
     """A line under the studio that counts, per learned solver with an exact finish (``+dls``), how often its finish
-    kept the learned pose since the page opened — the rest were finished by DLS from the start pose, the learned pose
-    discarded (:mod:`posekit.ik.finish`, ``info["kept"] == "start"``). Updated after every solve; an
+    kept the answer from the learned pose since the page opened — in the rest, DLS from the start pose gave the more
+    natural answer, or the only exact one, and the learned pose was discarded (:mod:`posekit.ik.finish`,
+    ``info["kept"] == "start"``). Updated after every solve; an
     ``ipywidgets.HTML`` (``.counts``: {solver: [kept, solves]})."""
     import html
 
@@ -234,8 +235,8 @@ def kept_label(editor):
             kept, total = label.counts.setdefault(name, [0, 0])
             label.counts[name] = [kept + (info.get("kept") != "start"), total + 1]
         parts = [f"{n} kept the learned pose in {k} of {t} solves" for n, (k, t) in label.counts.items()]
-        label.value = ("<small>Exact finish: " + html.escape("; ".join(parts)) + " (the others were finished by "
-                       "DLS from the start pose: the learned pose was discarded)</small>") if parts else ""
+        label.value = ("<small>Exact finish: " + html.escape("; ".join(parts)) + " (in the others DLS from the "
+                       "start pose gave the more natural answer: the learned pose was discarded)</small>") if parts else ""
 
     count()
     editor.on_change(count)

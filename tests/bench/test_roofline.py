@@ -90,10 +90,23 @@ def test_speed_only_writes_its_rows_with_provenance(tmp_path, capsys, monkeypatc
     monkeypatch.setattr(bench_protores, "ROUNDS_ONE", 2)
     monkeypatch.setattr(bench_protores, "ROUNDS_BATCH", 1)
     monkeypatch.setattr(bench_protores, "BATCH", 4)
+    monkeypatch.setattr(bench_protores, "ROUNDS_PAPER", 1)
     out = tmp_path / bench_protores.RESULTS_FILE
     assert main(["bench", "protores", "--speed-only", "--json", "--out", str(out)]) == 0
-    rows = json.loads(capsys.readouterr().out)
+    every = json.loads(capsys.readouterr().out)
+    rows, wide = every[:-1], every[-1]
     assert [r["method"] for r in rows] == ["ProtoRes", "Masked-FCR", "Transformer"]
+    # the paper's width, timed on its own shapes: 1,024 wide, its multiply-adds counted like ours
+    from dataclasses import replace
+
+    from posekit.bench.roofline import macs_per_pose
+    from posekit.data import load_bandai_mini
+    from posekit.models.protores.solver import ProtoResSolver
+
+    assert wide["table"] == "speed-paper" and wide["width"] == bench_protores.PAPER_WIDTH == 1024
+    cfg = ProtoResSolver(load_bandai_mini().skeleton, arch="protores").net.config
+    assert wide["macs_per_pose"] == macs_per_pose(replace(cfg, width=1024), 5) > 10 * rows[0]["macs_per_pose"]
+    assert wide["ms_products_one"] > 0 and wide["paper_ms"] == bench_protores.PAPER_MS
     for r in rows:
         assert set(r) == SPEED_KEYS and r["table"] == "speed" and r["effectors"] == 5
         assert r["fraction_of_ideal"] == pytest.approx(r["poses_per_s"] / r["ideal_poses_per_s"], rel=0.01, abs=2e-3)
@@ -103,7 +116,7 @@ def test_speed_only_writes_its_rows_with_provenance(tmp_path, capsys, monkeypatc
     assert all(r["goal_ms"] is None and r["ms_met"] is None for r in rows[1:])  # the goal is ProtoRes's
     d = json.loads(out.read_text())
     assert d["command"] == f"posekit bench protores --speed-only --out {out}"
-    assert d["date"] and d["machine"]["processor"] and d["rows"] == rows
+    assert d["date"] and d["machine"]["processor"] and d["rows"] == every
     assert isinstance(d["load_avg_1min_before"], float)
     page = bench_page.markdown(tmp_path)
     assert "against the roofline" in page and "load average when the run began" in page and f"`posekit bench protores --speed-only --out {out}`" in page
