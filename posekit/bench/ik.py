@@ -19,7 +19,8 @@ What it runs
   a :class:`MethodContext`.
 
 Metrics (JSON keys; definitions in :mod:`posekit.evaluation.pose_scores`, the same code for every solver):
-``latency_ms_median`` (one solve, one thread, in the thread's CPU time: :data:`posekit.bench.roofline.CLOCK`), ``effector_error_mm_median`` (worst effector of a
+``latency_ms_median`` (one solve, one thread, in the thread's CPU time:
+:data:`posekit.bench.roofline.CLOCK`), ``effector_error_mm_median`` (worst effector of a
 case), ``mpjpe_mm_median`` (body joints, pelvis-relative), ``bone_length_error_mm_max``,
 ``rotation_error_deg_median`` (solvers that return rotations), ``natural_mm_median`` (distance to the
 nearest training pose) and ``natural_floor_mm_median`` (the true pose's own), ``converged_fraction``

@@ -236,7 +236,8 @@ def kept_label(editor):
             label.counts[name] = [kept + (info.get("kept") != "start"), total + 1]
         parts = [f"{n} kept the learned pose in {k} of {t} solves" for n, (k, t) in label.counts.items()]
         label.value = ("<small>Exact finish: " + html.escape("; ".join(parts)) + " (in the others DLS from the "
-                       "start pose gave the more natural answer: the learned pose was discarded)</small>") if parts else ""
+                       "start pose gave the more natural answer: the learned pose was discarded)</small>"
+                       ) if parts else ""
 
     count()
     editor.on_change(count)

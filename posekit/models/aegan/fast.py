@@ -292,8 +292,8 @@ def lbfgs_one(z0, cols, target, scale, tol, W, b, U, c, order, par, A, V, bo, UT
 
 
 @njit
-def adam_one(z0, cols, target, scale, tol, W, b, U, c, order, par, A, V, bo, UT, WT, work, max_iter, lr, patience, stall,
-             b1, b2):
+def adam_one(z0, cols, target, scale, tol, W, b, U, c, order, par, A, V, bo, UT, WT, work, max_iter, lr, patience,
+             stall, b1, b2):
     """:func:`posekit.models.aegan.latent_opt.adam` for one problem: ``(best z (d,), iterations, errors (K,))``."""
     d = len(z0)
     K = len(tol)

@@ -79,23 +79,29 @@ class NumpySPL:
     """:class:`~posekit.models.aegan.spl.StructuredPrediction` in numpy float32, forward and backward, on (N, in)
     batches.
 
-    The layout inside is joint-major, ``(J, N, .)``, so each depth is one batched ``matmul``.
+    The layout inside is joint-major, ``(J, N, .)``, so each depth is one batched ``matmul``. ``dtype``
+    (:meth:`from_state`): float32, or float64 for the encoder (:meth:`NumpyAEGAN.encode`).
     """
+
+    dtype = np.float32
 
     def __init__(self, layer):
         state = {k: v.detach().cpu().numpy() for k, v in layer.state_dict().items()}
         self._build(state, layer.parents, layer.out, layer.hidden, layer.ancestors)
 
     @classmethod
-    def from_state(cls, state: dict, parents, out: int, hidden: int, ancestors: str = "parent") -> "NumpySPL":
+    def from_state(cls, state: dict, parents, out: int, hidden: int, ancestors: str = "parent",
+                   dtype=np.float32) -> "NumpySPL":
         """The layer from a :class:`~posekit.models.aegan.spl.StructuredPrediction`'s state dict (name -> array:
-        ``shared.weight``, ``shared.bias``, ``anc.i``, ``w_out.i``, ``b_out.i``) and its sizes."""
+        ``shared.weight``, ``shared.bias``, ``anc.i``, ``w_out.i``, ``b_out.i``) and its sizes, computing in
+        ``dtype``."""
         self = cls.__new__(cls)
+        self.dtype = np.dtype(dtype).type
         self._build(state, parents, out, hidden, ancestors)
         return self
 
     def _build(self, state, parents, out, hidden, ancestors):
-        f32 = lambda name: np.asarray(state[name]).astype(np.float32).copy()  # noqa: E731
+        f32 = lambda name: np.asarray(state[name]).astype(self.dtype).copy()  # noqa: E731
         levels = tree_levels(parents, ancestors)
         if f"anc.{len(levels)}" in state:
             raise KeyError(f"anc.{len(levels)} (the tree has {len(levels)} depths)")
@@ -108,15 +114,15 @@ class NumpySPL:
             flat = anc.reshape(-1)
             uniq = np.unique(flat)
             # sums the gradients of (joint, ancestor) pairs into each distinct ancestor: (n_uniq, n * a)
-            S = (uniq[:, None] == flat[None, :]).astype(np.float32)
+            S = (uniq[:, None] == flat[None, :]).astype(self.dtype)
             self.levels.append((js, anc, A, V, b[:, None, :], uniq, S))
 
     def forward(self, h):
         """``h`` (N, in) -> (N, J * out) and the cache :meth:`backward` needs."""
-        h = np.asarray(h, dtype=np.float32)
+        h = np.asarray(h, dtype=self.dtype)
         n = h.shape[0]
         a = (h @ self.U + self.c).reshape(n, self.J, self.hidden).transpose(1, 0, 2)  # (J, N, hidden)
-        outs = np.zeros((self.J, n, self.out), np.float32)
+        outs = np.zeros((self.J, n, self.out), self.dtype)
         acts = []
         for js, anc, A, V, b, _, _ in self.levels:
             pre = a[js]
@@ -185,8 +191,11 @@ class NumpyAEGAN:
         hidden, ancestors, per_joint = int(config["spl_hidden"]), config["ancestors"], int(config["per_joint"])
         f32 = lambda name: np.asarray(state[name]).astype(np.float32).copy()  # noqa: E731
         part = lambda k: {n[len(k) + 1:]: v for n, v in state.items() if n.startswith(k + ".")}  # noqa: E731
-        self.e_spl = NumpySPL.from_state(part("encoder.spl"), parents, per_joint, hidden, ancestors)
-        self.e_W, self.e_b = f32("encoder.fc.weight").T.copy(), f32("encoder.fc.bias")
+        # the encoder in float64: its code, rounded to float32, is then the same on every CPU (a float32 product's
+        # last bit depends on the BLAS kernel the CPU picks, and latent optimisation from it magnifies that bit)
+        self.e_spl = NumpySPL.from_state(part("encoder.spl"), parents, per_joint, hidden, ancestors, dtype=np.float64)
+        f64 = lambda name: np.asarray(state[name]).astype(np.float64).copy()  # noqa: E731
+        self.e_W, self.e_b = f64("encoder.fc.weight").T.copy(), f64("encoder.fc.bias")
         self.g_W, self.g_b = f32("generator.fc.weight").T.copy(), f32("generator.fc.bias")
         self.g_spl = NumpySPL.from_state(part("generator.spl"), parents, 3, hidden, ancestors)
         self._sizes = {k: sum(int(np.asarray(v).size) for n, v in state.items() if n.startswith(k + "."))
@@ -197,9 +206,9 @@ class NumpyAEGAN:
         return self._sizes[name]
 
     def encode(self, x):
-        """z-scored poses (N, 3 B) -> codes (N, d)."""
-        h = np.maximum(self.e_spl.forward(x)[0], 0.0)
-        return np.tanh(h @ self.e_W + self.e_b)
+        """z-scored poses (N, 3 B) -> codes (N, d), float32 (computed in float64, then rounded)."""
+        h = np.maximum(self.e_spl.forward(np.asarray(x, np.float64))[0], 0.0)
+        return np.tanh(h @ self.e_W + self.e_b).astype(np.float32)
 
     def forward(self, z):
         """Codes (N, d) -> z-scored poses (N, 3 B), and the cache for :meth:`vjp`."""
