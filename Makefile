@@ -9,7 +9,8 @@
 #                         upper bounds, in .venv-latest (tools/test_latest.py; LATEST_ARGS=--pre for pre-releases)
 #   instructors: make slides (reveal.js slides of every lesson), make solutions (the lessons with
 #               their exercise solutions, executed), make course (one static page: lessons, slides,
-#               benchmark report) -- all under build/, openable from disk
+#               benchmark report) -- all under build/, openable from disk; slides and course are the
+#               students' (no solution in them) unless INSTRUCTOR=1
 #   make hub    the lessons served to a class by JupyterHub on this machine (trial login; docs/hub.md)
 #   make docs   rewrite the generated documentation pages: docs/cli.md (the argument parser) and docs/benchmarks.md
 #               (the results files under data_samples/results)
@@ -66,12 +67,14 @@ $(COURSE_JS): tools/course/package.json tools/course/package-lock.json
 
 course-assets: $(COURSE_JS)
 
-COURSE_OUT ?= build/course
+# the students' slides and course page hold no exercise solution; INSTRUCTOR=1 builds the instructor's version
+# (solutions and notes in the speaker notes, the lessons' instructor pages) into build/course-instructor
+COURSE_OUT ?= $(if $(INSTRUCTOR),build/course-instructor,build/course)
 slides: setup course-assets
-	$(VENV)/bin/posekit course slides --out $(COURSE_OUT)
+	$(VENV)/bin/posekit course slides --out $(COURSE_OUT) $(if $(INSTRUCTOR),--instructor)
 
 course: setup course-assets
-	$(VENV)/bin/posekit course build --out $(COURSE_OUT)
+	$(VENV)/bin/posekit course build --out $(COURSE_OUT) $(if $(INSTRUCTOR),--instructor)
 
 # every lesson's instructor version, executed (about as long as running all lessons: ~6 min on 2 cores)
 solutions: setup course-assets

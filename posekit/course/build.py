@@ -58,7 +58,7 @@ def _progress(items, desc, progress):
     return tqdm(items, desc=desc, unit="lesson")
 
 
-def build_slides(out=DEFAULT_OUT, only=None, progress: bool = True) -> list[dict]:
+def build_slides(out=DEFAULT_OUT, only=None, progress: bool = True, instructor: bool = False) -> list[dict]:
     """Write every lesson's reveal.js slides to ``out/slides/NN_name.html``.
 
     Parameters
@@ -67,6 +67,9 @@ def build_slides(out=DEFAULT_OUT, only=None, progress: bool = True) -> list[dict
         The course folder.
     only : list of Lesson, optional
         Default: every lesson.
+    instructor : bool
+        The instructor's decks: the exercises' solutions and notes in the speaker notes. Default: the students'
+        decks, with none.
 
     Returns
     -------
@@ -79,7 +82,7 @@ def build_slides(out=DEFAULT_OUT, only=None, progress: bool = True) -> list[dict
     done = []
     for lesson in _progress(only or lessons(), "slides", progress):
         nb = read_notebook(lesson.path)
-        page = slide_rules.export(nb, "slides", static="../_static", lesson=lesson)
+        page = slide_rules.export(nb, "slides", static="../_static", lesson=lesson, instructor=instructor)
         path = out / "slides" / f"{lesson.stem}.html"
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(page, encoding="utf-8")
@@ -182,7 +185,7 @@ def _minutes(seconds) -> str:
     return f"{seconds:.0f} s" if seconds < 90 else f"{seconds / 60:.1f} min"
 
 
-def _row(lesson: Lesson, n_slides) -> str:
+def _row(lesson: Lesson, n_slides, instructor: bool = False) -> str:
     e = html.escape
     prereq = ", ".join(lesson.prerequisites) or "—"
     source = e(lesson.paper) if lesson.paper else "—"
@@ -192,21 +195,35 @@ def _row(lesson: Lesson, n_slides) -> str:
     return (f"<tr><td>{lesson.number}</td><td><a href=\"lessons/{lesson.stem}.html\" title=\"{name}: the lesson as one "
             f"page\">{e(lesson.title)}</a></td>"
             f"<td><a href=\"slides/{lesson.stem}.html\" title=\"{name}: lecture slides\">slides</a> ({n_slides})</td>"
-            f"<td><a href=\"solutions/{lesson.stem}.html\" title=\"{name}: reference solutions and instructor "
-            f"notes\">solutions</a></td>"
-            f"<td>{lesson.duration_min} min</td><td>{_minutes(lesson.run_s)}</td><td>{prereq}</td>"
+            + (f"<td><a href=\"solutions/{lesson.stem}.html\" title=\"{name}: reference solutions and instructor "
+               f"notes\">solutions</a></td>" if instructor else "")
+            + f"<td>{lesson.duration_min} min</td><td>{_minutes(lesson.run_s)}</td><td>{prereq}</td>"
             f"<td>{source}</td></tr>")
 
 
-def build_course(out=DEFAULT_OUT, progress: bool = True) -> Path:
-    """Write the whole course folder (pages, slides, report, ``index.html``); returns the index's path."""
+def build_course(out=DEFAULT_OUT, progress: bool = True, instructor: bool = False) -> Path:
+    """Write the whole course folder (pages, slides, report, ``index.html``); returns the index's path.
+
+    ``instructor``: also the lessons' instructor versions (``solutions/``) and the solutions in the slides' speaker
+    notes. The default course is the students': no solution anywhere in it, so it can be published."""
     out = Path(out)
     all_ = lessons()
-    slides = {s["lesson"]: s["slides"] for s in build_slides(out, all_, progress)}
+    slides = {s["lesson"]: s["slides"] for s in build_slides(out, all_, progress, instructor=instructor)}
     build_pages(out, all_, progress)
-    build_solutions(out, all_, progress)
+    if instructor:
+        build_solutions(out, all_, progress)
+    elif (out / "solutions").is_dir():  # an instructor build's pages left in the folder would be published too
+        import shutil
+
+        shutil.rmtree(out / "solutions")
     build_report(out)
-    rows = "\n".join(_row(le, slides[le.number]) for le in all_)
+    rows = "\n".join(_row(le, slides[le.number], instructor) for le in all_)
+    solutions_head = "<th>for instructors</th>" if instructor else ""
+    notes_said = ("what each figure shows, the exercises' solutions and notes, a time per section" if instructor
+                  else "what each figure shows, a time per section; this is the students' course: no exercise "
+                       "solution is in it, the instructor's is built by <code>make course INSTRUCTOR=1</code>")
+    solutions_said = ("<em>Solutions</em>: the lesson with its reference solutions and instructor notes pasted in, not "
+                      "run here (<code>make solutions</code> runs and checks them).\n" if instructor else "")
     body = f"""<h1>posekit — data-driven character posing, a course in notebooks</h1>
 <p>From classical inverse kinematics to learned pose models: {len(all_)} lessons, each reproducing its
 paper's key claim with a measured table on real data. Every page here is the lesson as it is stored — executed,
@@ -215,16 +232,14 @@ running notebook: <code>make lab</code> opens the lessons in JupyterLab, <code>m
 lesson 06 as a browser app.</p>
 <h2>Lessons</h2>
 <table class="posekit-lessons">
-<thead><tr><th>#</th><th>lesson (one page)</th><th>lecture slides</th><th>for instructors</th><th>planned time</th>
+<thead><tr><th>#</th><th>lesson (one page)</th><th>lecture slides</th>{solutions_head}<th>planned time</th>
 <th>runs in<br><small>measured, CPU</small></th><th>prerequisites</th><th>paper it reproduces</th></tr></thead>
 <tbody>
 {rows}
 </tbody>
 </table>
-<p><small><em>Lecture slides</em>: press <code>s</code> for the speaker notes (what each figure shows, the
-exercises' solutions and notes, a time per section). <em>Solutions</em>: the lesson with its reference solutions
-and instructor notes pasted in, not run here (<code>make solutions</code> runs and checks them).
-<em>Planned time</em>: lecture and practical together, the authors' plan. <em>Runs in</em>: from the
+<p><small><em>Lecture slides</em>: press <code>s</code> for the speaker notes ({notes_said}).
+{solutions_said}<em>Planned time</em>: lecture and practical together, the authors' plan. <em>Runs in</em>: from the
 first cell to the last when the stored outputs were made (one CPU thread, a 2-core machine).</small></p>
 <h2>Benchmark</h2>
 <p><a href="report/bench_all.html">Every solver on the same held-out cases, speed against quality</a>

@@ -102,7 +102,7 @@ def _exercises_solutions(args) -> int:
 def _course_slides(args) -> int:
     from .build import build_slides
 
-    rows = build_slides(args.out, progress=sys.stderr.isatty())
+    rows = build_slides(args.out, progress=sys.stderr.isatty(), instructor=args.instructor)
     print(f"{'lesson':<7}{'slides':>7}  {'key figure':<11}file")
     for r in rows:
         print(f"{r['lesson']:<7}{r['slides']:>7}  {'yes' if r['key_figure'] else 'MISSING':<11}{r['path']}")
@@ -112,7 +112,7 @@ def _course_slides(args) -> int:
 def _course_build(args) -> int:
     from .build import build_course
 
-    index = build_course(args.out, progress=sys.stderr.isatty())
+    index = build_course(args.out, progress=sys.stderr.isatty(), instructor=args.instructor)
     print(f"wrote {index} (open it in a browser: file://{index.resolve()})")
     return 0
 
@@ -192,11 +192,16 @@ def add_commands(sub) -> None:
     course = sub.add_parser("course",
                             help="lecture slides, the static course page and the nbgrader course (instructors)")
     csub = course.add_subparsers(dest="cmd", required=True)
+    instructor_help = ("the instructor's version: the exercises' reference solutions and notes in the speaker notes "
+                       "(and, for build, the lessons' instructor pages); never give it to students. Default: the "
+                       "students' version, with no solution in it")
     p = csub.add_parser("slides", help="every lesson as reveal.js slides, from its stored outputs")
     p.add_argument("--out", default=str(Path("build") / "course"), help="course folder (default build/course)")
+    p.add_argument("--instructor", action="store_true", help=instructor_help)
     p.set_defaults(fn=_course_slides)
     p = csub.add_parser("build", help="the course page: lessons, slides, benchmark report, openable from disk")
     p.add_argument("--out", default=str(Path("build") / "course"), help="course folder (default build/course)")
+    p.add_argument("--instructor", action="store_true", help=instructor_help)
     p.set_defaults(fn=_course_build)
     p = csub.add_parser("mark", help="apply the slide convention to notebooks (cell metadata)")
     p.add_argument("notebooks", nargs="+")

@@ -442,7 +442,7 @@ def _solution_sources(lesson, nb) -> dict[int, str]:
     return found
 
 
-def lecture_notebook(nb, lesson=None) -> dict:
+def lecture_notebook(nb, lesson=None, instructor: bool = False) -> dict:
     """The lesson ``nb`` as the notebook its reveal.js deck is drawn from (see the module docstring).
 
     Parameters
@@ -451,6 +451,9 @@ def lecture_notebook(nb, lesson=None) -> dict:
         An executed lesson, marked by the slide convention.
     lesson : posekit.course.lessons.Lesson, optional
         Its facts (title, planned time, prerequisites, paper, open-exercise notes); read from ``nb`` when absent.
+    instructor : bool
+        Put the exercises' reference solutions and instructor notes into the speaker notes (the instructor's
+        deck, from ``instructor/solutions/``). Off by default: a deck given to students holds no solution.
     """
     import nbformat
 
@@ -463,16 +466,17 @@ def lecture_notebook(nb, lesson=None) -> dict:
     paper = ""
     notes, module, solutions = {}, None, {}
     if lesson is not None:
-        from .solutions import SOLUTIONS, notes as open_notes
+        from .solutions import notes as open_notes, solutions_dir
 
         if lesson.prerequisites:
             facts.append(f"after lesson{'s' if len(lesson.prerequisites) > 1 else ''} {', '.join(lesson.prerequisites)}")
         if lesson.paper:
             paper = f"\n\n*Reproduces:* {lesson.paper}"
-        notes = open_notes(lesson)
-        if (SOLUTIONS / f"nb{number}.py").is_file():
-            module = f"posekit/exercises/solutions/nb{number}.py"
-            solutions = _solution_sources(lesson, nb)
+        if instructor:
+            notes = open_notes(lesson)
+            if (solutions_dir() / f"nb{number}.py").is_file():
+                module = f"instructor/solutions/nb{number}.py"
+                solutions = _solution_sources(lesson, nb)
     facts = f"*{' · '.join(facts)}*{paper}"
     pages = lecture_pages(nb, number, title, minutes, facts, notes, module, solutions)
     plan = _timing(pages, minutes)

@@ -200,7 +200,8 @@ def _presentable(nb: dict) -> dict:
     return nb
 
 
-def export(nb: dict, kind: str, static: str = "../_static", back: str | None = None, lesson=None) -> str:
+def export(nb: dict, kind: str, static: str = "../_static", back: str | None = None, lesson=None,
+           instructor: bool = False) -> str:
     """One lesson as HTML with posekit's templates: ``kind`` ``"slides"`` (reveal.js) or ``"page"``.
 
     Parameters
@@ -214,6 +215,9 @@ def export(nb: dict, kind: str, static: str = "../_static", back: str | None = N
         Relative URL of the course page, linked at the top of a page.
     lesson : posekit.course.lessons.Lesson, optional
         The lesson's facts for its slides (title slide, time plan, exercise notes: :mod:`posekit.course.lecture`).
+    instructor : bool
+        Slides only: the speaker notes carry the exercises' reference solutions and instructor notes (the
+        instructor's deck). The default deck is safe to give to students.
     """
     import nbformat
     from nbconvert import HTMLExporter, SlidesExporter
@@ -232,7 +236,7 @@ def export(nb: dict, kind: str, static: str = "../_static", back: str | None = N
     if kind == "slides":
         from .lecture import lecture_notebook
 
-        node = lecture_notebook(nb, lesson)
+        node = lecture_notebook(nb, lesson, instructor=instructor)
     else:
         node = nbformat.from_dict(_presentable(nb))
         if "title" not in node.metadata and node.cells and _source(node.cells[0]).startswith("# "):

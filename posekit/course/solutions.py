@@ -3,11 +3,16 @@
 A lesson's exercises are found in the notebook itself: a markdown cell opening with ``**Exercise N``;
 a *checked* exercise is followed by a code cell holding a stub ``def exercise_...: raise
 NotImplementedError`` and its checker call; an *open* one (``**Exercise N (open).**``) has no checker.
-Their solutions live once, in the package:
+Their solutions live once, in the repository's ``instructor/solutions/`` folder — *outside* the ``posekit``
+package that students install and import, so no student kernel can ``import`` them (on a class's hub that folder
+is readable by the instructor only, ``deploy/jupyterhub``):
 
-* checked: a function of the same name and parameters in ``posekit/exercises/solutions/nbNN.py``,
+* checked: a function of the same name and parameters in ``instructor/solutions/nbNN.py``,
   self-contained so that its source can replace the stub;
-* open: a ``## Exercise N`` section of ``posekit/exercises/solutions/nbNN.md``, the instructor's notes.
+* open: a ``## Exercise N`` section of ``instructor/solutions/nbNN.md``, the instructor's notes.
+
+``POSEKIT_SOLUTIONS`` names another folder (an instructor's copy, when posekit is installed without its
+repository).
 
 :func:`instructor_notebook` pastes them in (and makes every checker call an ``assert``), and
 :func:`render` executes the result, so a solution that stops passing its checker fails the build.
@@ -18,6 +23,8 @@ from __future__ import annotations
 import ast
 import copy
 import importlib
+import importlib.util
+import os
 import inspect
 import re
 import textwrap
@@ -30,7 +37,27 @@ __all__ = ["Exercise", "exercises", "solution_function", "notes", "instructor_no
 
 _EXERCISE = re.compile(r"^\*\*Exercise (\d+)\b([^*]*)\*\*")
 _CHECK = re.compile(r"^(\s*)(\w+)\s*=\s*(check_\w+)\((exercise_\w+)\)\s*$", re.MULTILINE)
-SOLUTIONS = Path(__file__).resolve().parent.parent / "exercises" / "solutions"
+SOLUTIONS_HOME = Path(__file__).resolve().parents[2] / "instructor" / "solutions"
+"""Where the reference solutions live in the repository (outside the package)."""
+
+
+def solutions_dir() -> Path:
+    """The folder of reference solutions: ``POSEKIT_SOLUTIONS`` when set, else the repository's
+    ``instructor/solutions/``.
+
+    Raises
+    ------
+    LookupError
+        When that folder does not exist (posekit installed without its repository), with what to set.
+    """
+    env = os.environ.get("POSEKIT_SOLUTIONS")
+    path = Path(env).expanduser() if env else SOLUTIONS_HOME
+    if not path.is_dir():
+        raise LookupError(f"the exercises' reference solutions are not at {path}: they are not part of the posekit "
+                          "package (students must not import them); they live in the repository's "
+                          "instructor/solutions/ folder. Run from a checkout, or set POSEKIT_SOLUTIONS to an "
+                          "instructor's copy of that folder")
+    return path
 
 
 @dataclass(frozen=True)
@@ -88,21 +115,34 @@ def exercises(nb) -> list[Exercise]:
 
 
 def _module(lesson: Lesson):
-    return importlib.import_module(f"posekit.exercises.solutions.nb{lesson.number}")
+    """Lesson ``lesson``'s solutions module, loaded from its file (it is not an importable package)."""
+    import sys
+
+    path = solutions_dir() / f"nb{lesson.number}.py"
+    if not path.is_file():
+        raise LookupError(f"lesson {lesson.number}: no solutions file {path}")
+    name = f"_posekit_solutions_nb{lesson.number}"
+    mod = sys.modules.get(name)
+    if mod is None or getattr(mod, "__file__", None) != str(path):
+        spec = importlib.util.spec_from_file_location(name, path)
+        mod = importlib.util.module_from_spec(spec)
+        sys.modules[name] = mod  # inspect.getsource finds the module's file through it
+        spec.loader.exec_module(mod)
+    return mod
 
 
 def solution_function(lesson: Lesson, name: str):
     """The reference solution ``name`` of ``lesson`` (a function of its solutions module)."""
     fn = getattr(_module(lesson), name, None)
     if not callable(fn):
-        raise LookupError(f"lesson {lesson.number}: no solution {name!r} in posekit/exercises/solutions/"
+        raise LookupError(f"lesson {lesson.number}: no solution {name!r} in instructor/solutions/"
                           f"nb{lesson.number}.py")
     return fn
 
 
 def notes(lesson: Lesson) -> dict[int, str]:
     """The instructor's notes on ``lesson``'s open exercises: exercise number → Markdown."""
-    path = SOLUTIONS / f"nb{lesson.number}.md"
+    path = solutions_dir() / f"nb{lesson.number}.md"
     if not path.is_file():
         return {}
     found, current, lines = {}, None, []

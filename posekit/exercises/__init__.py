@@ -2,18 +2,22 @@
 
 Each checker calls the student's function on seeded cases, compares with posekit, prints one line
 (✓ or ✗ with what differed) and returns True or False. A function that still raises
-``NotImplementedError`` is reported as "not attempted yet".
+``NotImplementedError`` is reported as "not attempted yet"; one that changes its inputs in place, or calls the
+posekit function it is compared against, fails (:mod:`posekit.exercises._check`).
+
+The exercises' reference solutions are not in this package (students import it): they live in the repository's
+``instructor/solutions/`` folder (:mod:`posekit.course.solutions`).
 """
 
 from .nb00 import check_bone_lengths, check_fk, check_sixd_to_matrix
-from .nb01 import check_fabrik_chain, check_two_bone
+from .nb01 import check_fabrik_planted, check_two_bone_swivel
 from .nb02 import check_dls_step, check_gpr_mean
 from .nb03 import check_pose_vector, check_solver_loss, check_tied_decoder
 from .nb04 import check_generator_loss, check_latent_loss, check_tree_depths
 from .nb05 import check_centroid, check_prototype_step, check_tolerance_weight
 from .nb06 import check_drag_point, check_slerp
 
-__all__ = ["check_fk", "check_sixd_to_matrix", "check_bone_lengths", "check_fabrik_chain", "check_two_bone",
+__all__ = ["check_fk", "check_sixd_to_matrix", "check_bone_lengths", "check_fabrik_planted", "check_two_bone_swivel",
            "check_gpr_mean", "check_dls_step", "check_pose_vector", "check_tied_decoder", "check_solver_loss",
            "check_tree_depths", "check_latent_loss", "check_generator_loss", "check_prototype_step",
            "check_tolerance_weight", "check_centroid", "check_drag_point", "check_slerp"]

@@ -11,19 +11,23 @@ def check_pose_vector(my_pose_vector) -> bool:
     """Check ``my_pose_vector(skeleton, global_pos (J, 3)) -> (3B,)``: the body joints (no helper root)
     in the pose's root frame — pelvis projected on the floor at the origin, facing +Z — flattened
     (:func:`posekit.data.pose_vectors.pose_vectors`)."""
+    from ..data import load_sample
     from ..data.bandai_mini import load_bandai_mini
     from ..data.pose_vectors import pose_vectors
 
     m = load_bandai_mini()
+    other = load_sample()  # another skeleton (DeepMimic's humanoid, no helper root): no index may be hard-coded
     cases = []
 
     def describe(got, expected):
         d = np.abs(got - expected).reshape(-1, 3).max(-1)
         return (f"largest difference {d.max() * 1e3:.1f} mm at body joint {int(np.argmax(d))}; left out joint_Root? "
                 "turned by minus the facing angle? pelvis on the floor (y kept)?")
-    for f in (0, 4321, 20_000, 40_000):
-        cases.append(((m.skeleton, m.global_pos[f]), pose_vectors(m.skeleton, m.global_pos[f][None])[0][0], describe))
-    return report("check_pose_vector", my_pose_vector, cases, atol=1e-6)
+    for motion, f in ((m, 0), (other, 100), (m, 4321), (m, 20_000), (other, 1500), (m, 40_000)):
+        pos = motion.global_pos[f]
+        cases.append(((motion.skeleton, pos.copy()), pose_vectors(motion.skeleton, pos[None])[0][0], describe))
+    return report("check_pose_vector", my_pose_vector, cases, atol=1e-6, forbid=(pose_vectors,),
+                  arg_names=("skeleton", "global_pos"))
 
 
 def check_tied_decoder(my_decode) -> bool:
