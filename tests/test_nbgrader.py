@@ -263,6 +263,8 @@ def _class(course, stem) -> dict[str, str]:
     wrong = _copy(src)
     _answer(wrong, slip).source = _slip(_answer(wrong, slip).source, slip)
     hand_in("wrong", wrong)
+    if stem == CHEATED:
+        _cheats(src, hand_in)
     if stem != STEMS[0]:
         return {"wrong": slip}
     first, second = checked[0].function, checked[1].function
@@ -283,6 +285,39 @@ def _class(course, stem) -> dict[str, str]:
     return {"wrong": slip, "first": first, "second": second}
 
 
+CHEATED = "01_fabrik"
+"""The lesson whose class also holds the cheats of :func:`_cheats`."""
+CHEATS = ("patches", "borrows")
+
+
+def _cheats(src, hand_in) -> None:
+    """Two students of lesson 01 who try to earn points without the work (the three cheats an instructor saw):
+
+    * ``patches``: exercise 1's answer cell rebinds the checker to one that always passes (the kernel's tests
+      cell then gives the point); exercise 2 calls posekit's own ``two_bone_ik``, the function it is compared
+      against;
+    * ``borrows``: exercise 1 imports the reference solution from where it used to ship; exercise 2 is left as
+      released, but its tests cell is edited to award the point whatever happens.
+    """
+    stub1 = "def exercise_fabrik_planted(positions, target, tolerance, max_iter):\n    raise NotImplementedError\n"
+    patches = _copy(src)
+    _answer(patches, "exercise_fabrik_planted").source = (
+        "import posekit.exercises\nposekit.exercises.check_fabrik_planted = lambda f: True\n\n" + stub1)
+    _answer(patches, "exercise_two_bone_swivel").source = (
+        "def exercise_two_bone_swivel(root, mid, end, target, swivel):\n"
+        "    from posekit.exercises.nb01 import swivel_pole\n"
+        "    from posekit.ik.two_bone import two_bone_ik\n"
+        "    return two_bone_ik(root, mid, end, target, swivel_pole(root, mid, target, swivel))[:2]\n")
+    hand_in("patches", patches)
+    borrows = _copy(src)
+    _answer(borrows, "exercise_fabrik_planted").source = (
+        "from posekit.exercises.solutions.nb01 import exercise_fabrik_planted\n")
+    _answer(borrows, "exercise_two_bone_swivel").source = (
+        "def exercise_two_bone_swivel(root, mid, end, target, swivel):\n    raise NotImplementedError\n")
+    _answer(borrows, "exercise_two_bone_swivel_tests").source = "1  # the points earned"
+    hand_in("borrows", borrows)
+
+
 CLASS_00 = ("right", "untouched", "wrong", "deleted", "raises", "loops", "other", "broken", "empty")
 LOOP_TIMEOUT_S = 30
 """Lesson 00's cells take seconds: a 30 s limit (not the course's 300 s) bounds what its endless loop costs."""
@@ -301,7 +336,7 @@ def graded(course):
         if stem not in done:
             did = _class(course, stem)
             with Gradebook(f"sqlite:///{course / 'gradebook.db'}") as gb:  # the class list
-                for student in CLASS_00:
+                for student in CLASS_00 + CHEATS:
                     gb.update_or_create_student(student)
             extra = ["--cell-timeout", str(LOOP_TIMEOUT_S)] if stem == STEMS[0] else []
             proc = _run([sys.executable, "-m", "posekit", "course", "autograde", stem, "--course", str(course),
@@ -416,3 +451,39 @@ def test_autograde_reports_a_students_mistakes_and_bad_folders_and_export_writes
     for stem in graded.done:  # and every other lesson graded in this course (all of them in a full run)
         for student in ("right", "untouched", "wrong"):
             assert float(grades[(stem, student)]["raw_score"]) == _code_score(course, stem, student)[0]
+
+
+def _flagged(course, stem, student) -> bool:
+    from nbgrader.api import Gradebook
+
+    with Gradebook(f"sqlite:///{course / 'gradebook.db'}") as gb:
+        return bool(gb.find_submission_notebook(stem, stem, student).flagged)
+
+
+@pytest.mark.slow
+def test_the_three_cheats_score_nothing_and_are_flagged_and_an_honest_class_is_not(graded):
+    course, did, proc = graded(CHEATED)
+    points = _points(course, CHEATED)
+    assert set(points) == {"exercise_fabrik_planted_tests", "exercise_two_bone_swivel_tests"}
+    for student in CHEATS:
+        assert _cell_scores(course, CHEATED, student) == dict.fromkeys(points, 0), student
+        assert _code_score(course, CHEATED, student)[0] == 0
+        assert _flagged(course, CHEATED, student), student
+    # the rebound checker fooled the student's own kernel: the fresh process did not take its word
+    assert re.search(r"flagged patches / 01_fabrik / exercise_fabrik_planted: the kernel's tests cell gave 1 of 1, a "
+                     r"fresh process 0 \(kept\)", proc.stderr), proc.stderr
+    assert re.search(r"flagged patches / 01_fabrik / exercise_fabrik_planted: the answer touches the grading "
+                     r"machinery \(line 2: posekit\.exercises\.check_fabrik_planted = ", proc.stderr), proc.stderr
+    # calling the function the checker compares against is refused, in the kernel as in the fresh check
+    assert "calls posekit.ik.two_bone.two_bone_ik, the function it is compared against" in \
+        _outputs(course, CHEATED, "patches", "exercise_two_bone_swivel_tests")
+    # the solutions are not in the package a student imports
+    assert "ModuleNotFoundError" in _outputs(course, CHEATED, "borrows", "exercise_fabrik_planted")
+    # an edited tests cell is put back by nbgrader, and flagged by name
+    assert re.search(r"flagged borrows / 01_fabrik / exercise_two_bone_swivel_tests: read-only cell changed",
+                     proc.stderr), proc.stderr
+    for student in ("right", "untouched", "wrong"):  # honest work is never flagged
+        assert not _flagged(course, CHEATED, student), student
+        assert f"flagged {student} /" not in proc.stderr
+    grades = _grades(course)
+    assert all(float(grades[(CHEATED, s)]["raw_score"]) == 0 for s in CHEATS)

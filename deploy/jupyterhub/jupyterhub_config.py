@@ -6,12 +6,17 @@
 # jupyterhub-idle-culler, run by the hub as a service. The proxy is configurable-http-proxy from the npm registry
 # (deploy/jupyterhub/package.json, installed by `make hub`).
 #
-# TRIAL SET-UP: the authenticator is JupyterHub's SharedPasswordAuthenticator (any user name, one password) and the
-# spawner is SimpleLocalProcessSpawner (every student's server runs as the hub's own system user, with its own home
-# folder under the state folder). The hub keeps students apart at the web level only: a student's browser cannot
-# open or drive another student's server. Their processes are NOT kept apart: code in one student's kernel can read
-# and write every other student's files. A real class uses a real authenticator and one system user (or container)
-# per student: The Littlest JupyterHub (SystemdSpawner) or zero-to-jupyterhub (KubeSpawner) -- docs/hub.md.
+# STUDENTS KEPT APART (posekit_spawner.py, when the hub runs as root): each student's server runs as their own system
+# user (posekit-<name>, made on their first start), in a sandbox of its own (sandbox.py: a mount and PID namespace):
+# it sees no other process, no other student's home, not the hub's database or secrets, not the instructor's folder
+# (instructor/: the exercises' solutions), and a private /tmp. Not as root, the hub cannot: every server then runs as
+# the hub's user, with no isolation, and the log says so.
+# TRIAL LOGIN: the authenticator is JupyterHub's SharedPasswordAuthenticator (any user name, one password): whoever
+# knows the password can log in under any name, another student's included. A real class uses a real authenticator
+# (docs/hub.md).
+# NBGRADER: with POSEKIT_HUB_COURSE set, every student's JupyterLab has nbgrader's Assignments panel (fetch, submit,
+# validate) on the exchange folder POSEKIT_HUB_EXCHANGE; the instructor releases and collects with nbgrader in the
+# course folder (docs/nbgrader.md).
 #
 # Settings (environment variables, all optional):
 #   POSEKIT_HUB_STATE           the hub's state folder: database, secrets, the students' homes (default build/hub)
@@ -22,7 +27,11 @@
 #   POSEKIT_HUB_ACTIVITY_EVERY  seconds between a server's activity reports to the hub (default 300, the same bound)
 #   POSEKIT_HUB_API_PORT, POSEKIT_HUB_PROXY_API_PORT   the hub's and the proxy's internal ports (8081, 8001)
 #   POSEKIT_HUB_LESSONS         the folder of lessons each student copies (default notebooks/)
+#   POSEKIT_HUB_COURSE          an nbgrader course id: students get nbgrader's Assignments panel (default: none)
+#   POSEKIT_HUB_EXCHANGE        nbgrader's exchange folder, shared by the instructor and the students
+#                               (default <state>/exchange)
 
+import json
 import os
 import shutil
 import sys
@@ -42,8 +51,13 @@ PROXY = HERE / "node_modules" / ".bin" / "configurable-http-proxy"
 CULL_TIMEOUT = int(os.environ.get("POSEKIT_HUB_CULL_TIMEOUT") or 3600)
 CULL_EVERY = min(int(os.environ.get("POSEKIT_HUB_CULL_EVERY") or 300), max(1, CULL_TIMEOUT // 2))
 ACTIVITY_EVERY = min(int(os.environ.get("POSEKIT_HUB_ACTIVITY_EVERY") or 300), max(1, CULL_TIMEOUT // 2))
+COURSE = os.environ.get("POSEKIT_HUB_COURSE") or ""
+EXCHANGE = Path(os.environ.get("POSEKIT_HUB_EXCHANGE") or STATE / "exchange").resolve()
 STATE.mkdir(parents=True, exist_ok=True)
 (STATE / "users").mkdir(exist_ok=True)
+(STATE / "users").chmod(0o711)  # each student walks through to their own home; none can list the others
+sys.path.insert(0, str(HERE))
+from posekit_spawner import ClassSpawner  # noqa: E402 - deploy/jupyterhub/posekit_spawner.py
 
 c = get_config()  # noqa: F821 - JupyterHub defines it when it loads this file
 
@@ -68,9 +82,9 @@ c.JupyterHub.authenticator_class = "shared-password"
 c.SharedPasswordAuthenticator.user_password = os.environ.get("POSEKIT_HUB_PASSWORD") or "posekit-trial"
 c.Authenticator.allow_all = True
 
-# -- TRIAL spawner: one home folder per student, every server as the hub's own system user (see the top) ------------
-c.JupyterHub.spawner_class = "simple"
-c.SimpleLocalProcessSpawner.home_dir_template = str(STATE / "users" / "{username}")
+# -- the spawner: one system user, one home and one sandbox per student (see the top; posekit_spawner.py) -----------
+c.JupyterHub.spawner_class = ClassSpawner
+c.ClassSpawner.home_dir_template = str(STATE / "users" / "{username}")
 c.Spawner.cmd = [str(Path(sys.executable).parent / "jupyterhub-singleuser")]
 c.Spawner.default_url = f"/lab/tree/{LESSON_FOLDER}"
 c.Spawner.args = [
@@ -92,6 +106,52 @@ c.Spawner.environment = {
         os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache"), "posekit"),
 }
 c.Spawner.env_keep = ["PATH", "PYTHONPATH", "VIRTUAL_ENV", "LANG", "LC_ALL", "POSEKIT_DATA_DIR", "NUMBA_CACHE_DIR"]
+
+# what a student's sandbox may read (Python, the environment, the repository, the data), what it may not see
+# (the hub's state but their own home, the instructor's folder), the class's compiled-solver cache shared read-only
+# with a private writable layer
+_needed = [sys.base_prefix, sys.prefix, str(ROOT), os.environ.get("POSEKIT_DATA_DIR"),
+           *os.environ.get("PYTHONPATH", "").split(os.pathsep)]
+c.ClassSpawner.expose_ro = [p for p in dict.fromkeys(filter(None, _needed)) if os.path.isdir(p)]
+c.ClassSpawner.hide = [str(STATE), str(ROOT / "instructor")]
+c.ClassSpawner.overlay = c.Spawner.environment["POSEKIT_NUMBA_CACHE"]
+
+# -- nbgrader for the students (POSEKIT_HUB_COURSE): the Assignments panel, on one exchange folder ------------------
+STUDENT_CONFIG = STATE / "student-config"
+"""A Jupyter configuration folder put first on every student server's JUPYTER_CONFIG_PATH."""
+
+
+def student_config(course: str, exchange: Path, folder: Path = STUDENT_CONFIG) -> Path:
+    """Write the students' Jupyter configuration: nbgrader's student extensions on (the Assignments panel, fetch,
+    submit, validate) and the instructor's off (formgrader, course list, create assignment), for ``course`` on
+    ``exchange``. ``make lab``'s environment turns them all off (the Makefile); this folder comes first."""
+    (folder / "labconfig").mkdir(parents=True, exist_ok=True)
+    student, instructor = ["assignment_list", "validate_assignment"], ["formgrader", "course_list"]
+    server = {"ServerApp": {"jpserver_extensions": {
+        **{f"nbgrader.server_extensions.{e}": True for e in student},
+        **{f"nbgrader.server_extensions.{e}": False for e in instructor}}}}
+    (folder / "jupyter_server_config.json").write_text(json.dumps(server, indent=1))
+    lab = {"disabledExtensions": {"@jupyter/nbgrader": False, "@jupyter/nbgrader:formgrader": True,
+                                  "@jupyter/nbgrader:course-list": True, "@jupyter/nbgrader:create-assignment": True},
+           "lockedExtensions": {"@jupyter/nbgrader": True}}
+    (folder / "labconfig" / "page_config.json").write_text(json.dumps(lab, indent=1))
+    (folder / "nbgrader_config.py").write_text(
+        "c = get_config()  # noqa: F821 - written by deploy/jupyterhub/jupyterhub_config.py\n"
+        f"c.CourseDirectory.course_id = {course!r}\n"
+        f"c.Exchange.root = {str(exchange)!r}\n")
+    for p in [folder, *folder.rglob("*")]:
+        p.chmod(0o755 if p.is_dir() else 0o644)
+    return folder
+
+
+if COURSE:
+    student_config(COURSE, EXCHANGE)
+    EXCHANGE.mkdir(parents=True, exist_ok=True)
+    EXCHANGE.chmod(0o777)  # nbgrader's exchange: every student fetches from it and submits into it
+    c.Spawner.environment["JUPYTER_CONFIG_PATH"] = os.pathsep.join(
+        filter(None, [str(STUDENT_CONFIG), os.environ.get("JUPYTER_CONFIG_PATH")]))
+    c.ClassSpawner.expose_ro = [*c.ClassSpawner.expose_ro, str(STUDENT_CONFIG)]
+    c.ClassSpawner.expose = [str(EXCHANGE)]
 
 
 class LessonCopyError(HTTPError):

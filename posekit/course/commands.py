@@ -168,10 +168,15 @@ def _course_autograde(args) -> int:
               "`posekit course nbgrader --out DIR`)", file=sys.stderr)
         return 2
     extra = (f"--Execute.timeout={args.cell_timeout}",) if args.cell_timeout else ()
-    rc, refused = autograde(course, find_lesson(args.lesson).stem, student=args.student, force=args.force,
-                            extra=extra)
+    rc, refused, findings = autograde(course, find_lesson(args.lesson).stem, student=args.student,
+                                      force=args.force, extra=extra, cell_timeout_s=args.cell_timeout)
     for r in refused:
         print(f"refused {r.student}: {r}", file=sys.stderr)
+    for f in findings:
+        print(f"flagged {f}", file=sys.stderr)
+    if findings:
+        print(f"{len(findings)} finding(s) flagged in the grade book: the formgrader lists the flagged notebooks; "
+              "the points kept are the fresh process's", file=sys.stderr)
     return rc or (1 if refused else 0)
 
 
@@ -217,7 +222,8 @@ def add_commands(sub) -> None:
                    help="then autograde each lesson's source version with nbgrader and write the times")
     p.add_argument("--results", help="where --trial writes its JSON (default OUT/autograde_trial.json)")
     p.set_defaults(fn=_course_nbgrader)
-    p = csub.add_parser("autograde", help="nbgrader autograde LESSON, refusing by name the folders it cannot grade")
+    p = csub.add_parser("autograde", help="nbgrader autograde LESSON, refusing by name the folders it cannot grade, "
+                                         "then every exercise checked again in a fresh process, flags in the grade book")
     p.add_argument("lesson", help="the assignment: a lesson's number or notebook stem (01 or 01_fabrik)")
     p.add_argument("--course", default=str(Path("build") / "nbgrader"), help="course folder (default build/nbgrader)")
     p.add_argument("--student", help="only this student's submission")

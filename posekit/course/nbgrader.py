@@ -23,7 +23,9 @@ metadata (``{"posekit": {"points": 2}}``).
 nbgrader's own commands do the rest (``nbgrader generate_assignment``, ``autograde``, ``export``). One step is
 added in front of ``autograde``: :func:`screen` reads each student's folder first, and ``posekit course autograde``
 runs nbgrader's ``autograde`` without the folders it refuses (a notebook that is not JSON, another lesson's
-notebook, a folder without a notebook), naming each; nbgrader then grades them as missing.
+notebook, a folder without a notebook), naming each; nbgrader then grades them as missing. One step is added after
+it: every autograded exercise is checked again in a fresh process, whose verdict is the one the grade book keeps,
+and what a person should read is flagged (:mod:`posekit.course.grading`).
 """
 
 from __future__ import annotations
@@ -319,8 +321,9 @@ def _nbgrader_cmd(*args) -> list[str]:
 
 
 def autograde(course_dir, assignment: str, student: str | None = None, force: bool = False,
-              extra: tuple[str, ...] = (), log=None) -> tuple[int, list[Refused]]:
-    """Screen the submissions of ``assignment`` (:func:`screen`), then run ``nbgrader autograde`` on the rest.
+              extra: tuple[str, ...] = (), log=None, cell_timeout_s: float | None = None):
+    """Screen the submissions of ``assignment`` (:func:`screen`), run ``nbgrader autograde`` on the rest, then
+    check every autograded exercise again in a fresh process (:func:`posekit.course.grading.regrade`).
 
     Returns
     -------
@@ -328,7 +331,14 @@ def autograde(course_dir, assignment: str, student: str | None = None, force: bo
         nbgrader's exit status (non-zero when it could not grade a submission; its log names which).
     refused : list of Refused
         The folders left out, each with its reason (nbgrader grades them as missing).
+    findings : list of posekit.course.grading.Finding
+        What was flagged in the grade book for a person to read (a changed read-only cell, a kernel that
+        disagreed with the fresh check, an answer touching the grading machinery).
     """
+    import re
+
+    from .grading import regrade
+
     refused = screen(course_dir, assignment)
     cmd = _nbgrader_cmd("autograde", assignment, *extra)
     if student:
@@ -338,7 +348,11 @@ def autograde(course_dir, assignment: str, student: str | None = None, force: bo
     if refused:
         cmd.append("--CourseDirectory.student_id_exclude=" + ",".join(sorted({r.student for r in refused})))
     proc = subprocess.run(cmd, cwd=course_dir, stdout=log, stderr=subprocess.STDOUT if log else None)
-    return proc.returncode, refused
+    if cell_timeout_s is None:
+        said = re.search(r"^c\.Execute\.timeout = (\d+)", (Path(course_dir) / "nbgrader_config.py").read_text(), re.M)
+        cell_timeout_s = float(said.group(1)) if said else CELL_TIMEOUT_S
+    findings = regrade(course_dir, assignment, students=[student] if student else None, timeout_s=cell_timeout_s)
+    return proc.returncode, refused, findings
 
 
 def trial(course_dir, chosen=None, progress: bool = False, command: str = "posekit course nbgrader --trial") -> dict:
@@ -373,8 +387,8 @@ def trial(course_dir, chosen=None, progress: bool = False, command: str = "posek
         shutil.copy(course_dir / "source" / a / f"{a}.ipynb", dest / f"{a}.ipynb")
         load = os.getloadavg()[0]
         t0, cpu0 = time.perf_counter(), _children_cpu_s()
-        rc, _ = autograde(course_dir, a, student="trial-solution", force=True, extra=("--log-level=ERROR",),
-                          log=subprocess.DEVNULL)
+        rc, _, _ = autograde(course_dir, a, student="trial-solution", force=True, extra=("--log-level=ERROR",),
+                             log=subprocess.DEVNULL)
         seconds, cpu = time.perf_counter() - t0, _children_cpu_s() - cpu0
         if rc != 0:
             raise RuntimeError(f"nbgrader autograde failed on {a} (exit {rc}); run it in {course_dir} to see why")

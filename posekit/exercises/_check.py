@@ -119,9 +119,10 @@ def report(name: str, fn, cases, atol: float = 1e-6, forbid=(), arg_names=None) 
     bool
         True when every case matches.
     """
+    allclose, asarray, shape_of, watch_class = _allclose, _asarray, _shape, _Watch  # bound before any answer runs
     for k, (args, expected, describe) in enumerate(cases):
         before = _snapshot(args)
-        watch = _Watch(forbid)
+        watch = watch_class(forbid)
         try:
             with watch:
                 got = fn(*args)
@@ -149,12 +150,12 @@ def report(name: str, fn, cases, atol: float = 1e-6, forbid=(), arg_names=None) 
                 print(f"✗ {name}: case {k + 1} differs: {describe(got, expected)}")
                 return False
             continue
-        got = _asarray(got, dtype=float) if not isinstance(got, tuple) else _asarray(got[0], dtype=float)
+        got = asarray(got, dtype=float) if not isinstance(got, tuple) else asarray(got[0], dtype=float)
         answers = expected.answers if isinstance(expected, Either) else (expected,)
-        if got.shape != _shape(answers[0]):
-            print(f"✗ {name}: case {k + 1} returned shape {got.shape}, expected {_shape(answers[0])}")
+        if got.shape != shape_of(answers[0]):
+            print(f"✗ {name}: case {k + 1} returned shape {got.shape}, expected {shape_of(answers[0])}")
             return False
-        if not any(_allclose(got, a, atol=atol) for a in answers):
+        if not any(allclose(got, a, atol=atol) for a in answers):
             nearest = min(answers, key=lambda a: float(np.abs(got - a).max()))
             print(f"✗ {name}: case {k + 1} differs: {describe(got, nearest)}")
             return False

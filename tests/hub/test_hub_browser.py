@@ -4,12 +4,21 @@ moved, every solver re-solves); one student's browser is refused the other's ser
 restart; a student whose lessons cannot be copied sees the hub's error page while the others work on; and the culler
 stops the server of a student who left, not the one of a student still working.
 
+Run as root, the hub keeps the students apart at the system level too (deploy/jupyterhub/posekit_spawner.py): a
+probe run in alice's kernel, from her JupyterLab, finds no file of bob's, no process but her own, not bob's server
+token, not the hub's database nor the instructor's solutions; and with a course configured, nbgrader's Assignments
+panel lists what the instructor released.
+
 The tests run in order on one hub (module fixture). Needs Debian's chromium and the proxy from npm (make hub installs
 it: deploy/jupyterhub/node_modules)."""
 
 from __future__ import annotations
 
 import json
+import os
+import re
+import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -28,12 +37,18 @@ STUDENTS = ("alice", "bob")
 MARK = "alice-edited-this-cell"
 
 
+COURSE = "posekit"
+ASSIGNMENT = "00_skeletons_and_poses"
+
+
 @pytest.fixture(scope="module")
 def hub(tmp_path_factory):
     if not Path(CHROMIUM).exists():
         pytest.fail(f"{CHROMIUM} not found: install Debian's chromium (make test does)")
     folder = tmp_path_factory.mktemp("hub")
-    with running_hub(folder, cull_timeout=CULL_TIMEOUT, cull_every=5, activity_every=5) as hub:
+    course = {"POSEKIT_HUB_COURSE": COURSE, "POSEKIT_HUB_EXCHANGE": str(folder / "exchange")}
+    with running_hub(folder, cull_timeout=CULL_TIMEOUT, cull_every=5, activity_every=5, extra_env=course) as hub:
+        hub.exchange = folder / "exchange"
         # each student already has lesson 01 trimmed to its panel (as tests/viz runs it): the hub must keep it
         for user in STUDENTS:
             (hub.home(user) / "lessons").mkdir(parents=True)
@@ -113,6 +128,116 @@ def test_two_students_log_in_and_run_lesson_01(hub, chromium):
         _run_panel_and_move_target(page, hub, user)
     # make lab's websocket setting reached each student's server: its kernel socket reads back TCP_NODELAY=1
     assert hub.log_text().count("websocket TCP_NODELAY=1") >= len(STUDENTS)
+
+
+PROBE = r"""
+import glob, json, os
+bob, state, root = {bob!r}, {state!r}, {root!r}
+seen = {{"uid": os.getuid()}}
+def attempt(key, do):
+    try:
+        seen[key] = repr(do())[:300]
+    except Exception as e:
+        seen[key] = "refused: " + type(e).__name__
+attempt("list bob's home", lambda: os.listdir(bob))
+attempt("read bob's lesson", lambda: open(os.path.join(bob, "lessons", {lesson!r})).read(20))
+attempt("write into bob's home", lambda: open(os.path.join(bob, "planted.txt"), "w").write("x"))
+attempt("read the hub's database", lambda: open(os.path.join(state, "jupyterhub.sqlite"), "rb").read(16))
+attempt("list the instructor's folder", lambda: os.listdir(os.path.join(root, "instructor")))
+attempt("import the solutions", lambda: __import__("posekit.exercises.solutions"))
+environs = []
+for path in glob.glob("/proc/[0-9]*/environ"):
+    try:
+        environs.append(open(path, "rb").read().decode(errors="replace"))
+    except OSError:
+        pass
+seen["processes"] = sorted(int(p.split("/")[2]) for p in glob.glob("/proc/[0-9]*/environ"))
+seen["process owners"] = sorted({{os.stat(p).st_uid for p in glob.glob("/proc/[0-9]*")}})
+seen["environ text"] = "\n".join(environs)
+print("PROBE " + json.dumps(seen))
+"""
+
+
+def _contents_put(page, url, path, model):
+    """PUT a file through a student's server's contents API, with the page's cookies (and its XSRF token)."""
+    xsrf = next((c["value"] for c in page.context.cookies() if c["name"] == "_xsrf"), "")
+    response = page.request.put(f"{url}/api/contents/{path}", data=json.dumps(model),
+                                headers={"X-XSRFToken": xsrf, "Content-Type": "application/json"})
+    assert response.status in (200, 201), f"{path}: {response.status} {response.text()[:300]}"
+
+
+def _server_pid(user) -> int:
+    """The pid of ``user``'s jupyterhub-singleuser (as root sees it)."""
+    out = subprocess.run(["ps", "-ww", "-eo", "pid,user:32,args"], capture_output=True, text=True).stdout
+    pids = [int(line.split()[0]) for line in out.splitlines()
+            if f"posekit-{user}" in line.split()[1:2] and "jupyterhub-singleuser" in line and "sandbox.py" not in line]
+    assert pids, out
+    return pids[0]
+
+
+@pytest.mark.skipif(os.geteuid() != 0, reason="keeping students apart needs the hub to run as root (docs/hub.md)")
+def test_a_students_kernel_sees_no_other_student_nor_the_hub_nor_the_solutions(hub):
+    page = hub.pages["alice"]
+    url = f"{hub.url}/user/alice"
+    # what the probe must not find: bob's server token, as root reads it from his server's environment
+    bob_env = Path(f"/proc/{_server_pid('bob')}/environ").read_bytes().decode(errors="replace").split("\0")
+    bob_token = next(v.split("=", 1)[1] for v in bob_env if v.startswith("JUPYTERHUB_API_TOKEN="))
+    assert len(bob_token) >= 16
+    source = PROBE.format(bob=str(hub.home("bob")), state=str(hub.state), root=str(ROOT), lesson=PANEL_NOTEBOOK)
+    nb = {"cells": [{"cell_type": "code", "metadata": {}, "source": source, "outputs": [], "execution_count": None}],
+          "metadata": {"kernelspec": {"name": "python3", "display_name": "Python 3", "language": "python"}},
+          "nbformat": 4, "nbformat_minor": 5}
+    _contents_put(page, url, "probe.ipynb", {"type": "notebook", "format": "json", "content": nb})
+    page.goto(f"{url}/lab/tree/probe.ipynb", timeout=60_000)
+    page.wait_for_selector("#jp-main-statusbar :text('Idle')", timeout=120_000)
+    out = page.locator(".jp-OutputArea-output", has_text="PROBE ")
+    for _ in range(8):  # a key press can arrive before the kernel is connected: press again until it runs
+        page.locator(".jp-Notebook:visible .jp-Cell .jp-InputArea-editor").first.click()
+        page.keyboard.press("Control+Enter")
+        try:
+            out.first.wait_for(timeout=15_000)
+            break
+        except Exception:  # noqa: BLE001 - playwright's TimeoutError
+            continue
+    out.first.wait_for(timeout=60_000)
+    seen = json.loads(re.search(r"PROBE (\{.*\})", out.first.inner_text(), re.S).group(1))
+    alice_uid, bob_uid = hub.home("alice").stat().st_uid, hub.home("bob").stat().st_uid
+    assert seen["uid"] == alice_uid and alice_uid not in (0, bob_uid, os.getuid())
+    for what in ("list bob's home", "read bob's lesson", "write into bob's home", "read the hub's database",
+                 "list the instructor's folder", "import the solutions"):
+        assert seen[what].startswith("refused"), f"alice could {what}: {seen[what]}"
+    assert not (hub.home("bob") / "planted.txt").exists()
+    assert seen["process owners"] == [alice_uid], seen["process owners"]  # her own processes only
+    assert len(seen["processes"]) < 10, seen["processes"]
+    assert bob_token not in seen["environ text"] and "JUPYTERHUB_USER=bob" not in seen["environ text"]
+    assert (hub.home("alice").stat().st_mode & 0o777) == 0o700
+
+
+def test_the_assignments_panel_lists_what_the_instructor_released(hub, tmp_path):
+    from posekit.course.nbgrader import scripts_on_path
+
+    scripts_on_path()  # nbgrader's grade book runs alembic by name
+    # the instructor's side, as docs/nbgrader.md has it: a course folder, one assignment generated and released
+    course = tmp_path / "course"
+    run = dict(cwd=course, check=True, capture_output=True, text=True)
+    subprocess.run([sys.executable, "-m", "posekit", "course", "nbgrader", "--out", str(course), "--lesson", "00"],
+                   check=True, capture_output=True, text=True, cwd=ROOT)
+    for step in (["generate_assignment", ASSIGNMENT], ["release_assignment", ASSIGNMENT]):
+        subprocess.run([sys.executable, "-m", "nbgrader", *step, f"--Exchange.root={hub.exchange}",
+                        f"--CourseDirectory.course_id={COURSE}"], **run)
+    page = hub.pages["alice"]
+    listed = page.request.get(f"{hub.url}/user/alice/assignments?course_id={COURSE}")
+    assert listed.status == 200, listed.text()[:500]
+    names = {a["assignment_id"]: a["status"] for a in listed.json()["value"]}
+    assert names.get(ASSIGNMENT) == "released", names
+    # and in her JupyterLab: the Assignments panel, from nbgrader's menu
+    page.goto(f"{hub.url}/user/alice/lab", timeout=60_000)
+    page.wait_for_selector(".jp-DirListing-item", timeout=60_000)
+    page.locator(".lm-MenuBar-itemLabel", has_text="Nbgrader").first.click(timeout=30_000)
+    page.locator(".lm-Menu-itemLabel", has_text="Assignment List").first.click(timeout=30_000)
+    wait_for(lambda: page.locator(f"text={ASSIGNMENT}").count() or None, 60, "the released assignment in the panel")
+    page.screenshot(path=str(tmp_path / "assignments.png"))
+    assert page.locator(".lm-Menu-itemLabel", has_text="Formgrader").count() == 0
 
 
 def test_the_studio_is_served_from_each_server(hub):
