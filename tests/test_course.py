@@ -16,6 +16,7 @@ import pytest
 from posekit.cli import main
 from posekit.course import slides as rules
 from posekit.course.lessons import find_lesson, lessons, read_notebook
+from posekit.course.solutions import _module as solutions_module
 from posekit.course.solutions import exercises, instructor_notebook, notes, solution_function
 from posekit.paths import notebooks_dir
 
@@ -110,10 +111,11 @@ def test_mark_command_checks_and_writes(tmp_path, capsys):
 
 @pytest.fixture(scope="module")
 def course(tmp_path_factory):
-    """The course page as an instructor builds it: ``make course`` (built once for every test below)."""
+    """The course page as an instructor builds it for themselves: ``make course INSTRUCTOR=1`` (built once for
+    every test below; the students' version differs only by what it leaves out, tested on its own)."""
     out = tmp_path_factory.mktemp("course")
-    r = subprocess.run(["make", "-C", str(ROOT), "course", f"COURSE_OUT={out}"], capture_output=True, text=True,
-                       timeout=600)
+    r = subprocess.run(["make", "-C", str(ROOT), "course", "INSTRUCTOR=1", f"COURSE_OUT={out}"], capture_output=True,
+                       text=True, timeout=600)
     assert r.returncode == 0, r.stdout + r.stderr
     return out
 
@@ -211,7 +213,7 @@ def test_solutions_pages_hold_the_solutions_and_notes(tmp_path):
     (path,) = build_solutions(tmp_path, only=[le], progress=False)
     page = path.read_text(encoding="utf-8")
     assert re.search(r"<title>\s*01 — FABRIK[^<]*instructor version", page)
-    assert "Instructor notes — exercise 3" in page and "exercise_fabrik_chain" in page
+    assert "Instructor notes — exercise 3" in page and "exercise_fabrik_planted" in page
     assert "raise NotImplementedError" not in page  # the stubs are replaced by the solutions
     assert "Not executed here" in page
 
@@ -276,7 +278,7 @@ def test_solutions_command_runs_the_instructor_version(tmp_path, capsys):
 
 @pytest.mark.slow
 def test_a_solution_that_fails_its_checker_fails_the_run(tmp_path, monkeypatch, capsys):
-    module = importlib.import_module("posekit.exercises.solutions.nb00")
+    module = solutions_module(find_lesson("00"))
 
     def exercise_bone_lengths(parents, global_pos):
         import numpy as np
@@ -290,9 +292,36 @@ def test_a_solution_that_fails_its_checker_fails_the_run(tmp_path, monkeypatch, 
 def test_solutions_refuse_an_unknown_lesson_or_a_missing_solution(monkeypatch, capsys):
     assert main(["exercises", "solutions", "9"]) == 2
     assert "no lesson '9': expected one of 00, 01" in capsys.readouterr().err
-    module = importlib.import_module("posekit.exercises.solutions.nb06")
+    module = solutions_module(find_lesson("06"))
     monkeypatch.delattr(module, "exercise_slerp")
-    with pytest.raises(LookupError, match="no solution 'exercise_slerp' in posekit/exercises/solutions/nb06.py"):
+    with pytest.raises(LookupError, match="no solution 'exercise_slerp' in instructor/solutions/nb06.py"):
         instructor_notebook("06")
     assert main(["exercises", "list"]) == 1
     assert re.search(r"06\s+2\s+checked exercise_slerp\s+check_slerp\s+MISSING", capsys.readouterr().out)
+
+
+def test_the_solutions_are_not_in_the_package_students_import(monkeypatch, tmp_path):
+    import posekit
+
+    assert not (Path(posekit.__file__).parent / "exercises" / "solutions").exists()
+    with pytest.raises(ModuleNotFoundError):
+        importlib.import_module("posekit.exercises.solutions")
+    assert (ROOT / "instructor" / "solutions" / "nb01.py").is_file()
+    # an instructor's copy elsewhere is found through POSEKIT_SOLUTIONS; a missing folder says what to set
+    monkeypatch.setenv("POSEKIT_SOLUTIONS", str(tmp_path / "nowhere"))
+    with pytest.raises(LookupError, match="not part of the posekit package.*POSEKIT_SOLUTIONS"):
+        solution_function(find_lesson("01"), "exercise_fabrik_planted")
+
+
+def test_the_students_slides_and_course_page_hold_no_solution(tmp_path):
+    from posekit.course.build import _row, build_slides
+
+    le = find_lesson("01")
+    said = inspect.getdoc(solution_function(le, "exercise_fabrik_planted")).splitlines()[0]  # one highlighted span
+    (students,) = build_slides(tmp_path / "students", only=[le], progress=False)
+    (teacher,) = build_slides(tmp_path / "instructor", only=[le], progress=False, instructor=True)
+    page, notes_page = students["path"].read_text(encoding="utf-8"), teacher["path"].read_text(encoding="utf-8")
+    assert html.escape(said) in notes_page or html.escape(said, quote=False) in notes_page
+    assert said not in page and html.escape(said) not in page and html.escape(said, quote=False) not in page
+    assert "reference solution" not in page and "Instructor notes — exercise" not in page
+    assert "solutions/" not in _row(le, 20) and "solutions/01_fabrik.html" in _row(le, 20, instructor=True)

@@ -173,10 +173,10 @@ def test_section_times_share_the_planned_time():
 
 def test_checked_and_open_exercises_bring_their_instructor_notes():
     le = find_lesson("01")
-    page = rules.export(read_notebook(le.path), "slides", lesson=le)
+    page = rules.export(read_notebook(le.path), "slides", lesson=le, instructor=True)
     notes = " ".join(re.findall(r'<aside class="notes">(.*?)</aside>', page, re.S))
-    assert "reference solution" in notes and "exercise_fabrik_chain" in notes  # a checked exercise: its reference solution
-    assert "Instructor notes — exercise 3" in notes  # an open one: posekit/exercises/solutions/nb01.md
+    assert "reference solution" in notes and "exercise_fabrik_planted" in notes  # a checked exercise: its solution
+    assert "Instructor notes — exercise 3" in notes  # an open one: instructor/solutions/nb01.md
 
 
 def _markdown_output(text):

@@ -1,0 +1,149 @@
+"""The exercises' checkers refuse wrong answers, each for the reason a student would make it, and accept every
+convention the exercise's text allows: a list of wrong answers per checker of lesson 01 (a wrong sign, the iteration
+budget or tolerance ignored, the input changed in place, the compared-against function called, the planted joint
+moved) and for lesson 03's pose vector (indices of one skeleton hard-coded); the machinery shared by all checkers
+(``posekit.exercises._check``)."""
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+import pytest
+
+from posekit.course.lessons import find_lesson
+from posekit.course.solutions import solution_function
+from posekit.exercises import check_fabrik_planted, check_pose_vector, check_two_bone_swivel
+from posekit.exercises._check import Either, report
+from posekit.exercises.nb01 import swivel_pole
+from posekit.ik.single_chain import fabrik_chain
+from posekit.ik.two_bone import two_bone_ik
+
+PLANTED = solution_function(find_lesson("01"), "exercise_fabrik_planted")
+SWIVEL = solution_function(find_lesson("01"), "exercise_two_bone_swivel")
+
+
+def _own_two_bone(root, mid, end, target, swivel, margin=0.0, sign=1.0, from_up=False):
+    """A student's own swivel two-bone IK, with the slips below as options."""
+    l1, l2 = np.linalg.norm(mid - root), np.linalg.norm(end - mid)
+    dist = np.linalg.norm(target - root)
+    d = np.clip(dist, abs(l1 - l2) + margin, l1 + l2 - margin)
+    u = (target - root) / dist
+    ref = np.array([0.0, 1.0, 0.0]) if from_up else mid - root
+    v0 = ref - (ref @ u) * u
+    v0 /= np.linalg.norm(v0)
+    v = np.cos(sign * swivel) * v0 + np.sin(sign * swivel) * np.cross(u, v0)
+    ca = np.clip((l1**2 + d**2 - l2**2) / (2 * l1 * d), -1, 1)
+    return root + l1 * (ca * u + np.sqrt(1 - ca**2) * v), root + d * u
+
+
+def test_the_reference_solutions_and_a_students_own_conventions_pass(capsys):
+    assert check_fabrik_planted(PLANTED) and check_two_bone_swivel(SWIVEL)
+    # clamping the distance exactly, or with section 1's 1e-6 m margin: both are what the text allows
+    assert check_two_bone_swivel(lambda *a: _own_two_bone(*a, margin=0.0))
+    assert check_two_bone_swivel(lambda *a: _own_two_bone(*a, margin=1e-6))
+    out = capsys.readouterr().out
+    assert out.count("✓") == 4 and "✗" not in out
+
+
+PLANTED_WRONG = {
+    "max_iter ignored": (lambda p, t, tol, it: PLANTED(p, t, tol, 500), "case 5 differs"),
+    "tolerance ignored": (lambda p, t, tol, it: PLANTED(p, t, 1e-9, it), "case 1 differs"),
+    "input changed in place": (lambda p, t, tol, it: _in_place(p, PLANTED(p, t, tol, it)),
+                               "changed its input `positions` in place"),
+    "the base kept instead of the end": (lambda p, t, tol, it: _fabrik_by_hand(p, t, tol, it), "case 1 differs"),
+    "posekit's FABRIK called": (lambda p, t, tol, it: fabrik_chain(p[::-1], t, tol, it)[0][::-1],
+                                "calls posekit.ik.single_chain.fabrik_chain"),
+    "not attempted": (lambda *a: (_ for _ in ()).throw(NotImplementedError), "not attempted yet"),
+    "a bug that raises": (lambda p, t, tol, it: p[99], "case 1 raised IndexError"),
+}
+
+
+def _in_place(p, new):
+    p[:] = new
+    return p
+
+
+def _fabrik_by_hand(p, t, tol, it):
+    """Section 2's FABRIK, copied: the first joint kept, the last one reaching."""
+    p = np.array(p, float)
+    d = np.linalg.norm(np.diff(p, axis=0), axis=1)
+    base = p[0].copy()
+    for _ in range(it):
+        if np.linalg.norm(p[-1] - t) <= tol:
+            break
+        p[-1] = t
+        for i in range(len(d) - 1, -1, -1):
+            p[i] = p[i + 1] + d[i] * (p[i] - p[i + 1]) / np.linalg.norm(p[i] - p[i + 1])
+        p[0] = base
+        for i in range(len(d)):
+            p[i + 1] = p[i] + d[i] * (p[i + 1] - p[i]) / np.linalg.norm(p[i + 1] - p[i])
+    return p
+
+
+@pytest.mark.parametrize("slip", PLANTED_WRONG)
+def test_check_fabrik_planted_refuses_each_wrong_answer_and_says_why(slip, capsys):
+    answer, said = PLANTED_WRONG[slip]
+    assert check_fabrik_planted(answer) is False
+    out = capsys.readouterr().out
+    assert said in out, out
+
+
+def _moves_mid(root, mid, end, target, swivel):
+    new_mid, new_end = _own_two_bone(root, mid, end, target, swivel)
+    mid[:] = new_mid
+    return mid, new_end
+
+
+SWIVEL_WRONG = {
+    "the wrong sign": (lambda *a: _own_two_bone(*a, sign=-1.0), "the middle one is"),
+    "the angle measured from up, not from the bend": (lambda *a: _own_two_bone(*a, from_up=True), "the middle one is"),
+    "the swivel ignored": (lambda r, m, e, t, s: _own_two_bone(r, m, e, t, 0.0), "case 1 differs"),
+    "no clamping": (lambda r, m, e, t, s: (_own_two_bone(r, m, e, t, s)[0], t), "case 5 differs"),
+    "input changed in place": (lambda *a: _moves_mid(*a), "changed its input `mid` in place"),
+    "posekit's two-bone IK called": (lambda r, m, e, t, s: two_bone_ik(r, m, e, t, swivel_pole(r, m, t, s))[:2],
+                                     "calls posekit.ik.two_bone.two_bone_ik"),
+    "the checker's watch switched off": (lambda *a: (sys.setprofile(None), SWIVEL(*a))[1],
+                                         "switched the checker's watch off"),
+}
+
+
+@pytest.mark.parametrize("slip", SWIVEL_WRONG)
+def test_check_two_bone_swivel_refuses_each_wrong_answer_and_says_why(slip, capsys):
+    answer, said = SWIVEL_WRONG[slip]
+    assert check_two_bone_swivel(answer) is False
+    out = capsys.readouterr().out
+    assert said in out, out
+
+
+def test_check_pose_vector_refuses_indices_of_one_skeleton(capsys):
+    from posekit.data.bandai_mini import load_bandai_mini
+    from posekit.data.metrics import body_joints
+    from posekit.transforms import to_root_space
+
+    bandai = load_bandai_mini().skeleton
+    fixed = body_joints(bandai)  # Bandai's body joints, whatever skeleton comes in
+
+    def hard_coded(skeleton, global_pos):
+        local = to_root_space(skeleton, np.asarray(global_pos)[None])[0][0]
+        return local[[j for j in fixed if j < skeleton.n_joints]].ravel()
+    assert check_pose_vector(hard_coded) is False
+    assert "case 2 returned shape" in capsys.readouterr().out
+
+
+def test_report_accepts_any_answer_of_an_either_and_names_the_nearest_when_none_matches(capsys):
+    cases = [((), Either([0.0, 1.0], [0.0, 1.1]), lambda got, exp: f"nearest {exp.tolist()}")]
+    assert report("demo", lambda: np.array([0.0, 1.1]), cases)
+    assert not report("demo", lambda: np.array([0.0, 1.2]), cases)
+    assert "nearest [0.0, 1.1]" in capsys.readouterr().out
+
+
+def test_report_sees_a_forbidden_function_called_under_another_name(capsys):
+    def reference(x):
+        return x * 2
+
+    alias = reference
+    cases = [((np.ones(2),), np.full(2, 2.0), lambda g, e: "")]
+    assert report("demo", lambda x: x * 2, cases, forbid=(reference,))
+    assert not report("demo", lambda x: alias(x), cases, forbid=(reference,))
+    assert "calls " in capsys.readouterr().out and sys.getprofile() is None
