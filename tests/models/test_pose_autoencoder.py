@@ -174,20 +174,26 @@ def test_exercise_checkers_accept_right_and_refuse_wrong_answers(capsys):
     from posekit.exercises import check_pose_vector, check_solver_loss, check_tied_decoder
     from posekit.transforms import to_root_space
 
+    from posekit.data.metrics import body_joints
+
     def right_vector(s, p):
-        return to_root_space(s, p[None])[0][0][1:].reshape(-1)
+        return to_root_space(s, p[None])[0][0][body_joints(s)].reshape(-1)
 
     def wrong_vector(s, p):  # keeps joint_Root: the trap of the issue
         return to_root_space(s, p[None])[0][0][:-1].reshape(-1)
 
+    def bandai_only(s, p):  # "the helper root is joint 0": true of Bandai's skeleton, not of another one
+        return to_root_space(s, p[None])[0][0][1:].reshape(-1)
+
     relu = lambda a: np.maximum(a, 0)  # noqa: E731
     assert check_pose_vector(right_vector) and not check_pose_vector(wrong_vector)
+    assert not check_pose_vector(bandai_only)
     assert check_tied_decoder(lambda z, w1, w2, w3: relu(relu(z @ w3) @ w2) @ w1)
     assert not check_tied_decoder(lambda z, w1, w2, w3: relu(relu(relu(z @ w3) @ w2) @ w1))
     cols_mse = lambda d, t, c, k: (((d - t)[:, c]) ** 2).mean() + k * (np.delete(d - t, c, axis=1) ** 2).mean()  # noqa
     assert check_solver_loss(cols_mse) and not check_solver_loss(lambda d, t, c, k: ((d - t) ** 2).mean())
     out = capsys.readouterr().out
-    assert out.count("✓") == 3 and out.count("✗") == 3
+    assert out.count("✓") == 3 and out.count("✗") == 4
 
 
 def test_solver_panel_shows_a_refusal_and_keeps_the_other_views(mini):
