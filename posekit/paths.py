@@ -18,7 +18,7 @@ import contextlib
 import os
 from pathlib import Path
 
-__all__ = ["samples_dir", "weights_path", "find_checkpoint", "weights_note", "held_checkpoints", "use_skeleton", "user_weights_dir",
+__all__ = ["samples_dir", "weights_path", "find_checkpoint", "checkpoint_identity", "weights_note", "held_checkpoints", "use_skeleton", "user_weights_dir",
            "use_weights", "shared_data_dir", "require_shared_data",
            "notebooks_dir", "course_assets_dir"]
 
@@ -69,6 +69,13 @@ def _header(path: Path):
             skel = d.get("skeleton") or {}
             _HEADERS[key] = (tuple(field(n) for n in IDENTITY_FIELDS), tuple(skel.get("names") or ()))
     return _HEADERS[key]
+
+
+def checkpoint_identity(path):
+    """What the checkpoint at ``path`` says it is (its :data:`IDENTITY_FIELDS` values), or None when the file is
+    missing or not a posekit checkpoint."""
+    h = _header(Path(path))
+    return None if h is None else h[0]
 
 
 def _describe(identity) -> str:

@@ -288,6 +288,7 @@ register_trainer(
     used_by="lesson 04 (04_aegan_latent_space.ipynb), the latent-opt solvers, posekit bench ik",
     takes="about 9-11 minutes on one core (it trains on one thread: 8 min 35 s measured idle, 11 min "
           "beside another training)",
+    shipped=lambda args: "data_samples/weights/aegan.pt",
     args=[arg("--data", default="bandai-mini", help="training data: bandai-mini (default, its own split), "
               "or any posekit data set name / path (split by clip)")]
          + [arg("--" + key.replace("_", "-"), dest=key, type=type(DEFAULTS[key]), default=DEFAULTS[key],
