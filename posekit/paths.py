@@ -189,6 +189,8 @@ def use_weights(folder):
     ------
     FileNotFoundError
         ``folder`` is not a folder, or holds no ``.pt`` file (said before any work).
+    ValueError
+        A ``.pt`` file in ``folder`` is not a posekit checkpoint (named, before any work).
     """
     path = Path(folder).expanduser()
     if not path.is_dir():
@@ -197,6 +199,12 @@ def use_weights(folder):
     if not any(path.glob("*.pt")):
         raise FileNotFoundError(f"--weights {folder}: the folder holds no .pt file (expected the checkpoints of "
                                 "`posekit train ... --out DIR/FILE.pt`)")
+    junk = [p.name for p in sorted(path.glob("*.pt")) if _header(p) is None]
+    if junk:  # said of the user's file, before a model falls back on the shipped one and is blamed for it
+        raise ValueError(f"--weights {folder}: {', '.join(junk[:3])}{', ...' if len(junk) > 3 else ''} "
+                         f"{'is' if len(junk) == 1 else 'are'} not a posekit checkpoint (not readable as one); "
+                         "expected only the checkpoints of `posekit train ... --out DIR/FILE.pt` in the folder "
+                         "(move the file out, or train it again)")
     _USER_WEIGHTS.append(path)
     try:
         yield path

@@ -116,7 +116,7 @@ def app_studio(data: str | None = None, solvers=None, export_dir=None):
         try:
             with use_weights(weights):
                 pass
-        except FileNotFoundError as e:
+        except (FileNotFoundError, ValueError) as e:
             raise FileNotFoundError(str(e).replace("--weights", "STUDIO_WEIGHTS", 1)) from None
     skeleton, (start, goal, effectors, tolerance_of), (available, refused) = _app_case(data)
     _return_freed_memory()
