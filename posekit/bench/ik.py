@@ -399,9 +399,9 @@ def run(motions, solvers=("fabrik", "ccd", "dls"), effector_sets=("2", "5"), n_c
                 built[name] = make_solver(name, s)
             except ValueError as err:
                 if not every:  # named in --solvers: refused, with what the weights folder holds (SKIP_RULE)
-                    raise ValueError(f"bench ik: solver {name!r}, named in --solvers, cannot pose {first.source!r}: "
-                                     f"{err}" + (f"; {held}" if held else "") + "; leave it out of --solvers, or "
-                                     "give --solvers all to skip every solver that cannot pose this data") from None
+                    raise ValueError(f"{name!r}, named in --solvers, cannot pose this data: {err}"
+                                     + (f"; {held}" if held else "")
+                                     + "; leave it out, or give --solvers all to skip it") from None
                 skipped[name] = str(err)
     if skipped:
         first_reason = next(iter(skipped.values()))
