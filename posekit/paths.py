@@ -18,7 +18,8 @@ import contextlib
 import os
 from pathlib import Path
 
-__all__ = ["samples_dir", "weights_path", "find_checkpoint", "checkpoint_identity", "weights_note", "held_checkpoints", "use_skeleton", "user_weights_dir",
+__all__ = ["samples_dir", "weights_path", "find_checkpoint", "checkpoint_identity", "weights_note",
+           "held_checkpoints", "use_skeleton", "user_weights_dir",
            "use_weights", "shared_data_dir", "require_shared_data",
            "notebooks_dir", "course_assets_dir"]
 

@@ -52,7 +52,8 @@ from .roofline import CLOCK
 
 __all__ = ["Method", "MethodContext", "register_method", "unregister_method", "method_names", "get_method",
            "resolve_solvers", "evaluate_solver", "case_effectors", "effector_set_names", "SolverRefused", "RANDOM",
-           "EFFECTOR_CHOICES", "weights_and_data", "SKIP_RULE", "run", "PAPER", "PAPER_KB", "TABLES", "TABLE_LABELS", "default_data"]
+           "EFFECTOR_CHOICES", "weights_and_data", "SKIP_RULE",
+           "run", "PAPER", "PAPER_KB", "TABLES", "TABLE_LABELS", "default_data"]
 
 PAPER = {
     ("fabrik", "2"): 6.56,  # Victor et al. 2021, Table 1: full-body FABRIK runtime, ms

@@ -62,4 +62,6 @@ def verdicts(rows: list[dict], sets=None, starts=None) -> list[str]:
 def footer(rows: list[dict], args=None) -> str:
     """The sentences of :func:`verdicts` as a paragraph under a benchmark's text tables (empty when none)."""
     said = verdicts(rows)
-    return ("Learned solvers against plain DLS and FABRIK (median MPJPE to 0.1 mm):\n" + "\n".join(said)) if said else ""
+    if not said:
+        return ""
+    return "Learned solvers against plain DLS and FABRIK (median MPJPE to 0.1 mm):\n" + "\n".join(said)

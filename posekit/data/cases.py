@@ -40,7 +40,8 @@ from ..transforms import rotate_y_rotations, to_root_space
 from .dataset import sample_pairs, split_by_clip
 from .motion import MotionSet
 
-__all__ = ["Cases", "build_cases", "case_split", "held_out_clips", "placement_joints", "START_CONDITIONS", "START_ALIASES",
+__all__ = ["Cases", "build_cases", "case_split", "held_out_clips", "placement_joints",
+           "START_CONDITIONS", "START_ALIASES",
            "SAME_CLIP_MAX_S", "REST_TOL", "start_condition", "rest_start"]
 
 START_CONDITIONS = {
@@ -167,7 +168,8 @@ def _rest_refusal(motions: MotionSet, frames) -> str | None:
     if len(dev) == 0 or dev.max() <= REST_TOL:
         return None
     j = body[int(np.argmax(dev))]
-    return (f"the rest start (--start rest; start='rest' in Python) needs every joint below the pelvis to keep its skeleton offset (within "
+    return (f"the rest start (--start rest; start='rest' in Python) needs every joint below the pelvis to keep its "
+            f"skeleton offset (within "
             f"{REST_TOL:g} m); in {s.name or motions.source!r} the translation of {s.names[j]} differs by "
             f"{dev.max() * 1e3:.3g} mm in held-out frames, so the rest pose cannot reach those targets; "
             "use the same-clip or other-clip start (--start same-clip,other-clip)")

@@ -295,4 +295,5 @@ register_trainer(
                 help=f"{what} (default: {DEFAULTS[key]})") for key, what in _WHAT]
          + [arg("--dense", action="store_true", help="dense layers of equal width instead of SPLs (a comparison)"),
             arg("--seed", type=int, default=0, help="(default: 0)"),
-            arg("--out", default=None, help="checkpoint file (default data_samples/weights/aegan.pt)")])
+            arg("--out", default=None, help="checkpoint file (default data_samples/weights/aegan.pt; required "
+                                          "with another --data: a .pt file, checked before training)")])

@@ -248,4 +248,5 @@ register_trainer(
                 "as in the authors' code (default: untied, its own weights and biases: measured better in "
                 "lesson 03)"),
             arg("--seed", type=int, default=0, help="(default: 0)"),
-            arg("--out", default=None, help="checkpoint file (default data_samples/weights/ae_solvers.pt)")])
+            arg("--out", default=None, help="checkpoint file (default data_samples/weights/ae_solvers.pt; required "
+                                          "with another --data: a .pt file, checked before training)")])

@@ -327,4 +327,5 @@ register_trainer(
             arg("--fixed-weights", action="store_true",
                 help="every joint weighted 1 instead of the randomized min(W_M, 1/sigma) (Table 2's ablation)"),
             arg("--seed", type=int, default=0, help="(default: 0)"),
-            arg("--out", default=None, help="checkpoint file (default data_samples/weights/protores*.pt)")])
+            arg("--out", default=None, help="checkpoint file (default data_samples/weights/protores*.pt; required "
+                                          "with another --data: a .pt file, checked before training)")])
