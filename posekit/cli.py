@@ -199,6 +199,9 @@ def _train(args) -> int:
 
     if args.list:
         return _train_list(args)
+    from .learn.trainers import check_out
+
+    check_out(get_trainer(args.trainer), args)  # a place to write refused before the device, the data, any training
     if launched_world() <= 1:
         with start(args.device):  # the device checked before any data is read
             return get_trainer(args.trainer).run(args)

@@ -18,7 +18,8 @@ import contextlib
 import os
 from pathlib import Path
 
-__all__ = ["samples_dir", "weights_path", "find_checkpoint", "weights_note", "held_checkpoints", "use_skeleton", "user_weights_dir",
+__all__ = ["samples_dir", "weights_path", "find_checkpoint", "checkpoint_identity", "weights_note",
+           "held_checkpoints", "use_skeleton", "user_weights_dir",
            "use_weights", "shared_data_dir", "require_shared_data",
            "notebooks_dir", "course_assets_dir"]
 
@@ -69,6 +70,13 @@ def _header(path: Path):
             skel = d.get("skeleton") or {}
             _HEADERS[key] = (tuple(field(n) for n in IDENTITY_FIELDS), tuple(skel.get("names") or ()))
     return _HEADERS[key]
+
+
+def checkpoint_identity(path):
+    """What the checkpoint at ``path`` says it is (its :data:`IDENTITY_FIELDS` values), or None when the file is
+    missing or not a posekit checkpoint."""
+    h = _header(Path(path))
+    return None if h is None else h[0]
 
 
 def _describe(identity) -> str:
@@ -182,6 +190,8 @@ def use_weights(folder):
     ------
     FileNotFoundError
         ``folder`` is not a folder, or holds no ``.pt`` file (said before any work).
+    ValueError
+        A ``.pt`` file in ``folder`` is not a posekit checkpoint (named, before any work).
     """
     path = Path(folder).expanduser()
     if not path.is_dir():
@@ -190,6 +200,12 @@ def use_weights(folder):
     if not any(path.glob("*.pt")):
         raise FileNotFoundError(f"--weights {folder}: the folder holds no .pt file (expected the checkpoints of "
                                 "`posekit train ... --out DIR/FILE.pt`)")
+    junk = [p.name for p in sorted(path.glob("*.pt")) if _header(p) is None]
+    if junk:  # said of the user's file, before a model falls back on the shipped one and is blamed for it
+        raise ValueError(f"--weights {folder}: {', '.join(junk[:3])}{', ...' if len(junk) > 3 else ''} "
+                         f"{'is' if len(junk) == 1 else 'are'} not a posekit checkpoint (not readable as one); "
+                         "expected only the checkpoints of `posekit train ... --out DIR/FILE.pt` in the folder "
+                         "(move the file out, or train it again)")
     _USER_WEIGHTS.append(path)
     try:
         yield path

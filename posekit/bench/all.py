@@ -39,20 +39,23 @@ from ..ik.registry import solver_info
 from .ik import RANDOM, TABLE_LABELS, TABLES as IK_TABLES, WEIGHTS_HELP, _group_title, default_data, effector_set_names, resolve_solvers
 from .ik import run as run_ik
 from .all_plot import plot
+from .verdicts import footer as verdict_footer, verdicts
 from .plugin import arg, register_benchmark
 from ..provenance import machine, today
 
-__all__ = ["run", "write_report", "markdown", "plot", "pareto", "winners", "default_out", "FILES", "KEYS"]
+__all__ = ["run", "write_report", "markdown", "plot", "pareto", "winners", "verdicts", "default_out", "FILES", "KEYS"]
 
 FILES = ("bench_all.json", "bench_all.md", "bench_all.png")
 """What :func:`write_report` writes into its folder."""
 
 KEYS = ("method", "start", "effectors", "lesson", "kinds", "latency_ms_median", "mpjpe_mm_median",
         "effector_error_mm_median", "effector_error_deg_median", "natural_mm_median", "converged_fraction",
-        "bone_length_error_mm_max", "cases", "refused_cases", "refused_reason", "learned_kept_fraction", "data")
+        "bone_length_error_mm_max", "cases", "refused_cases", "refused_reason", "learned_kept_fraction", "finish_rule",
+        "data")
 """The keys of every row (definitions in :mod:`posekit.bench.ik`; ``refused_cases`` and ``refused_reason``: the
 cases the solver refused and the first refusal's sentence; ``learned_kept_fraction``: for a learned solver with an
-exact finish, the share of its cases finished from the learned pose, else None)."""
+exact finish, the share of its cases finished from the learned pose, else None; ``finish_rule``: how such a finish
+chose its answer, ``"natural"`` when a naturalness comparison ran, ``"learned"`` when none could, else None)."""
 
 _DIGITS = {"latency_ms_median": 4, "mpjpe_mm_median": 3, "effector_error_mm_median": 3,
            "effector_error_deg_median": 3, "natural_mm_median": 3, "converged_fraction": 4,
@@ -83,6 +86,26 @@ def _check(n_cases, starts, effectors) -> tuple:
     if not names:
         raise ValueError(f"no start condition given; valid: {', '.join(START_CONDITIONS)}")
     return names, effector_set_names(effectors)
+
+
+def _fall_back(motions, data: str, starts: tuple, seed: int) -> tuple:
+    """``starts`` with ``other-clip`` replaced by ``same-clip`` (and a warning saying so) when the held-out frames
+    of ``motions`` come from fewer than two clips, as with a one-clip data set (where ``posekit bench ik`` holds out
+    the end of every clip): a start from another held-out clip cannot be drawn there."""
+    if "other-clip" not in starts:
+        return starts
+    from ..data.cases import held_out_clips
+
+    with warnings.catch_warnings():  # the split's own warning comes once, from the cases
+        warnings.simplefilter("ignore")
+        n = held_out_clips(motions, seed)
+    if n >= 2:
+        return starts
+    kept = tuple(dict.fromkeys("same-clip" if s == "other-clip" else s for s in starts))
+    warnings.warn(f"bench all: {data!r} has {n} held-out clip(s), too few for the other-clip start (a frame of "
+                  f"another held-out clip); measuring from same-clip instead, as --start {','.join(kept)} would",
+                  UserWarning, stacklevel=3)
+    return kept
 
 
 def run(n_cases: int = 200, starts=("rest", "other-clip"), effectors=("2", "5", RANDOM), seed: int = 0, out=None,
@@ -120,7 +143,9 @@ def run(n_cases: int = 200, starts=("rest", "other-clip"), effectors=("2", "5", 
     Raises
     ------
     ValueError
-        For ``n_cases < 1``, an unknown start condition or an unknown effector set (before any work).
+        For ``n_cases < 1``, an unknown start condition or an unknown effector set (before any work). A data set
+        whose held-out frames come from one clip is measured from ``same-clip`` instead of ``other-clip``, with a
+        warning.
         A solver that refuses a set's effectors is left out of that set (``meta["refused"]``), not an error.
     """
     from ..data.sources import open_dataset
@@ -133,6 +158,7 @@ def run(n_cases: int = 200, starts=("rest", "other-clip"), effectors=("2", "5", 
     data = default_data(names) if data is None else str(data)
     t0 = time.perf_counter()
     motions = open_dataset(data)
+    starts = _fall_back(motions, data, starts, int(seed))
     refused = {}
     with warnings.catch_warnings():  # the refusals go into the report instead
         warnings.filterwarnings("ignore", message="bench ik: not measured")
@@ -150,6 +176,7 @@ def run(n_cases: int = 200, starts=("rest", "other-clip"), effectors=("2", "5", 
             row[k] = None if v is None else round(float(v), digits)
         row["cases"] = int(r["cases"])
         row["refused_cases"], row["refused_reason"] = int(r.get("refused_cases") or 0), r.get("refused_reason")
+        row["finish_rule"] = r.get("finish_rule")
         row["data"] = data
         rows.append(row)
     rows.sort(key=lambda r: (sets.index(r["effectors"]), starts.index(r["start"]), r["mpjpe_mm_median"], r["method"]))
@@ -322,10 +349,7 @@ def markdown(rows: list[dict], meta: dict) -> str:
            + "; *converged*, the share of cases with every effector within its tolerance (1 mm, 1 degree)"
            + ("; *refused*, the cases the solver refused (counted as not converged; the other columns are over the "
               "cases it solved)" if any(r.get("refused_cases") for r in rows) else "")
-           + ("; *learned kept*, for a learned solver with an exact finish (`+dls`), the share of cases whose "
-              "answer is DLS's from the learned pose — in the rest DLS from the start pose gave the more natural "
-              "answer, or the only exact one, and the learned pose was discarded"
-              if any(r.get("learned_kept_fraction") is not None for r in rows) else "")
+           + _kept_text(rows, meta)
            + ". *lesson*: the notebook that introduces the solver.", "",
            f"Machine: {m['platform']}, {m['processor']}, {m['cpu_count']} CPUs"
            + (f"; made on {meta['date']}" if meta.get("date") else "") + "; the run took "
@@ -355,6 +379,10 @@ def markdown(rows: list[dict], meta: dict) -> str:
             f"Per effector set and start: the closest pose of any solver, the closest of those that meet their "
             f"effectors (converged in at least {100 * EXACT:.0f}% of the cases), and plain DLS and FABRIK "
             "(MPJPE, converged, ms per solve).", "", _winners_table(rows, sets, starts)]
+    said = verdicts(rows, sets, starts)
+    if said:
+        out += ["", "Learned solvers against plain DLS and FABRIK (median MPJPE, shown to 0.1 mm: a tie is not "
+                "closer):", ""] + [f"- {v}" for v in said]
     for e in sets:
         for st in starts:
             cell = [r for r in rows if r["effectors"] == e and r["start"] == st]
@@ -363,6 +391,30 @@ def markdown(rows: list[dict], meta: dict) -> str:
     out += ["", "## Reading the scatter", "", "![time per solve against MPJPE](bench_all.png)", "",
             _reading(rows, starts, sets)]
     return "\n".join(out) + "\n"
+
+
+def _kept_text(rows: list[dict], meta: dict) -> str:
+    """The *learned kept* column's definition, saying how the finishes chose — a naturalness comparison only where
+    one ran (``finish_rule``)."""
+    finished = [r for r in rows if r.get("learned_kept_fraction") is not None]
+    if not finished:
+        return ""
+    text = ("; *learned kept*, for a learned solver with an exact finish (`+dls`), the share of cases whose answer "
+            "is DLS's from the learned pose — in the rest DLS from the start pose gave the answer kept and the "
+            "learned pose was discarded")
+    rules = {r.get("finish_rule") for r in finished}
+    natural = sorted({r["method"] for r in finished if r.get("finish_rule") == "natural"})
+    learned = sorted({r["method"] for r in finished if r.get("finish_rule") == "learned"})
+    if rules == {"natural"}:
+        return text + (f" (the more natural of two exact answers: nearer a training pose of `{meta['data']}`'s "
+                       "training split; or the only exact one)")
+    if natural:
+        text += (" (" + ", ".join(f"`{n}`" for n in natural) + f": the more natural of two exact answers, nearer a "
+                 f"training pose of `{meta['data']}`'s training split, or the only exact one)")
+    if learned:
+        text += (" (" + ", ".join(f"`{n}`" for n in learned) + ": no naturalness comparison ran, no training poses "
+                 "of this skeleton; the start's answer only where DLS got stuck from the learned pose)")
+    return text
 
 
 def _reading(rows: list[dict], starts: list, sets: list) -> str:
@@ -454,4 +506,4 @@ register_benchmark(
                  "do not write)"),
     ],
     tables=TABLES, labels={**TABLE_LABELS, "lesson": "lesson", "method": "solver"}, header=_header,
-    group_by="start", group_title=_group_title, lesson="notebooks/06_posing_studio.ipynb")
+    group_by="start", group_title=_group_title, footer=verdict_footer, lesson="notebooks/06_posing_studio.ipynb")

@@ -47,11 +47,13 @@ from ..ik.api import EFFECTOR_SETS, effector_set
 from ..ik.registry import make_solver, solver_info, solver_names
 from ..plugins import Registry
 from .plugin import arg, register_benchmark
+from .verdicts import footer as verdict_footer
 from .roofline import CLOCK
 
 __all__ = ["Method", "MethodContext", "register_method", "unregister_method", "method_names", "get_method",
            "resolve_solvers", "evaluate_solver", "case_effectors", "effector_set_names", "SolverRefused", "RANDOM",
-           "EFFECTOR_CHOICES", "weights_and_data", "run", "PAPER", "PAPER_KB", "TABLES", "TABLE_LABELS", "default_data"]
+           "EFFECTOR_CHOICES", "weights_and_data", "SKIP_RULE",
+           "run", "PAPER", "PAPER_KB", "TABLES", "TABLE_LABELS", "default_data"]
 
 PAPER = {
     ("fabrik", "2"): 6.56,  # Victor et al. 2021, Table 1: full-body FABRIK runtime, ms
@@ -250,6 +252,9 @@ def evaluate_solver(solver, cases: Cases, effectors: str, tolerance: float = 1e-
     the cases it solved, and ``converged_fraction`` is over every case (a refused case did not converge).
     ``learned_kept_fraction``, for a learned solver with an exact finish (:mod:`posekit.ik.finish`), is the share
     of its solved cases whose result was finished from the learned pose (not DLS from the start pose).
+    ``finish_rule``, for such a solver, is how it chose between its two answers: ``"natural"`` (the nearer a
+    training pose: a naturalness comparison ran) or ``"learned"`` (no training poses of this skeleton: the
+    learned pose's answer unless DLS got stuck there); None for every other solver.
 
     Raises
     ------
@@ -301,7 +306,8 @@ def evaluate_solver(solver, cases: Cases, effectors: str, tolerance: float = 1e-
     row = {"cases": len(cases), "latency_ms_median": float(np.median(lat) * 1e3), **scores,
            "iterations_median": float(np.median(iters)), "memory_kb": round(peak / 1024, 1),
            "refused_cases": len(reasons), "refused_reason": reasons[min(reasons)] if reasons else None,
-           "learned_kept_fraction": float(np.mean(kept)) if kept else None}
+           "learned_kept_fraction": float(np.mean(kept)) if kept else None,
+           "finish_rule": getattr(solver, "choose", None) if kept else None}
     if hasattr(solver, "sizes_kb") and effectors in EFFECTOR_SETS:  # a learned solver: the networks one solve runs
         row.update(solver.sizes_kb(EFFECTOR_SETS[effectors]))
     return row
@@ -381,20 +387,25 @@ def run(motions, solvers=("fabrik", "ccd", "dls"), effector_sets=("2", "5"), n_c
     if natural:
         nat = NaturalnessIndex(s, motions.global_pos[first.train_frames], seed=seed)
         floor = nat.distance(first.target_pos)  # the targets are the same under every start condition
+    from ..ik.finish import judged_on
     from ..paths import held_checkpoints, use_skeleton
 
     built, skipped = {}, {}
-    with use_skeleton(s.names):  # among several checkpoints of one model in --weights DIR: the one for this data
+    held = held_checkpoints()
+    # among several checkpoints of one model in --weights DIR: the one for this data; an exact finish judges its
+    # answers against this data's training poses (the natural column's), whatever skeleton it is
+    with use_skeleton(s.names), judged_on(motions, first.train_frames):
         for name in solvers:
             try:
                 built[name] = make_solver(name, s)
             except ValueError as err:
-                if not every:  # asked for by name: its refusal (e.g. weights made for another skeleton) is the answer
-                    raise
+                if not every:  # named in --solvers: refused, with what the weights folder holds (SKIP_RULE)
+                    raise ValueError(f"{name!r}, named in --solvers, cannot pose this data: {err}"
+                                     + (f"; {held}" if held else "")
+                                     + "; leave it out, or give --solvers all to skip it") from None
                 skipped[name] = str(err)
     if skipped:
         first_reason = next(iter(skipped.values()))
-        held = held_checkpoints()
         warnings.warn(f"bench ik: skipping solver(s) {', '.join(map(repr, skipped))} on {first.source!r} "
                       f"({first_reason[:200]}{'...' if len(first_reason) > 200 else ''})"
                       + (f"; a learned solver takes a checkpoint from your weights folder when the checkpoint says it "
@@ -493,8 +504,17 @@ WEIGHTS_HELP = ("a folder of checkpoints you trained (posekit train NAME --data 
                 "masked-fcr or transformer: train protores --arch ...); of several checkpoints of one model, the one "
                 "trained for --data's skeleton, else the one with the shipped file's name (ae_solvers.pt, aegan.pt, "
                 "protores.pt, protores_masked_fcr.pt, protores_transformer.pt); a model DIR lacks is the shipped one "
-                "(made for the Bandai skeleton: skipped on other data); give --data too")
+                "(made for the Bandai skeleton); a .pt in DIR that is not a posekit checkpoint is refused, by name; "
+                "give --data too. ")
 """``--weights DIR`` of ``posekit bench ik`` and ``bench all``: how a checkpoint is found (:func:`posekit.paths.find_checkpoint`)."""
+
+SKIP_RULE = ("A learned solver that cannot pose --data's skeleton (a model made for another one) is refused, exit "
+             "status 2, with the reason and what DIR holds, when --solvers names it; it is skipped, with a warning "
+             "that names it, under --solvers all and in posekit bench all.")
+"""The one rule of ``posekit bench ik`` and ``bench all`` for a solver that cannot pose the data (both commands'
+``--help`` and docs/own-mocap.md say it)."""
+
+WEIGHTS_HELP += SKIP_RULE
 
 
 def weights_and_data(args, solvers) -> tuple:
@@ -577,4 +597,4 @@ register_benchmark(
         arg("--no-peers", action="store_true", help="skip peer libraries (ikpy)"),
     ],
     tables=TABLES, labels=TABLE_LABELS, header=_header, group_by="start", group_title=_group_title, wide=True,
-    lesson="notebooks/01_fabrik.ipynb")
+    footer=verdict_footer, lesson="notebooks/01_fabrik.ipynb")

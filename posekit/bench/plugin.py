@@ -50,6 +50,7 @@ class Benchmark:
     group_title: Callable | None = None
     wide: bool = False
     lesson: str = ""
+    footer: Callable | None = None
 
     def namespace(self, **overrides) -> argparse.Namespace:
         """The arguments ``run`` receives, at their defaults unless overridden (``json=False``)."""
@@ -71,7 +72,7 @@ class Benchmark:
 
     def render(self, rows: list[dict], args=None) -> str:
         """The text output of ``posekit bench NAME``: the header, then the tables (once per value of
-        ``group_by``, under its title), or a single table of every column with ``args.wide``."""
+        ``group_by``, under its title), or a single table of every column with ``args.wide``, then the footer."""
         parts = []
         if self.header is not None:
             parts.append(_wrap(self.header(rows, args)))
@@ -86,6 +87,8 @@ class Benchmark:
                 parts.append(format_table(grouped, self.wide_columns(), self.labels))
             else:
                 parts.append(format_tables(grouped, list(self.tables), self.labels))
+        if self.footer is not None:
+            parts.append(_wrap(self.footer(rows, args)))
         return "\n\n".join(p for p in parts if p)
 
 
@@ -99,7 +102,7 @@ _REGISTRY = Registry("benchmark", catalogue.BENCHMARKS)
 def register_benchmark(name: str, run: Callable, *, help: str = "", args=(), tables=(), labels=None,
                        header: Callable | None = None, group_by: str | None = None,
                        group_title: Callable | None = None, wide: bool = False, lesson: str = "",
-                       replace: bool = False) -> Benchmark:
+                       footer: Callable | None = None, replace: bool = False) -> Benchmark:
     """Make ``posekit bench NAME`` run a benchmark.
 
     Parameters
@@ -126,6 +129,8 @@ def register_benchmark(name: str, run: Callable, *, help: str = "", args=(), tab
         Offer ``--wide``: one table with every column.
     lesson : str
         The notebook that introduces it.
+    footer : callable, optional
+        ``footer(rows, args) -> str``: lines printed under the tables (empty: none).
     replace : bool
         Redefine an existing name (e.g. while editing a notebook); otherwise a taken name is an error.
     """
@@ -135,7 +140,7 @@ def register_benchmark(name: str, run: Callable, *, help: str = "", args=(), tab
         if not isinstance(a, Arg):
             raise ValueError(f"benchmark {name!r}: arguments must be made with arg(...), got {a!r}")
     b = Benchmark(name, run, help, tuple(args), tuple(tables), dict(labels or {}), header, group_by, group_title,
-                  bool(wide), lesson)
+                  bool(wide), lesson, footer)
     return _REGISTRY.add(name, b, owner=getattr(run, "__module__", ""), replace=replace)
 
 

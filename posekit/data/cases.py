@@ -40,7 +40,8 @@ from ..transforms import rotate_y_rotations, to_root_space
 from .dataset import sample_pairs, split_by_clip
 from .motion import MotionSet
 
-__all__ = ["Cases", "build_cases", "case_split", "placement_joints", "START_CONDITIONS", "START_ALIASES",
+__all__ = ["Cases", "build_cases", "case_split", "held_out_clips", "placement_joints",
+           "START_CONDITIONS", "START_ALIASES",
            "SAME_CLIP_MAX_S", "REST_TOL", "start_condition", "rest_start"]
 
 START_CONDITIONS = {
@@ -167,10 +168,11 @@ def _rest_refusal(motions: MotionSet, frames) -> str | None:
     if len(dev) == 0 or dev.max() <= REST_TOL:
         return None
     j = body[int(np.argmax(dev))]
-    return (f"start='rest' needs every joint below the pelvis to keep its skeleton offset (within "
+    return (f"the rest start (--start rest; start='rest' in Python) needs every joint below the pelvis to keep its "
+            f"skeleton offset (within "
             f"{REST_TOL:g} m); in {s.name or motions.source!r} the translation of {s.names[j]} differs by "
             f"{dev.max() * 1e3:.3g} mm in held-out frames, so the rest pose cannot reach those targets; "
-            "use start='same-clip' or 'other-clip'")
+            "use the same-clip or other-clip start (--start same-clip,other-clip)")
 
 
 def _same_clip_pairs(motions: MotionSet, n: int, rng, frames, max_s: float):
@@ -196,8 +198,9 @@ def _other_clip_starts(motions: MotionSet, targets, frames, rng):
     clip = motions.clip_id[frames]
     n_clips = len(np.unique(clip))
     if n_clips < 2:
-        raise ValueError(f"start='other-clip' needs at least two held-out clips; {motions.source!r} has "
-                         f"{n_clips} (use start='same-clip')")
+        raise ValueError(f"the other-clip start (--start other-clip; start='other-clip' in Python) needs at least two "
+                         f"held-out clips; {motions.source!r} has {n_clips} (use the same-clip start: --start "
+                         "same-clip, or --start rest,same-clip for posekit bench all)")
     t_clip = motions.clip_id[targets]
     lo = np.searchsorted(clip, t_clip, side="left")
     hi = np.searchsorted(clip, t_clip, side="right")
@@ -237,6 +240,12 @@ def rest_start(motions: MotionSet, train_frames):
     k = int(np.argmin(np.linalg.norm(local - local.mean(0), axis=-1).mean(-1)))
     q, root = rotate_y_rotations(motions.local_rot[pick[k]], motions.root_pos[pick[k]] - origin[k], -angle[k])
     return q, root, False
+
+
+def held_out_clips(motions: MotionSet, seed: int = 0, split=(0.8, 0.1, 0.1)) -> int:
+    """How many clips the held-out frames of :func:`build_cases` come from (the ``other-clip`` start needs two)."""
+    test = case_split(motions, seed, split)[2]
+    return len(np.unique(motions.clip_id[test]))
 
 
 def build_cases(motions: MotionSet, n_cases: int = 1000, seed: int = 0, start: str = "same-clip",

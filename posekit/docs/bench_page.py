@@ -102,7 +102,7 @@ def _provenance(name: str, d: dict) -> str:
 
 # --------------------------------------------------------------------------------------------- the sections
 def _bench_all(name: str, d: dict) -> str:
-    from ..bench.all import EXACT, winners
+    from ..bench.all import EXACT, verdicts, winners
 
     rows = d["rows"]
 
@@ -126,6 +126,9 @@ def _bench_all(name: str, d: dict) -> str:
         f"that converged, median ms per solve. *Meets its effectors*: converged in at least {_num(EXACT)} of the "
         "cases.",
         "\n".join(lines),
+        *(["**Learned solvers against plain DLS and FABRIK** (median MPJPE, shown to 0.1 mm: a tie is not closer).",
+           "\n".join(f"- {v}" for v in verdicts(rows, list(d["effectors"]), list(d["starts"])))]
+          if verdicts(rows) else []),
         "![median time per solve against median MPJPE, every solver](../data_samples/results/bench_all.png)"])
 
 

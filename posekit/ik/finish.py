@@ -22,11 +22,15 @@ The stages
 3. :class:`~posekit.ik.dls.DLSSolver` from that pose with every effector, and DLS from the start pose as well:
    two answers, each meeting the effectors (or not);
 4. ``choose="natural"`` (default): when both meet every effector, the more natural is kept — the one nearer a
-   training pose of the data the learned solver was trained on (:class:`posekit.data.metrics.NaturalnessIndex`
-   over :data:`JUDGE_POSES` of its training frames: a nearest-neighbour prior on the data the learned prior was
-   made from); when one meets them, that one; when neither, the one nearer its effectors. ``choose="learned"``:
-   the answer from the learned pose unless DLS got stuck there (a limb stretched to its end, a local minimum)
-   and the start's answer is no worse. ``info["kept"] = "start"`` when the start's answer is kept.
+   training pose (:class:`posekit.data.metrics.NaturalnessIndex` over :data:`JUDGE_POSES` training frames: a
+   nearest-neighbour prior on the data the learned prior was made from); when one meets them, that one; when
+   neither, the one nearer its effectors. The training poses are those of the data being posed when a caller
+   names it (:func:`judged_on`: ``posekit bench ik`` and ``bench all`` name ``--data``'s training split, the one
+   ``posekit train --data`` trains on), else those the learned solver was registered with (the Bandai mini set's
+   for the shipped models); with neither on the skeleton there is no judge and the rule is ``"learned"``
+   (:attr:`FinishedSolver.choose` says which ran). ``choose="learned"``: the answer from the learned pose unless
+   DLS got stuck there (a limb stretched to its end, a local minimum) and the start's answer is no worse.
+   ``info["kept"] = "start"`` when the start's answer is kept.
 
 Why judge two answers. From a start that already resembles the target (the rest pose, five effectors on the
 body's ends), DLS from the start alone is often a better pose than the learned one finished; elsewhere the
@@ -45,6 +49,7 @@ so. Never NaN, never a hang: both stages have iteration limits.
 
 from __future__ import annotations
 
+import contextlib
 import time
 from dataclasses import replace
 
@@ -58,7 +63,7 @@ from .registry import make_solver, register, solver_info
 from ..records import Pose
 from ..rotations import matrix_to_quat, quat_to_matrix
 
-__all__ = ["FinishedSolver", "finished_name", "FINISHED", "CHOICES", "JUDGE_POSES", "judge_for"]
+__all__ = ["FinishedSolver", "finished_name", "FINISHED", "CHOICES", "JUDGE_POSES", "judge_for", "judged_on"]
 
 FINISHED = ("neural", "latent-opt", "protores")
 """The learned solvers (lessons 03, 04, 05) registered with an exact finish, ``NAME+dls``."""
@@ -90,6 +95,49 @@ def judge_for(data: str | None, skeleton):
                                                             max_poses=JUDGE_POSES, seed=0))
     trained_on, index = _JUDGES[data]
     return index if trained_on.same_as(skeleton) else None
+
+
+_JUDGED_ON: list = []
+"""The data :func:`judged_on` names, innermost last: ``[skeleton, source, frames, index or None]``."""
+
+
+@contextlib.contextmanager
+def judged_on(motions, train_frames=None):
+    """Within the block, an exact finish made for ``motions``' skeleton judges its two answers against training
+    poses of ``motions``: a :class:`~posekit.data.metrics.NaturalnessIndex` over :data:`JUDGE_POSES` of
+    ``motions.global_pos[train_frames]`` (built when a finish first needs it).
+
+    Parameters
+    ----------
+    motions : MotionSet
+        The data being posed (``posekit bench ik --data``).
+    train_frames : ndarray of int, optional
+        Its training frames; default the split the learned models train on
+        (:func:`posekit.data.cases.case_split`, as ``posekit train --data`` splits it). Never held-out frames.
+    """
+    if train_frames is None:
+        from ..data.cases import case_split
+
+        train_frames = case_split(motions)[0]
+    _JUDGED_ON.append([motions.skeleton, motions.source, motions.global_pos[np.asarray(train_frames)], None])
+    try:
+        yield
+    finally:
+        _JUDGED_ON.pop()
+
+
+def _judge(data: str | None, skeleton) -> tuple:
+    """``(index, source)``: the judge of a finish on ``skeleton`` whose learned solver was registered with
+    ``data`` (the innermost :func:`judged_on` on this skeleton, else :func:`judge_for`), or ``(None, None)``."""
+    for entry in reversed(_JUDGED_ON):
+        if entry[0].same_as(skeleton):
+            if entry[3] is None:
+                from ..data.metrics import NaturalnessIndex
+
+                entry[3] = NaturalnessIndex(entry[0], entry[2], max_poses=JUDGE_POSES, seed=0)
+            return entry[3], entry[1]
+    index = judge_for(data, skeleton)
+    return (index, data) if index is not None else (None, None)
 
 
 def finished_name(learned: str) -> str:
@@ -127,9 +175,16 @@ class FinishedSolver(SolverBase):
     max_iter : int
         DLS iterations of the finish.
     choose : {"natural", "learned"}
-        Which of the two answers is kept (the module docstring, step 4). ``"natural"`` needs the learned
-        solver's training data (:func:`judge_for`); without it (another skeleton) the rule is ``"learned"``,
-        and :attr:`choose` says so.
+        Which of the two answers is kept (the module docstring, step 4). ``"natural"`` needs training poses of
+        this skeleton (:func:`judged_on`, else the learned solver's registered data, :func:`judge_for`); without
+        them the rule is ``"learned"``, and :attr:`choose` says so.
+
+    Attributes
+    ----------
+    choose : str
+        The rule that runs: ``"natural"`` only when a judge exists.
+    judged_on : str or None
+        The data whose training poses judge (a data set's source), None without a judge.
     **learned_options
         Passed to the learned solver (``make_solver(learned, skeleton, **learned_options)``).
     """
@@ -143,7 +198,8 @@ class FinishedSolver(SolverBase):
         self.learned = make_solver(learned, skeleton, **learned_options)
         self.finisher = DLSSolver(skeleton, max_iter=max_iter)
         self.name = finished_name(learned)
-        self.judge = judge_for(solver_info(learned).data, skeleton) if choose == "natural" else None
+        self.judge, self.judged_on = _judge(solver_info(learned).data, skeleton) if choose == "natural" \
+            else (None, None)
         self.choose = "natural" if self.judge is not None else "learned"
         self.needs_start = self.learned.needs_start
         self.batch_atol = max(self.learned.batch_atol, 1e-9) * 10

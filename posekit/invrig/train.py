@@ -66,7 +66,7 @@ register_trainer(
     makes="data_samples/weights/invrig_nn_{uniform,gaussian,mvn,gmm,pca}.pt",
     what="inverse-rig networks, one per supersampling method (Holden et al. 2017)",
     used_by="lesson 02 (02_inverse_rig_mapping.ipynb) and posekit bench invrig",
-    takes="about 40 s on 2 idle cores (8 s per method)",
+    takes="about 40 s on 2 idle cores (8 s per method)", out="/",
     args=[arg("--methods", default="uniform,gaussian,mvn,gmm,pca",
               help="comma-separated supersampling methods (default: uniform,gaussian,mvn,gmm,pca)"),
           arg("--samples", type=int, default=20_000, help="training samples per method (default: 20000)"),

@@ -166,8 +166,12 @@ def save_checkpoint(path, model_state, *, kind: str, config: dict, skeleton: Ske
     if run.main:  # under torchrun every process holds the same weights: rank 0 writes them, the others wait
         path.parent.mkdir(parents=True, exist_ok=True)
         tmp = path.with_name(path.name + ".tmp")
-        torch.save(ckpt, tmp)
-        os.replace(tmp, path)
+        try:
+            torch.save(ckpt, tmp)
+            os.replace(tmp, path)
+        except BaseException:  # no half-written .tmp left beside the weights
+            tmp.unlink(missing_ok=True)
+            raise
     run.barrier()
     return path
 

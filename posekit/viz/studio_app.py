@@ -116,7 +116,7 @@ def app_studio(data: str | None = None, solvers=None, export_dir=None):
         try:
             with use_weights(weights):
                 pass
-        except FileNotFoundError as e:
+        except (FileNotFoundError, ValueError) as e:
             raise FileNotFoundError(str(e).replace("--weights", "STUDIO_WEIGHTS", 1)) from None
     skeleton, (start, goal, effectors, tolerance_of), (available, refused) = _app_case(data)
     _return_freed_memory()
@@ -215,7 +215,8 @@ def app_page():
 def kept_label(editor):
     """A line under the studio that counts, per learned solver with an exact finish (``+dls``), how often its finish
     kept the answer from the learned pose since the page opened — in the rest, DLS from the start pose gave the more
-    natural answer, or the only exact one, and the learned pose was discarded (:mod:`posekit.ik.finish`,
+    natural answer, or the only exact one, and the learned pose was discarded (a finish without training poses of
+    the skeleton, ``choose == "learned"``, is said to have made no naturalness comparison; :mod:`posekit.ik.finish`,
     ``info["kept"] == "start"``). Updated after every solve; an
     ``ipywidgets.HTML`` (``.counts``: {solver: [kept, solves]})."""
     import html
@@ -235,9 +236,11 @@ def kept_label(editor):
             kept, total = label.counts.setdefault(name, [0, 0])
             label.counts[name] = [kept + (info.get("kept") != "start"), total + 1]
         parts = [f"{n} kept the learned pose in {k} of {t} solves" for n, (k, t) in label.counts.items()]
-        label.value = ("<small>Exact finish: " + html.escape("; ".join(parts)) + " (in the others DLS from the "
-                       "start pose gave the more natural answer: the learned pose was discarded)</small>"
-                       ) if parts else ""
+        unjudged = [n for n in label.counts if getattr(editor.solvers.get(n), "choose", "natural") != "natural"]
+        why = ("the more natural answer" if not unjudged else "the answer kept (" + ", ".join(unjudged)
+               + ": no naturalness comparison, no training poses of this skeleton)")
+        label.value = ("<small>Exact finish: " + html.escape("; ".join(parts) + f" (in the others DLS from the "
+                       f"start pose gave {why}: the learned pose was discarded)") + "</small>") if parts else ""
 
     count()
     editor.on_change(count)

@@ -189,3 +189,49 @@ def test_the_cli(report, capsys, monkeypatch):
     assert sorted(ln.split()[0] for ln in table if ln.strip()) == sorted(resolve_solvers("all"))
     finish = out.split("the exact finish")[1].split("\n\n")[0].splitlines()[3:]  # learned kept: the +dls rows
     assert sorted(ln.split()[0] for ln in finish) == sorted(n for n in resolve_solvers("all") if n.endswith("+dls"))
+
+
+def _cell_rows(start, effectors, **mpjpe):
+    return [{"method": m.replace("_", "-").replace("-dls", "+dls"), "start": start, "effectors": effectors,
+             "mpjpe_mm_median": v, "learned_kept_fraction": 0.02 if m.endswith("_dls") else None,
+             "converged_fraction": 1.0, "latency_ms_median": 1.0, "effector_error_mm_median": 0.1,
+             "natural_mm_median": 30.0, "lesson": "06"} for m, v in mpjpe.items()]
+
+
+def test_each_cell_says_whether_a_learned_solver_beats_dls_and_fabrik():
+    from posekit.bench.verdicts import verdicts
+
+    rows = (_cell_rows("rest", "2", dls=54.8, fabrik=60.0, neural_dls=99.4, protores=108.5)  # learned all lose
+            + _cell_rows("rest", "5", dls=20.01, fabrik=39.2, neural_dls=20.04)  # a tie to 0.1 mm is not closer
+            + _cell_rows("other-clip", "2", dls=54.8, fabrik=60.0, protores=40.1, neural_dls=70.0)
+            + _cell_rows("other-clip", "5", fabrik=50.0, dls=23.8))  # no learned solver: no sentence
+    said = verdicts(rows)
+    assert len(said) == 3
+    assert said[0] == ("Effectors `2` from rest: no learned solver lands closer to the true pose than `dls` (54.8 mm) "
+                       "and `fabrik` (60.0 mm); the closest learned one is `neural+dls`, 99.4 mm, keeping its learned "
+                       "pose in 2% of the cases.")
+    assert said[1].startswith("Effectors `2` from other-clip: 1 of 2 learned solvers lands closer") and \
+        "the closest is `protores`, 40.1 mm." in said[1]
+    assert said[2].startswith("Effectors `5` from rest: no learned solver lands closer")
+    md = bench_all.markdown(rows, {"command": "posekit bench all", "cases": 3, "starts": ["rest", "other-clip"],
+                                   "effectors": ["2", "5"], "data": "mine", "machine": {
+                                       "platform": "p", "processor": "c", "cpu_count": 2}, "seconds": 1.0})
+    assert all(f"- {v}" in md for v in said)
+    from posekit.bench.plugin import get_benchmark
+
+    for name in ("ik", "all"):  # the printed text says it too
+        assert said[0] in " ".join(get_benchmark(name).footer(rows).split())
+
+
+@pytest.mark.parametrize("rule, says, never", [
+    ("natural", "the more natural of two exact answers: nearer a training pose of `mine`", "no naturalness"),
+    ("learned", "no naturalness comparison ran", "more natural"),
+    (None, "gave the answer kept", "natural answer")])
+def test_the_report_claims_a_naturalness_comparison_only_where_one_ran(rule, says, never):
+    rows = [dict(r, finish_rule=rule if r["method"].endswith("+dls") else None)
+            for r in _cell_rows("rest", "5", dls=20.0, fabrik=39.0, neural_dls=21.0)]
+    md = bench_all.markdown(rows, {"command": "posekit bench all", "cases": 3, "starts": ["rest"], "effectors": ["5"],
+                                   "data": "mine", "machine": {"platform": "p", "processor": "c", "cpu_count": 2},
+                                   "seconds": 1.0})
+    columns = md.split("**Columns**")[1].split("\n")[0]
+    assert says in columns and never not in columns

@@ -40,9 +40,12 @@ def test_bench_ik_measures_the_users_own_models(own, capsys):
                                                             for e in ("2", "5")}
     assert all(np.isfinite(r["mpjpe_mm_median"]) for r in rows)
     assert all(r["converged_fraction"] == 1.0 for r in rows if r["method"] == "neural+dls")
-    # without --weights the shipped (Bandai) networks are refused for this skeleton, by name
+    assert {r["finish_rule"] for r in rows if r["method"] == "neural+dls"} == {"natural"}  # judged on --data
+    assert {r["finish_rule"] for r in rows if r["method"] != "neural+dls"} == {None}
+    # without --weights the shipped (Bandai) networks are refused for this skeleton, by name (named in --solvers)
     assert main(["bench", "ik", "--solvers", "neural", "--data", str(bvh), "--cases", "5"]) == 2
-    assert "trained for skeleton" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "trained for skeleton" in err and "named in --solvers" in err and "--solvers all to skip" in err
     assert paths.user_weights_dir() is None  # the folder was in use for that command only
 
 
@@ -122,3 +125,57 @@ def test_weights_are_found_by_what_the_checkpoint_says_not_by_file_name(own, tmp
     with pytest.warns(UserWarning, match=r"other holds gan.pt \(aegan \(structured True\)\)"):
         assert main(["bench", "all", "--weights", str(other), "--data", str(bvh), "--cases", "2", "--start", "rest",
                      "--effectors", "5", "--out", "none", "--json"]) == 0
+
+
+def test_a_finish_on_your_skeleton_is_judged_on_your_data(own):
+    """The exact finish of a model trained on your clips compares its two answers with the training poses of your
+    data (judged_on, as posekit bench ik --data sets it up); without them there is no judge, and it says so."""
+    from posekit.data import open_dataset
+    from posekit.data.cases import build_cases
+    from posekit.ik import effector_set, make_solver
+    from posekit.ik.finish import judged_on
+
+    bvh, weights = own
+    motions = open_dataset(str(bvh))
+    cases = build_cases(motions, 6, seed=0, start="same-clip")
+    with paths.use_weights(weights):
+        unjudged = make_solver("neural+dls", motions.skeleton)
+        with judged_on(motions, cases.train_frames):
+            judged = make_solver("neural+dls", motions.skeleton)
+    assert unjudged.choose == "learned" and unjudged.judge is None  # the Bandai poses cannot judge this skeleton
+    assert judged.choose == "natural" and judged.judged_on == motions.source
+    infos = [judged.solve(cases.pose(i), effector_set(motions.skeleton, "5", cases.target_pos[i])).info
+             for i in range(len(cases))]
+    assert any("natural_mm" in info for info in infos)  # both answers exact: the judge compared them
+
+
+def test_a_junk_pt_in_your_folder_is_blamed_on_that_file(own, tmp_path, capsys):
+    bvh, weights = own
+    mine = tmp_path / "w"
+    mine.mkdir()
+    (mine / "ae_solvers.pt").write_bytes((weights / "ae_solvers.pt").read_bytes())
+    (mine / "aegan.pt").write_bytes(b"not a checkpoint")
+    capsys.readouterr()
+    for cmd in (["bench", "ik", "--solvers", "latent-opt", "--methods", "none"], ["bench", "all", "--out", "none"]):
+        assert main(cmd + ["--weights", str(mine), "--data", str(bvh), "--cases", "3"]) == 2
+        err = capsys.readouterr().err
+        assert f"--weights {mine}: aegan.pt is not a posekit checkpoint" in err and "data_samples" not in err, err
+
+
+def test_bench_all_on_one_clip_falls_back_to_same_clip(own, tmp_path, mini):
+    """With one clip the held-out frames are the end of that clip: the other-clip start cannot be drawn, and bench all
+    measures from same-clip instead, saying so (as the command line --start rest,same-clip would)."""
+    from posekit.bench.all import _fall_back
+    from posekit.data import open_dataset
+
+    bvh, _ = own
+    one = tmp_path / "one"
+    one.mkdir()
+    (one / "clip0.bvh").write_bytes((bvh / "clip0.bvh").read_bytes())
+    motions = open_dataset(str(one))
+    with pytest.warns(UserWarning, match=r"1 held-out clip\(s\), too few for the other-clip start.*"
+                                         r"--start rest,same-clip"):
+        assert _fall_back(motions, str(one), ("rest", "other-clip"), 0) == ("rest", "same-clip")
+    with pytest.warns(UserWarning, match="--start same-clip,rest"):
+        assert _fall_back(motions, str(one), ("same-clip", "other-clip", "rest"), 0) == ("same-clip", "rest")
+    assert _fall_back(mini, "bandai-mini", ("rest", "other-clip"), 0) == ("rest", "other-clip")  # many test clips

@@ -80,7 +80,7 @@ def test_a_foreign_or_broken_npz_gets_a_sentence_naming_it(tmp_path, capsys, mak
     path = tmp_path / "clips.npz"
     make(path)
     for argv in (["data", "inspect", str(path)], ["bench", "ik", "--data", str(path), "--cases", "2"],
-                 ["train", "ae-solvers", "--data", str(path)]):
+                 ["train", "ae-solvers", "--data", str(path), "--out", str(tmp_path / "mine.pt")]):
         assert main(argv) == 2, argv
         err = capsys.readouterr().err
         assert err.startswith(f"posekit: error: {path}: ") and says in err, err

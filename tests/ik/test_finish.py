@@ -180,3 +180,18 @@ def test_the_judge_knows_only_training_poses(mini):
 def test_an_unknown_rule_is_refused(cases):
     with pytest.raises(ValueError, match="choose must be one of natural, learned"):
         make_solver("neural+dls", cases.skeleton, choose="best")
+
+
+def test_the_judge_takes_the_training_poses_of_the_data_being_posed(mini):
+    """Within judged_on(motions, frames) a finish judges against those frames (the data a benchmark's --data names),
+    not its registered data's; outside, the registered data's judge is back."""
+    from posekit.ik.finish import judged_on
+
+    s = mini.skeleton
+    frames = np.sort(mini.split.train)[:300]
+    with judged_on(mini, frames):
+        solver = make_solver("neural+dls", s)
+    assert solver.choose == "natural" and solver.judged_on == mini.source and len(solver.judge) == 300
+    np.testing.assert_allclose(solver.judge.distance(mini.global_pos[frames[:5]]), 0, atol=1e-9)
+    outside = make_solver("neural+dls", s)
+    assert outside.judged_on == "bandai-mini" and len(outside.judge) == JUDGE_POSES

@@ -104,3 +104,17 @@ def test_a_solver_left_out_for_another_reason_is_not_called_made_for_another_ske
         "left out (made for another skeleton): neural")
     note = studio_app.refused_note({"neural": "/w/ae.pt: a broken checkpoint (truncated)"})
     assert "another skeleton" not in note and "broken checkpoint" in note
+
+
+def test_the_kept_line_claims_a_naturalness_comparison_only_where_one_ran():
+    """Issue 58: a finish without training poses of the skeleton (choose "learned") compared no naturalness."""
+    from types import SimpleNamespace
+
+    res = SimpleNamespace(info={"learned_ms": 1.0, "kept": "start"})
+    for choose, says, never in (("natural", "the more natural answer", "no naturalness"),
+                                ("learned", "neural+dls: no naturalness comparison", "more natural")):
+        editor = SimpleNamespace(solvers={"neural+dls": SimpleNamespace(choose=choose)},
+                                 results={"neural+dls": res}, on_change=lambda fn: None)
+        value = studio_app.kept_label(editor).value
+        assert "neural+dls kept the learned pose in 0 of 1 solves" in value
+        assert says in value and never not in value

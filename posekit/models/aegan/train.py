@@ -288,10 +288,12 @@ register_trainer(
     used_by="lesson 04 (04_aegan_latent_space.ipynb), the latent-opt solvers, posekit bench ik",
     takes="about 9-11 minutes on one core (it trains on one thread: 8 min 35 s measured idle, 11 min "
           "beside another training)",
+    shipped=lambda args: "data_samples/weights/aegan.pt",
     args=[arg("--data", default="bandai-mini", help="training data: bandai-mini (default, its own split), "
               "or any posekit data set name / path (split by clip)")]
          + [arg("--" + key.replace("_", "-"), dest=key, type=type(DEFAULTS[key]), default=DEFAULTS[key],
                 help=f"{what} (default: {DEFAULTS[key]})") for key, what in _WHAT]
          + [arg("--dense", action="store_true", help="dense layers of equal width instead of SPLs (a comparison)"),
             arg("--seed", type=int, default=0, help="(default: 0)"),
-            arg("--out", default=None, help="checkpoint file (default data_samples/weights/aegan.pt)")])
+            arg("--out", default=None, help="checkpoint file (default data_samples/weights/aegan.pt; required "
+                                          "with another --data: a .pt file, checked before training)")])

@@ -173,6 +173,7 @@ register_trainer(
     makes="data_samples/weights/ae_solvers_studies.json",
     what="lesson 03's measured choices: autoencoder size and decoder, the loss weight k, chaining",
     used_by="lesson 03 (03_autoencoder_solvers.ipynb)", takes="about 9 minutes on one core (9 min 22 s measured)",
+    out=".json",
     args=[arg("--ae-epochs", type=int, default=40, help="epochs of each autoencoder of the size study (default: 40)"),
           arg("--seed", type=int, default=0, help="(default: 0)"),
           arg("--out", default=None, help="JSON file (default data_samples/weights/ae_solvers_studies.json)")])

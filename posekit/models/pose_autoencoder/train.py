@@ -238,6 +238,7 @@ register_trainer(
          "(Victor et al. 2021)",
     used_by="lesson 03 (03_autoencoder_solvers.ipynb), the neural solvers, posekit bench ik",
     takes="about 7 minutes on one core (it trains on one thread: 7 min 13 s measured)",
+    shipped=lambda args: "data_samples/weights/ae_solvers.pt",
     args=[arg("--data", default="bandai-mini", help="training data: bandai-mini (default, its own split), "
               "or any posekit data set name / path (split by clip)")]
          + [arg("--" + key.replace("_", "-"), dest=key, type=type(DEFAULTS[key]), default=DEFAULTS[key],
@@ -247,4 +248,5 @@ register_trainer(
                 "as in the authors' code (default: untied, its own weights and biases: measured better in "
                 "lesson 03)"),
             arg("--seed", type=int, default=0, help="(default: 0)"),
-            arg("--out", default=None, help="checkpoint file (default data_samples/weights/ae_solvers.pt)")])
+            arg("--out", default=None, help="checkpoint file (default data_samples/weights/ae_solvers.pt; required "
+                                          "with another --data: a .pt file, checked before training)")])

@@ -239,6 +239,7 @@ register_trainer(
     what="lesson 05's Table 2 ablations (no GPD, fixed weights) and the width study",
     used_by="lesson 05 (05_protores.ipynb), posekit bench protores",
     takes="about 15 minutes on 2 cores (five 2,000-step runs, two side by side)",
+    out=".json",
     args=[arg("--workers", type=int, default=2, help="runs side by side, one thread each (default: 2)"),
           arg("--seed", type=int, default=0, help="(default: 0)"),
           arg("--scaling", action="store_true",

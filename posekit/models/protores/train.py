@@ -42,6 +42,7 @@ from ...plugins import arg
 from ...data.bandai_mini import weights_licence
 from .networks import ARCHS, PosingNet, ProtoResConfig, weights_path
 from .data import PoseBank, draw_batch
+from .fast import WEIGHTS as _WEIGHTS
 
 __all__ = ["DEFAULTS", "STEPS", "WIDTH", "LOSSES", "geodesic", "losses", "train_protores",
            "validation_batches", "evaluate_batches", "command"]
@@ -312,6 +313,7 @@ register_trainer(
     used_by="lesson 05 (05_protores.ipynb), the protores solvers, posekit bench protores",
     takes="about an hour each on 2 cores under torchrun --standalone --nproc-per-node 2 (the shipped networks; "
           "one process: about twice as long)",
+    shipped=lambda args: f"data_samples/weights/{_WEIGHTS[args.arch]}",
     args=[arg("--data", default="bandai-mini", help="training data: bandai-mini (default, its own split), or any "
               "posekit data set name / path (split by clip; e.g. bandai1 for the full Bandai set 1)"),
           arg("--arch", choices=ARCHS, default="protores",
@@ -325,4 +327,5 @@ register_trainer(
             arg("--fixed-weights", action="store_true",
                 help="every joint weighted 1 instead of the randomized min(W_M, 1/sigma) (Table 2's ablation)"),
             arg("--seed", type=int, default=0, help="(default: 0)"),
-            arg("--out", default=None, help="checkpoint file (default data_samples/weights/protores*.pt)")])
+            arg("--out", default=None, help="checkpoint file (default data_samples/weights/protores*.pt; required "
+                                          "with another --data: a .pt file, checked before training)")])
