@@ -128,13 +128,15 @@ test-latest: browser-deps
 	$(PYTHON) tools/test_latest.py $(LATEST_ARGS)
 
 # a class on one machine, for trying it (docs/hub.md): JupyterHub with a trial login (any name, HUB_PASSWORD or
-# "posekit-trial"), each student's server on their own copy of the lessons, idle servers culled after HUB_CULL
+# "posekit-trial"), each student's server on their own copy of the lessons (run as root: each as their own system
+# user in a sandbox; HUB_COURSE=posekit: nbgrader's Assignments panel on HUB_EXCHANGE), idle servers culled after HUB_CULL
 # seconds (default 3600); http://localhost:8000 (HUB_PORT). Ctrl-C stops the hub, its proxy and every server
 HUB_PROXY := deploy/jupyterhub/node_modules/.bin/configurable-http-proxy
 hub: setup warm
 	test -x $(VENV)/bin/jupyterhub || $(PY) -m pip install -q -e ".[hub]"
 	test -x $(HUB_PROXY) || (cd deploy/jupyterhub && npm ci --no-audit --no-fund --loglevel=error)
 	$(if $(HUB_PASSWORD),POSEKIT_HUB_PASSWORD="$(HUB_PASSWORD)") $(if $(HUB_CULL),POSEKIT_HUB_CULL_TIMEOUT="$(HUB_CULL)") \
+	  $(if $(HUB_COURSE),POSEKIT_HUB_COURSE="$(HUB_COURSE)") $(if $(HUB_EXCHANGE),POSEKIT_HUB_EXCHANGE="$(abspath $(HUB_EXCHANGE))") \
 	  $(if $(HUB_PORT),POSEKIT_HUB_PORT="$(HUB_PORT)") PATH="$(abspath $(VENV))/bin:$$PATH" \
 	  $(VENV)/bin/jupyterhub -f deploy/jupyterhub/jupyterhub_config.py $(HUB_ARGS)
 

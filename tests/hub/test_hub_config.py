@@ -100,3 +100,51 @@ def test_the_image_carries_make_hubs_server_settings():
     assert settings["VoilaConfiguration"]["template"] == "posekit"
     requirements = (ROOT / "deploy" / "image" / "requirements.txt").read_text()
     assert "download.pytorch.org/whl/cpu" in requirements and "+cpu" in requirements  # never the CUDA build
+
+
+def test_each_student_gets_a_system_user_name_of_their_own():
+    import sys
+
+    sys.path.insert(0, str(HUB))
+    from posekit_spawner import unix_name
+
+    assert unix_name("alice") == "posekit-alice"
+    names = {unix_name(n) for n in ("Alice", "alice", "a.lice", "a_lice", "élise", "x" * 60)}
+    assert len(names) == 6  # a name that had to change carries a hash of the original: no two share a user
+    assert all(re.fullmatch(r"posekit-[a-z0-9-]{1,24}", n) for n in names)
+
+
+def test_the_sandbox_hides_the_state_and_solutions_and_exposes_what_a_server_needs(config, tmp_path):
+    import sys
+
+    _, c = config
+    spawner = c.ClassSpawner
+    assert c.JupyterHub.spawner_class.__name__ == "ClassSpawner"
+    assert str(tmp_path / "state") in spawner.hide and str(ROOT / "instructor") in spawner.hide
+    assert sys.base_prefix in spawner.expose_ro and str(ROOT) in spawner.expose_ro
+    assert spawner.overlay == c.Spawner.environment["POSEKIT_NUMBA_CACHE"]
+    sys.path.insert(0, str(HUB))
+    import sandbox
+
+    locked = tmp_path / "locked"
+    (locked / "inside").mkdir(parents=True)
+    locked.chmod(0o700)
+    block = sandbox._blocking(locked / "inside")  # covered, its needed part bound back (pytest's own tmp may block first)
+    assert block in (locked, *locked.parents) and not block.stat().st_mode & 0o001
+    assert sandbox._blocking(ROOT) is None
+
+
+def test_a_course_gives_students_the_assignments_panel_and_not_the_instructors_tools(tmp_path, monkeypatch):
+    monkeypatch.setenv("POSEKIT_HUB_STATE", str(tmp_path / "state"))
+    monkeypatch.setenv("POSEKIT_HUB_COURSE", "posekit")
+    c = Config()
+    runpy.run_path(str(CONFIG), init_globals={"get_config": lambda: c})
+    folder = tmp_path / "state" / "student-config"
+    assert c.Spawner.environment["JUPYTER_CONFIG_PATH"].split(":")[0] == str(folder)
+    server = json.loads((folder / "jupyter_server_config.json").read_text())["ServerApp"]["jpserver_extensions"]
+    assert server["nbgrader.server_extensions.assignment_list"] and not server["nbgrader.server_extensions.formgrader"]
+    lab = json.loads((folder / "labconfig" / "page_config.json").read_text())["disabledExtensions"]
+    assert lab["@jupyter/nbgrader"] is False and lab["@jupyter/nbgrader:formgrader"] is True
+    said = (folder / "nbgrader_config.py").read_text()
+    assert "course_id = 'posekit'" in said and str(tmp_path / "state" / "exchange") in said
+    assert c.ClassSpawner.expose == [str(tmp_path / "state" / "exchange")]
