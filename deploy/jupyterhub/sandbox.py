@@ -12,8 +12,8 @@ process on the machine is visible from it). This script then, still as root and 
 2. binds back, at their own paths, only what the server needs from inside a covered folder: the student's home
    (read-write), Python and the virtual environment, the repository, the data folder (read-only where bound back;
    elsewhere their own permissions apply: root's files, which a student cannot change), and the class's
-   compiled-solver cache as an overlay (the shared cache below, the student's writes in a private layer above, so no student can change what
-   another loads);
+   compiled-solver cache as an overlay (the shared cache below, the student's writes in a private layer above, so
+   no student can change what another loads);
 3. drops to the student's own system user (uid, gid, no other groups) and runs the server as the child of a small
    init that passes on the hub's stop signals and reaps orphans.
 

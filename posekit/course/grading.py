@@ -6,9 +6,9 @@ those cells did to that kernel, the tests cell inherits: an answer cell that reb
 So ``posekit course autograde`` does not take the kernel's word for it (:func:`regrade`):
 
 * **a fresh check**: for each autograded exercise, the answer cell's source (from the submitted notebook) is run in
-  a new Python process, with the lesson's imports before it, *after* the lesson's checker has been imported and has
-  computed its expected answers; the points in the grade book are the fresh check's (``python -m
-  posekit.course.grading`` is that process);
+  a new Python process, with the lesson's imports (from its read-only cells) before it, *after* the lesson's
+  checker has been imported and has computed its expected answers; the points in the grade book are the fresh
+  check's (``python -m posekit.course.grading`` is that process);
 * **flags for a person**: the submission is flagged in the grade book (the formgrader lists flagged notebooks) and
   the answer cell gets an automatic comment when the fresh check and the kernel disagree, when a read-only cell
   (a lesson's cell, a tests cell) was changed or deleted in what the student handed in (nbgrader restores it before
@@ -230,14 +230,17 @@ def regrade(course_dir, assignment: str, students=None, timeout_s: float = 300) 
                     fresh = Fresh(False, "no answer cell")
                 else:
                     source = cells[k].source
-                    imports = lesson_imports(c.source for c in cells[:k] if c.cell_type == "code")
+                    imports = lesson_imports(c.source for c in cells[:k]  # the lesson's own cells, not answers
+                                             if c.cell_type == "code" and not _grading(c).get("solution")
+                                             and _grading(c).get("locked"))
                     fresh = fresh_check(lesson.number, checker.group(1), function, source, imports, timeout_s)
                     for line in suspicious(source):
                         notes.setdefault(function, []).append(f"the answer touches the grading machinery ({line})")
                 fresh_points = points if fresh.passed else 0
                 if fresh_points != kernel_points:
                     notes.setdefault(function, []).append(
-                        f"the kernel's tests cell gave {kernel_points:g} of {points:g}, a fresh process {fresh_points:g}"
+                        f"the kernel's tests cell gave {kernel_points:g} of {points:g}, "
+                        f"a fresh process {fresh_points:g}"
                         f" (kept): {fresh.said.strip().splitlines()[-1] if fresh.said.strip() else 'no verdict'}")
                 grade.auto_score = fresh_points
             for function, reasons in notes.items():

@@ -113,7 +113,8 @@ def check_two_bone_swivel(my_two_bone_swivel) -> bool:
     def describe(got, expected):
         err = np.abs(got - expected).max() * 100
         if np.allclose(got[1], expected[1], atol=1e-6):
-            return (f"the end joint is right but the middle one is {err * 10:.3f} mm off (angle measured from the current "
+            return (f"the end joint is right but the middle one is {err * 10:.3f} mm off (angle measured from the "
+                    "current "
                     "bend? right-handed about root → target? law of cosines at the root?)")
         return f"the end joint is {np.abs(got[1] - expected[1]).max() * 1000:.3f} mm off (distance clamped?)"
     cases = [((root, mid, end, target, s), swivel_answers(root, mid, end, target, s), describe)

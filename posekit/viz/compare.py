@@ -39,12 +39,13 @@ def status_line(result, ms: float, joints=None, ignored=()) -> str:
 
 def reached_mark(result, ignored=()) -> str:
     """Whether a solver reached its effectors, as HTML: ``"✓ reached"``, ``"✗ not reached"``, or with effectors it
-    ignored (not given, their kind not honoured) ``"✓ 3 of 5 reached · look-at, rotation ignored"`` — never a plain
-    ✓ then. The views (:func:`status_line`) and the studio's summary say it in these words."""
+    ignored (not given, their kind not honoured) ``"⚠ 3 of 5 reached · look-at, rotation ignored"`` — never a ✓
+    then: an effector ignored is an effector not met. The views (:func:`status_line`) and the studio's summary say it
+    in these words."""
     if not ignored:
         return "✓ reached" if result.converged else "✗ not reached"
     used = len(result.effector_error)
-    mark = f"✓ {used} of {used + len(ignored)} reached" if result.converged else "✗ not reached"
+    mark = f"⚠ {used} of {used + len(ignored)} reached" if result.converged else "✗ not reached"
     return mark + f" · <span style='color:#b9770e'>{_kinds_text(e.kind for e in ignored)} ignored</span>"
 
 

@@ -430,6 +430,7 @@ def test_the_summary_names_the_effectors_a_solver_ignored(bandai, tmp_path):
     assert "5 of 7 reached" in rows["fabrik"] and "rotation, look-at ignored" in rows["fabrik"], rows["fabrik"]
     view = studio.editor.labels["fabrik"].value
     assert "5 of 7 reached" in view and "rotation, look-at ignored" in view
+    assert "✓" not in rows["fabrik"] and "✓" not in view  # an ignored effector is not met: no tick leads the line
     assert "ignored" not in rows["dls"], rows["dls"]  # DLS honours every kind
 
 
