@@ -32,19 +32,20 @@ def status_line(result, ms: float, joints=None, ignored=()) -> str:
     iterations and time (ms). ``ignored``: effectors the solver was not given because it does not honour
     their kind — the view says so ("look-at ignored") and never calls them reached."""
     it = result.iterations
+    excluded = f"<br>{_kinds_text(e.kind for e in ignored)} not measured" if ignored else ""
     return status_table(f"<b>{reached_mark(result, ignored)}</b>",
-                        [("worst effector", worst_errors(result, joints, sep="<br>")),
+                        [("worst effector", worst_errors(result, joints, sep="<br>") + excluded),
                          (f"iteration{'' if it == 1 else 's'}", str(it)), ("time", f"{ms:.2f} ms")])
 
 
 def reached_mark(result, ignored=()) -> str:
     """Whether a solver reached its effectors, as HTML: ``"✓ reached"``, ``"✗ not reached"``, or with effectors it
-    ignored (not given, their kind not honoured) ``"✓ 3 of 5 reached · look-at, rotation ignored"`` — never a plain
-    ✓ then. The views (:func:`status_line`) and the studio's summary say it in these words."""
+    ignored (not given, their kind not honoured) ``"◐ 3 of 5 reached · look-at, rotation ignored"`` — never a
+    ✓ then, since an ignored effector is unmet. The views (:func:`status_line`) and the studio's summary say it in these words."""
     if not ignored:
         return "✓ reached" if result.converged else "✗ not reached"
     used = len(result.effector_error)
-    mark = f"✓ {used} of {used + len(ignored)} reached" if result.converged else "✗ not reached"
+    mark = f"◐ {used} of {used + len(ignored)} reached" if result.converged else "✗ not reached"
     return mark + f" · <span style='color:#b9770e'>{_kinds_text(e.kind for e in ignored)} ignored</span>"
 
 

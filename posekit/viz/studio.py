@@ -129,6 +129,7 @@ class PosingStudio(StudioExport, StudioTimeline):
         self.load_button = widget(w.Button, description="load setup")
         self.load_button.on_click(lambda _: self._safely(lambda: self.load(self.setup_file()), "setup"))
         self.upload = widget(w.FileUpload, accept=".json,.bvh", multiple=False, description="upload setup / BVH",
+                             tooltip="a setup (.json) or a BVH pose (.bvh) from your computer",
                              layout={"width": "auto"})
         self.upload.observe(self._on_upload, names="value")
         self.export_solver = widget(w.Dropdown, description="export", layout={"width": "260px"})
