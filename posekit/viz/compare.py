@@ -73,9 +73,21 @@ def worst_errors(result, joints=None, sep: str = ", ") -> str:
 
 
 def status_table(title: str, rows) -> str:
-    """A title over a two-column HTML table of ``(label, value)`` rows (values right-aligned)."""
-    body = "".join(f"<tr><td style='padding-right:10px'>{label}</td>"
-                   f"<td style='text-align:right;font-family:monospace'>{value}</td></tr>" for label, value in rows)
+    """A title over an HTML table of ``(label, value, ...)`` rows. Two-cell rows: the value right-aligned. Rows of
+    more cells (the studio's summary: name, mark, errors, time) keep each column aligned: the second cell left, the
+    others right-aligned in monospace; a shorter row's last cell spans the columns it lacks."""
+    width = max((len(r) for r in rows), default=2)
+
+    def cells(row):
+        out = [f"<td style='padding-right:10px'>{row[0]}</td>"]
+        for k, value in enumerate(row[1:], start=1):
+            span = width - len(row) + 1 if k == len(row) - 1 else 1
+            left = width > 2 and (k == 1 or span > 1)
+            style = "padding-right:10px" + ("" if left else ";text-align:right;font-family:monospace")
+            out.append(f"<td{f' colspan={span}' if span > 1 else ''} style='{style}'>{value}</td>")
+        return "".join(out)
+
+    body = "".join(f"<tr>{cells(row)}</tr>" for row in rows)
     return f"{title}<table style='border-collapse:collapse'>{body}</table>"
 
 

@@ -431,6 +431,9 @@ def test_the_summary_names_the_effectors_a_solver_ignored(bandai, tmp_path):
     view = studio.editor.labels["fabrik"].value
     assert "5 of 7 reached" in view and "rotation, look-at ignored" in view
     assert "✓" not in rows["fabrik"] and "✓" not in view, (rows["fabrik"], view)
+    # the summary's columns line up: every solved row has its name, mark, errors and time in cells of their own
+    cells = re.findall(r"<tr>(.*?)</tr>", studio.summary.value)
+    assert [c.count("<td") for c in cells] == [4, 4], cells
     assert "rotation, look-at not measured" in view, view
     assert "ignored" not in rows["dls"], rows["dls"]  # DLS honours every kind
 
