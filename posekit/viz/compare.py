@@ -32,20 +32,20 @@ def status_line(result, ms: float, joints=None, ignored=()) -> str:
     iterations and time (ms). ``ignored``: effectors the solver was not given because it does not honour
     their kind — the view says so ("look-at ignored") and never calls them reached."""
     it = result.iterations
+    excluded = f"<br>{_kinds_text(e.kind for e in ignored)} not measured" if ignored else ""
     return status_table(f"<b>{reached_mark(result, ignored)}</b>",
-                        [("worst effector", worst_errors(result, joints, sep="<br>")),
+                        [("worst effector", worst_errors(result, joints, sep="<br>") + excluded),
                          (f"iteration{'' if it == 1 else 's'}", str(it)), ("time", f"{ms:.2f} ms")])
 
 
 def reached_mark(result, ignored=()) -> str:
     """Whether a solver reached its effectors, as HTML: ``"✓ reached"``, ``"✗ not reached"``, or with effectors it
-    ignored (not given, their kind not honoured) ``"⚠ 3 of 5 reached · look-at, rotation ignored"`` — never a ✓
-    then: an effector ignored is an effector not met. The views (:func:`status_line`) and the studio's summary say it
-    in these words."""
+    ignored (not given, their kind not honoured) ``"◐ 3 of 5 reached · look-at, rotation ignored"`` — never a
+    ✓ then, since an ignored effector is unmet. The views (:func:`status_line`) and the studio's summary say it in these words."""
     if not ignored:
         return "✓ reached" if result.converged else "✗ not reached"
     used = len(result.effector_error)
-    mark = f"⚠ {used} of {used + len(ignored)} reached" if result.converged else "✗ not reached"
+    mark = f"◐ {used} of {used + len(ignored)} reached" if result.converged else "✗ not reached"
     return mark + f" · <span style='color:#b9770e'>{_kinds_text(e.kind for e in ignored)} ignored</span>"
 
 
@@ -73,9 +73,21 @@ def worst_errors(result, joints=None, sep: str = ", ") -> str:
 
 
 def status_table(title: str, rows) -> str:
-    """A title over a two-column HTML table of ``(label, value)`` rows (values right-aligned)."""
-    body = "".join(f"<tr><td style='padding-right:10px'>{label}</td>"
-                   f"<td style='text-align:right;font-family:monospace'>{value}</td></tr>" for label, value in rows)
+    """A title over an HTML table of ``(label, value, ...)`` rows. Two-cell rows: the value right-aligned. Rows of
+    more cells (the studio's summary: name, mark, errors, time) keep each column aligned: the second cell left, the
+    others right-aligned in monospace; a shorter row's last cell spans the columns it lacks."""
+    width = max((len(r) for r in rows), default=2)
+
+    def cells(row):
+        out = [f"<td style='padding-right:10px'>{row[0]}</td>"]
+        for k, value in enumerate(row[1:], start=1):
+            span = width - len(row) + 1 if k == len(row) - 1 else 1
+            left = width > 2 and (k == 1 or span > 1)
+            style = "padding-right:10px" + ("" if left else ";text-align:right;font-family:monospace")
+            out.append(f"<td{f' colspan={span}' if span > 1 else ''} style='{style}'>{value}</td>")
+        return "".join(out)
+
+    body = "".join(f"<tr>{cells(row)}</tr>" for row in rows)
     return f"{title}<table style='border-collapse:collapse'>{body}</table>"
 
 

@@ -129,6 +129,7 @@ class PosingStudio(StudioExport, StudioTimeline):
         self.load_button = widget(w.Button, description="load setup")
         self.load_button.on_click(lambda _: self._safely(lambda: self.load(self.setup_file()), "setup"))
         self.upload = widget(w.FileUpload, accept=".json,.bvh", multiple=False, description="upload setup / BVH",
+                             tooltip="a setup (.json) or a BVH pose (.bvh) from your computer",
                              layout={"width": "auto"})
         self.upload.observe(self._on_upload, names="value")
         self.export_solver = widget(w.Dropdown, description="export", layout={"width": "260px"})
@@ -283,8 +284,8 @@ class PosingStudio(StudioExport, StudioTimeline):
             elif isinstance(res, Exception):
                 rows.append((html.escape(name), _error(f"failed: {res}")))
             else:
-                rows.append((html.escape(name), f"{reached_mark(res, ignored)}: {worst_errors(res)}, "
-                                                f"{self.editor.times.get(name, 0):.2f} ms"))
+                rows.append((html.escape(name), reached_mark(res, ignored), worst_errors(res),
+                             f"{self.editor.times.get(name, 0):.2f} ms"))
         self.undo_button.disabled = getattr(self, "position", 0) == 0
         self.redo_button.disabled = getattr(self, "position", 0) >= len(getattr(self, "history", [None])) - 1
         # the update counter last: when the browser shows it, every view and button of this update is there

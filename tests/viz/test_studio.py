@@ -413,8 +413,8 @@ def test_make_lab_and_make_studio_pass_the_websocket_setting():
 
 def test_the_summary_names_the_effectors_a_solver_ignored(bandai, tmp_path):
     """Issue 44: with a look-at and a rotation effector, FABRIK (positions only) reaches its five targets; the
-    "All solvers" summary says so as its view does ("5 of 7 reached · rotation, look-at ignored"), never a plain
-    ✓."""
+    "All solvers" summary says so as its view does ("5 of 7 reached · rotation, look-at ignored"), never with a
+    ✓ (issue 57: an ignored effector is unmet), and its view's error figure says which kinds it did not measure."""
     import re
 
     from posekit.viz import PosingStudio
@@ -430,7 +430,11 @@ def test_the_summary_names_the_effectors_a_solver_ignored(bandai, tmp_path):
     assert "5 of 7 reached" in rows["fabrik"] and "rotation, look-at ignored" in rows["fabrik"], rows["fabrik"]
     view = studio.editor.labels["fabrik"].value
     assert "5 of 7 reached" in view and "rotation, look-at ignored" in view
-    assert "✓" not in rows["fabrik"] and "✓" not in view  # an ignored effector is not met: no tick leads the line
+    assert "✓" not in rows["fabrik"] and "✓" not in view, (rows["fabrik"], view)
+    # the summary's columns line up: every solved row has its name, mark, errors and time in cells of their own
+    cells = re.findall(r"<tr>(.*?)</tr>", studio.summary.value)
+    assert [c.count("<td") for c in cells] == [4, 4], cells
+    assert "rotation, look-at not measured" in view, view
     assert "ignored" not in rows["dls"], rows["dls"]  # DLS honours every kind
 
 
