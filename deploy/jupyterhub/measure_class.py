@@ -1,19 +1,22 @@
-"""Measure a class on one hub: per-student memory and start times for lesson 01 and the studio with 1, 2, 4 ...
+"""Measure a class on one hub: per-student memory and times for each lesson (00-06) and the studio with 1, 2, 4 ...
 students at once.
 
-    python deploy/jupyterhub/measure_class.py --students 1,2,4 --out deploy/jupyterhub/class_sizing.json
+    python deploy/jupyterhub/measure_class.py --students 1 --lessons 00,01,02,03,04,05,06 \
+        --out deploy/jupyterhub/class_sizing.json
     python deploy/jupyterhub/measure_class.py --table deploy/jupyterhub/class_sizing.json    # docs/hub.md's table
     python deploy/jupyterhub/measure_class.py --values deploy/jupyterhub/class_sizing.json   # z2jh's resources
 
 It starts a hub with the repository's configuration (jupyterhub_config.py: the trial login, the local spawner,
-make lab's settings) in a temporary state folder, and for each class size starts that many students' servers at once
-through the hub's REST API, then has each server's kernel run lesson 01's cells up to its solver panel (set-up, the
-held-out case, the three solvers, the panel) over the kernel websocket, all students at the same time; then every
-student opens the studio at once (Voila renders their copy of studio.ipynb on their server, a second kernel). Per
-student it records the server's start (request to ready), the lesson's run (kernel start to the panel built), the
-studio's page (request to the rendered page), and the memory of the student's processes (the server and its
-kernels) after the lesson and after the studio, and the peak (the sum of each process's VmHWM). No browser is
-involved: what a browser adds is on the student's machine. It does not import posekit.
+make lab's settings) in a temporary state folder, and for each lesson and each class size starts that many students'
+servers at once through the hub's REST API (a fresh server per lesson, so that each lesson's peak is its own), then
+has each student open their copy of the lesson (a notebook session in lessons/, as JupyterLab opens it) and run ALL
+its code cells in order over the kernel websocket, all students at the same time; then every student opens the
+studio at once (Voila renders their copy of studio.ipynb on their server, a second kernel): a student may keep it
+open beside any lesson, and lesson 06 teaches it. Per student it records the server's start (request to ready), the
+lesson's run (kernel start to its last cell done), the studio's page (request to the rendered page), and the memory
+of the student's processes (the server and its kernels) after the lesson and after the studio, and the peak (the
+sum of each process's VmHWM). No browser is involved: what a browser adds is on the student's machine. It does not
+import posekit.
 """
 
 from __future__ import annotations
@@ -39,9 +42,11 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
-LESSON = ROOT / "notebooks" / "01_fabrik.ipynb"
-CELLS = ("motions = load_sample()", "cases = build_cases(", 'solvers = {"fabrik": fabrik', "SolverPanel(")
-"""The code cells of lesson 01 each student runs (the ones tests/viz/test_browser.py runs for the panel)."""
+NOTEBOOKS = ROOT / "notebooks"
+LESSON_FOLDER = "lessons"
+"""The folder of each student's home that holds their copy of the lessons (jupyterhub_config.py copies them)."""
+CELL_TIMEOUT_S = 1800
+"""A lesson's cell that runs longer than this is reported as stuck (the measurement stops, it does not hang)."""
 TOKEN = "posekit-measure-" + uuid.uuid4().hex
 OVERLAY = """\
 load_subconfig({config!r})
@@ -78,28 +83,50 @@ def _server(url, user):
     return (info or {}).get("servers", {}).get("") if status == 200 else None
 
 
-def _lesson_code():
-    nb = json.loads(LESSON.read_text())
-    code = ["".join(c["source"]) for c in nb["cells"] if c["cell_type"] == "code"]
-    chosen = [src for src in code if any(k in src for k in CELLS)]
-    if len(chosen) != len(CELLS):
-        raise SystemExit(f"{LESSON.name}: expected one code cell for each of {CELLS}, found {len(chosen)}")
-    return chosen
+def lesson_names(spec, folder=NOTEBOOKS):
+    """The lesson notebooks named by ``spec``, their numbers comma-separated ("00,01,06"), in that order.
+
+    Raises ``SystemExit`` with a sentence naming the lessons there are when a number is not a lesson's or ``spec``
+    names none."""
+    lessons = {p.name[:2]: p.name for p in sorted(folder.glob("[0-9][0-9]_*.ipynb"))}
+    wanted = [part.strip() for part in spec.split(",") if part.strip()]
+    unknown = [w for w in wanted if w.zfill(2) not in lessons]
+    if not wanted or unknown:
+        raise SystemExit(f"--lessons {spec!r}: expected lesson numbers from {', '.join(lessons)}, comma-separated"
+                         + (f" ({', '.join(unknown)} is not one)" if unknown else ""))
+    return [lessons[w.zfill(2)] for w in dict.fromkeys(wanted)]
 
 
-async def _run_lesson(url, user, code):
-    """Start a kernel on ``user``'s server and run ``code`` (cells) in it; returns the seconds it took."""
+def lesson_code(path):
+    """The source of every code cell of the notebook ``path``, in order (what Run All runs).
+
+    Raises ``SystemExit`` naming the file when it is not a notebook or has no code cell."""
+    try:
+        nb = json.loads(Path(path).read_text())
+        code = ["".join(c["source"]) for c in nb["cells"] if c["cell_type"] == "code"]
+    except (OSError, ValueError, KeyError, TypeError) as err:
+        raise SystemExit(f"{path}: expected a Jupyter notebook (JSON with code cells): {err}") from err
+    if not any(src.strip() for src in code):
+        raise SystemExit(f"{path}: expected a notebook with code cells, found none")
+    return [src for src in code if src.strip()]
+
+
+async def _run_lesson(url, user, lesson, code):
+    """Open ``user``'s copy of ``lesson`` (a notebook session: its kernel runs in their lessons folder) and run
+    ``code`` (cells) in it; returns the seconds it took."""
     from tornado.httpclient import HTTPRequest
     from tornado.websocket import websocket_connect
 
     headers = {"Authorization": f"token {TOKEN}"}
     t0 = time.perf_counter()
-    status, kernel = await asyncio.to_thread(_user_api, url, user, "POST", "/api/kernels", {"name": "python3"})
+    status, session = await asyncio.to_thread(
+        _user_api, url, user, "POST", "/api/sessions",
+        {"path": f"{LESSON_FOLDER}/{lesson}", "name": lesson, "type": "notebook", "kernel": {"name": "python3"}})
     if status != 201:
-        raise RuntimeError(f"{user}: could not start a kernel ({status})")
-    ws_url = url.replace("http", "ws", 1) + f"/user/{user}/api/kernels/{kernel['id']}/channels"
-    conn = await websocket_connect(HTTPRequest(ws_url, headers=headers))
-    for src in code:
+        raise RuntimeError(f"{user}: could not open {lesson} with a kernel ({status})")
+    ws_url = url.replace("http", "ws", 1) + f"/user/{user}/api/kernels/{session['kernel']['id']}/channels"
+    conn = await websocket_connect(HTTPRequest(ws_url, headers=headers), max_message_size=1 << 30)
+    for number, src in enumerate(code, 1):
         msg_id = uuid.uuid4().hex
         await conn.write_message(json.dumps({
             "header": {"msg_id": msg_id, "msg_type": "execute_request", "username": user, "session": msg_id,
@@ -108,7 +135,10 @@ async def _run_lesson(url, user, code):
             "content": {"code": src, "silent": False, "store_history": True, "user_expressions": {},
                         "allow_stdin": False, "stop_on_error": True}}))
         while True:
-            raw = await conn.read_message()
+            try:
+                raw = await asyncio.wait_for(conn.read_message(), CELL_TIMEOUT_S)
+            except asyncio.TimeoutError:
+                raise RuntimeError(f"{user}: {lesson}'s code cell {number} ran past {CELL_TIMEOUT_S} s") from None
             if raw is None:
                 raise RuntimeError(f"{user}: the kernel's websocket closed")
             if isinstance(raw, bytes):
@@ -117,10 +147,12 @@ async def _run_lesson(url, user, code):
             if msg.get("parent_header", {}).get("msg_id") != msg_id:
                 continue
             if msg["msg_type"] == "error":
-                raise RuntimeError(f"{user}: lesson 01 failed: {msg['content']['ename']}: {msg['content']['evalue']}")
+                raise RuntimeError(f"{user}: {lesson}'s code cell {number} failed: {msg['content']['ename']}: "
+                                   f"{msg['content']['evalue']}")
             if msg["msg_type"] == "execute_reply":
                 if msg["content"].get("status") != "ok":
-                    raise RuntimeError(f"{user}: lesson 01's cell ended with {msg['content'].get('status')}")
+                    raise RuntimeError(f"{user}: {lesson}'s code cell {number} ended with "
+                                       f"{msg['content'].get('status')}")
                 break
     conn.close()
     return time.perf_counter() - t0
@@ -150,15 +182,19 @@ def _open_studio(url, user):
     return time.perf_counter() - t0
 
 
-def _memory(user):
-    """(server RSS, kernels' RSS, peak of all) in MB for ``user``'s server process and its children (kernels)."""
+def _memory(hub_api, user):
+    """(server RSS, kernels' RSS, peak of all) in MB for ``user``'s server process and its children (kernels); only
+    a server of this hub (its API at ``hub_api``) counts, not another hub's student of the same name."""
     import psutil
 
     for proc in psutil.process_iter(["cmdline"]):
         try:
-            if not any("jupyterhub-singleuser" in part for part in proc.info["cmdline"] or []):
+            cmd = proc.info["cmdline"] or []
+            # the server itself, not the sandbox's unshare or init that carry its command line as arguments
+            if not any(Path(part).name == "jupyterhub-singleuser" for part in cmd[:2]) or "sandbox.py" in " ".join(cmd[:2]):
                 continue
-            if proc.environ().get("JUPYTERHUB_USER") != user:
+            env = proc.environ()
+            if env.get("JUPYTERHUB_USER") != user or env.get("JUPYTERHUB_API_URL", "").split("/hub/")[0] != hub_api:
                 continue
             kids = proc.children(recursive=True)
             peak = sum(_hwm_kb(p.pid) for p in [proc, *kids]) / 1024
@@ -175,7 +211,7 @@ def _hwm_kb(pid):
     return 0
 
 
-async def _class(url, n, code):
+async def _class(url, hub_api, n, lesson, code):
     users = [f"student{i + 1}" for i in range(n)]
 
     async def one(user):
@@ -188,42 +224,48 @@ async def _class(url, n, code):
                 raise RuntimeError(f"{user}: the server did not start within 300 s")
             await asyncio.sleep(0.2)
         start_s = time.perf_counter() - t0
-        lesson_s = await _run_lesson(url, user, code)
+        lesson_s = await _run_lesson(url, user, lesson, code)
         return user, start_s, lesson_s
 
     for user in users:
         _api(url, "POST", "/users", {"usernames": [user]})
-    done = await asyncio.gather(*(one(u) for u in users))
-    with_lesson = {user: _memory(user) for user, _, _ in done}
-    # then every student opens the studio at once, from their own server (Voila's server extension)
-    studio_s = await asyncio.gather(*(asyncio.to_thread(_open_studio, url, user) for user, _, _ in done))
-    rows = []
-    for (user, start_s, lesson_s), open_s in zip(done, studio_s):
-        server_mb, kernels_mb, peak_mb = _memory(user)
-        rows.append({"student": user, "server_start_s": round(start_s, 2), "lesson_s": round(lesson_s, 2),
-                     "studio_s": round(open_s, 2), "server_rss_mb": round(with_lesson[user][0], 1),
-                     "kernel_rss_mb": round(with_lesson[user][1], 1),
-                     "rss_mb": round(with_lesson[user][0] + with_lesson[user][1], 1),
-                     "studio_rss_mb": round(server_mb + kernels_mb, 1), "peak_mb": round(peak_mb, 1)})
-    for user in users:
-        _api(url, "DELETE", f"/users/{user}/server")
-    for user in users:
-        while _server(url, user) is not None:
-            time.sleep(0.5)
-        _api(url, "DELETE", f"/users/{user}")
+    try:
+        done = await asyncio.gather(*(one(u) for u in users))
+        with_lesson = {user: _memory(hub_api, user) for user, _, _ in done}
+        # then every student opens the studio at once, from their own server (Voila's server extension)
+        studio_s = await asyncio.gather(*(asyncio.to_thread(_open_studio, url, user) for user, _, _ in done))
+        rows = []
+        for (user, start_s, lesson_s), open_s in zip(done, studio_s):
+            server_mb, kernels_mb, peak_mb = _memory(hub_api, user)
+            rows.append({"student": user, "server_start_s": round(start_s, 2), "lesson_s": round(lesson_s, 2),
+                         "studio_s": round(open_s, 2), "server_rss_mb": round(with_lesson[user][0], 1),
+                         "kernel_rss_mb": round(with_lesson[user][1], 1),
+                         "rss_mb": round(with_lesson[user][0] + with_lesson[user][1], 1),
+                         "lesson_peak_mb": round(with_lesson[user][2], 1),
+                         "studio_rss_mb": round(server_mb + kernels_mb, 1), "peak_mb": round(peak_mb, 1)})
+    finally:  # every server stopped, so that the next lesson starts fresh ones (and their peaks are their own)
+        for user in users:
+            _api(url, "DELETE", f"/users/{user}/server")
+        for user in users:
+            t0 = time.perf_counter()
+            while _server(url, user) is not None and time.perf_counter() - t0 < 120:
+                time.sleep(0.5)
+            _api(url, "DELETE", f"/users/{user}")
     return rows
 
 
-def measure(sizes, out, note=""):
-    code = _lesson_code()
+def measure(sizes, lessons, out, note=""):
+    """Measure ``lessons`` (notebook names) with each class size of ``sizes`` on a hub of this configuration; write
+    the results file ``out`` (the command, the machine, the date, one run per lesson and size) and return it."""
+    code = {lesson: lesson_code(NOTEBOOKS / lesson) for lesson in lessons}
     folder = Path(tempfile.mkdtemp(prefix="posekit-hub-measure-"))
     overlay = folder / "jupyterhub_measure_config.py"
     overlay.write_text(OVERLAY.format(config=str(HERE / "jupyterhub_config.py"), token=TOKEN))
-    port = _free_port()
+    port, api_port = _free_port(), _free_port()
     env = dict(os.environ, POSEKIT_HUB_STATE=str(folder / "state"), POSEKIT_HUB_PORT=str(port),
-               POSEKIT_HUB_API_PORT=str(_free_port()), POSEKIT_HUB_PROXY_API_PORT=str(_free_port()),
+               POSEKIT_HUB_API_PORT=str(api_port), POSEKIT_HUB_PROXY_API_PORT=str(_free_port()),
                PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}")
-    url = f"http://127.0.0.1:{port}"
+    url, hub_api = f"http://127.0.0.1:{port}", f"http://127.0.0.1:{api_port}"
     with open(folder / "hub.log", "w") as log:
         hub = subprocess.Popen([str(Path(sys.executable).parent / "jupyterhub"), "-f", str(overlay)], cwd=folder,
                                env=env, stdout=log, stderr=subprocess.STDOUT)
@@ -234,13 +276,15 @@ def measure(sizes, out, note=""):
                     raise SystemExit(f"the hub did not start; its log: {folder / 'hub.log'}")
                 time.sleep(0.5)
             runs = []
-            for n in sizes:
-                rows = asyncio.run(_class(url, n, code))
-                runs.append({"students": n, "per_student": rows})
-                print(f"{n} students: " + ", ".join(
-                    f"start {r['server_start_s']:.1f} s, lesson {r['lesson_s']:.1f} s {r['rss_mb']:.0f} MB, studio "
-                    f"{r['studio_s']:.1f} s {r['studio_rss_mb']:.0f} MB (peak {r['peak_mb']:.0f})" for r in rows),
-                    flush=True)
+            for lesson in lessons:
+                for n in sizes:
+                    rows = asyncio.run(_class(url, hub_api, n, lesson, code[lesson]))
+                    runs.append({"lesson": lesson, "students": n, "per_student": rows})
+                    print(f"{lesson}, {n} students: " + ", ".join(
+                        f"start {r['server_start_s']:.1f} s, lesson {r['lesson_s']:.1f} s {r['rss_mb']:.0f} MB "
+                        f"(peak {r['lesson_peak_mb']:.0f}), "
+                        f"studio {r['studio_s']:.1f} s {r['studio_rss_mb']:.0f} MB (peak {r['peak_mb']:.0f})"
+                        for r in rows), flush=True)
         finally:
             hub.terminate()
             try:
@@ -255,12 +299,19 @@ def measure(sizes, out, note=""):
         "machine": {"platform": f"{platform.system()} {platform.machine()}", "python": platform.python_version(),
                     "cpus": os.cpu_count(), "memory_gb": round(_total_memory() / 2**30, 1),
                     "note": note},
-        "lesson": LESSON.name, "cells": list(CELLS), "runs": runs,
-        "per_student_peak_mb": max(r["peak_mb"] for run in runs for r in run["per_student"]),
+        "lessons": list(lessons), "cells": "every code cell of each lesson, in order; then the studio", "runs": runs,
     }
+    result.update(worst(runs))
     Path(out).write_text(json.dumps(result, indent=1) + "\n")
     print(f"wrote {out}")
     return result
+
+
+def worst(runs) -> dict:
+    """The largest per-student peak of ``runs`` (MB) and the lesson it was measured in: the figure a class is sized
+    by (``per_student_peak_mb``, ``worst_lesson``)."""
+    run, row = max(((run, r) for run in runs for r in run["per_student"]), key=lambda rr: rr[1]["peak_mb"])
+    return {"per_student_peak_mb": row["peak_mb"], "worst_lesson": run["lesson"]}
 
 
 def _total_memory():
@@ -281,18 +332,22 @@ def tljh_memory_gb(users, peak_mb):
 
 def table(result) -> str:
     """docs/hub.md's class-sizing tables (markdown), read from a results file of ``measure``."""
-    lines = ["| students at once | server start, s | lesson 01 to its panel, s | the studio's page, s | "
-             "memory with lesson 01, MB | with lesson 01 and the studio, MB | peak, MB |",
-             "|---|---|---|---|---|---|---|"]
+    lines = ["| lesson | students at once | server start, s | the whole lesson, s | the studio's page, s | "
+             "memory with the lesson, MB | its peak, MB | with the lesson and the studio, MB | peak, MB |",
+             "|---|---|---|---|---|---|---|---|---|"]
     for run in result["runs"]:
         rows = run["per_student"]
         times = [[r[k] for r in rows] for k in ("server_start_s", "lesson_s", "studio_s")]
-        lines.append(f"| {run['students']} | " + " | ".join(f"{_median(t):.1f} / {max(t):.1f}" for t in times) +
-                     f" | {max(r['rss_mb'] for r in rows):.0f} | {max(r['studio_rss_mb'] for r in rows):.0f} | "
+        lines.append(f"| {run['lesson'].removesuffix('.ipynb')} | {run['students']} | " +
+                     " | ".join(f"{_median(t):.1f} / {max(t):.1f}" for t in times) +
+                     f" | {max(r['rss_mb'] for r in rows):.0f} | {max(r['lesson_peak_mb'] for r in rows):.0f} | "
+                     f"{max(r['studio_rss_mb'] for r in rows):.0f} | "
                      f"{max(r['peak_mb'] for r in rows):.0f} |")
-    lines += ["", "Times: median / slowest student; memory: the student using the most (their server and kernels)."]
-    peak = result["per_student_peak_mb"]
-    lines += ["", f"Memory a machine needs by TLJH's rule (students × {peak:.0f} MB + {TLJH_OVERHEAD_MB} MB):", "",
+    lines += ["", "Times: median / slowest student; memory: the student using the most (their server and kernels), "
+              "after the lesson, its peak then, after the studio too, and the peak of it all."]
+    peak, lesson = result["per_student_peak_mb"], result["worst_lesson"].removesuffix(".ipynb")
+    lines += ["", f"Memory a machine needs by TLJH's rule (students × {peak:.0f} MB, the peak of {lesson} with the "
+              f"studio, + {TLJH_OVERHEAD_MB} MB):", "",
               "| students at once | " + " | ".join(str(n) for n in SIZES) + " |",
               "|---|" + "---|" * len(SIZES),
               "| memory, GB | " + " | ".join(f"{tljh_memory_gb(n, peak):.1f}" for n in SIZES) + " |"]
@@ -300,10 +355,11 @@ def table(result) -> str:
 
 
 def z2jh_resources(result) -> dict:
-    """zero-to-jupyterhub's ``singleuser`` memory and CPU from the measured peak: the guarantee is the peak rounded
-    up to 64 MB (what every student is sure to have), the limit twice that (room for the exercises and the later
-    lessons; past it the kernel is killed), a quarter of a CPU guaranteed and one at most (a choice, not measured:
-    the lessons' solvers run on one core at a time)."""
+    """zero-to-jupyterhub's ``singleuser`` memory and CPU from the measured peak of the worst lesson (with the studio
+    open): the guarantee is that peak rounded up to 64 MB (what every student is sure to have), the limit twice that
+    (the margin: room for the exercises, a second lesson's kernel left running; past it the kernel is killed), a
+    quarter of a CPU guaranteed and one at most (a choice, not measured: the lessons' solvers run on one core at a
+    time)."""
     guarantee = math.ceil(result["per_student_peak_mb"] / 64) * 64
     return {"memory": {"guarantee": f"{guarantee}M", "limit": f"{2 * guarantee}M"},
             "cpu": {"guarantee": 0.25, "limit": 1.0}}
@@ -312,6 +368,8 @@ def z2jh_resources(result) -> dict:
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--students", default="1,2,4", help="class sizes to measure, comma-separated (default 1,2,4)")
+    ap.add_argument("--lessons", default="00,01,02,03,04,05,06",
+                    help="the lessons to run, their numbers comma-separated (default all: 00,01,02,03,04,05,06)")
     ap.add_argument("--out", default=str(HERE / "class_sizing.json"), help="the results file to write")
     ap.add_argument("--table", metavar="RESULTS", help="print docs/hub.md's tables from a results file and exit")
     ap.add_argument("--values", metavar="RESULTS", help="print z2jh's singleuser resources from a results file")
@@ -322,7 +380,11 @@ def main(argv=None):
     elif args.values:
         print(json.dumps(z2jh_resources(json.loads(Path(args.values).read_text())), indent=1))
     else:
-        measure([int(n) for n in args.students.split(",")], args.out, args.note)
+        try:
+            sizes = [int(n) for n in args.students.split(",")]
+        except ValueError:
+            raise SystemExit(f"--students {args.students!r}: expected class sizes, comma-separated (1,2,4)") from None
+        measure(sizes, lesson_names(args.lessons), args.out, args.note)
 
 
 if __name__ == "__main__":

@@ -89,6 +89,8 @@ def test_the_kubernetes_resources_follow_the_measured_peak():
     assert single["memory"] == want["memory"] and single["cpu"] == want["cpu"]
     guarantee = int(single["memory"]["guarantee"].rstrip("M"))
     assert guarantee >= results["per_student_peak_mb"]  # every student is sure to have their measured peak
+    said = VALUES.read_text()  # the comment names the lesson the figures come from and their file
+    assert f"worst lesson, {results['worst_lesson']}" in said and "deploy/jupyterhub/class_sizing.json" in said
     assert single["defaultUrl"] == "/lab/tree/lessons"
     assert values["cull"]["enabled"] and values["cull"]["timeout"] == 3600  # as make hub's default
 
@@ -148,3 +150,46 @@ def test_a_course_gives_students_the_assignments_panel_and_not_the_instructors_t
     said = (folder / "nbgrader_config.py").read_text()
     assert "course_id = 'posekit'" in said and str(tmp_path / "state" / "exchange") in said
     assert c.ClassSpawner.expose == [str(tmp_path / "state" / "exchange")]
+
+
+def _row(peak, rss=500.0, studio=800.0, start=4.0, lesson=10.0, page=3.0):
+    return {"student": "student1", "server_start_s": start, "lesson_s": lesson, "studio_s": page,
+            "server_rss_mb": 250.0, "kernel_rss_mb": rss - 250.0, "rss_mb": rss, "lesson_peak_mb": rss + 40.0,
+            "studio_rss_mb": studio,
+            "peak_mb": peak}
+
+
+def test_the_sizing_table_has_a_row_per_lesson_and_sizes_by_the_worst_one():
+    m = _measure_module()
+    runs = [{"lesson": "00_skeletons_and_poses.ipynb", "students": 1, "per_student": [_row(700.4)]},
+            {"lesson": "05_protores.ipynb", "students": 2,
+             "per_student": [_row(1046.2, rss=760.0, lesson=30.0), _row(1001.0, rss=740.0, lesson=20.0)]},
+            {"lesson": "06_posing_studio.ipynb", "students": 1, "per_student": [_row(990.0)]}]
+    result = {"runs": runs, **m["worst"](runs)}
+    assert result == {"runs": runs, "per_student_peak_mb": 1046.2, "worst_lesson": "05_protores.ipynb"}
+    lines = m["table"](result).splitlines()
+    assert lines[2].startswith("| 00_skeletons_and_poses | 1 | 4.0 / 4.0 | 10.0 / 10.0 | 3.0 / 3.0 | 500 | 540 | 800 | 700 |")
+    assert lines[3] == "| 05_protores | 2 | 4.0 / 4.0 | 25.0 / 30.0 | 3.0 / 3.0 | 760 | 800 | 800 | 1046 |"
+    tljh = next(line for line in lines if line.startswith("Memory a machine needs"))
+    assert "1046 MB, the peak of 05_protores" in tljh
+    assert lines[-1] == "| memory, GB | " + " | ".join(f"{(n * 1046.2 + 128) / 1024:.1f}" for n in (10, 20, 30, 50)) + " |"
+    assert m["z2jh_resources"](result)["memory"] == {"guarantee": "1088M", "limit": "2176M"}  # 1046.2 -> 17 x 64
+
+
+def test_the_lessons_to_measure_are_read_from_their_numbers(tmp_path):
+    m = _measure_module()
+    assert m["lesson_names"]("05,0") == ["05_protores.ipynb", "00_skeletons_and_poses.ipynb"]
+    assert len(m["lesson_names"]("00,01,02,03,04,05,06")) == 7
+    for bad in ("07", "", "1,x"):
+        with pytest.raises(SystemExit, match="expected lesson numbers from 00, 01"):
+            m["lesson_names"](bad)
+    code = m["lesson_code"](ROOT / "notebooks" / "01_fabrik.ipynb")
+    assert any("SolverPanel(" in src for src in code) and all(src.strip() for src in code)
+    broken = tmp_path / "broken.ipynb"
+    broken.write_text('{"cells": [')
+    with pytest.raises(SystemExit, match="broken.ipynb: expected a Jupyter notebook"):
+        m["lesson_code"](broken)
+    empty = tmp_path / "empty.ipynb"
+    empty.write_text('{"cells": [{"cell_type": "markdown", "source": ["# only prose"]}]}')
+    with pytest.raises(SystemExit, match="empty.ipynb: expected a notebook with code cells"):
+        m["lesson_code"](empty)
