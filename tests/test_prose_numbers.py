@@ -199,7 +199,7 @@ def test_a_notebook_output_is_a_source():
                        ('20.5<!-- out: "| dls" #3 -->', "no number #3"),
                        ('34%<!-- out: "fabrik" col "met" -->', 'no column "met"'),
                        ('76 mm<!-- out: "fabrik" -->', "is not its source"),          # its first number: 3.49
-                       ('3.49<!-- out: "o" -->', "times (cells")):
+                       ('3.49<!-- out: "mm" -->', "times (cells")):
         bad = _problems(text, nb=_nb(*outs))
         assert len(bad) == 1 and says in bad[0], (text, bad)
 

@@ -84,7 +84,7 @@ _NOT_A_FIGURE = re.compile(r"(?:Secs?\.|Sections?|sections?|Alg\.|Algorithm|Eqs?
                            r"\s*(?:\d+(?:\.\d+)*\s*[–-]\s*)?[(]?$")
 _BARE_DECIMAL = re.compile(r"(?<![\w.$^{/-])(?P<num>\d+\.\d+)(?![\w.%°×/-])")
 # a bare integer of a list that ends in a figure: "FABRIK 71, DLS 56 and CCD 80 mm" -> 71 and 56
-_LIST_ITEM = re.compile(rf"(?<![\w.$^{{/-])(?P<num>{NUM})(?P<gap>\s*(?:,|;|\band\b|\bor\b|/)\s*(?:(?:and|or)\s+)?"
+_LIST_ITEM = re.compile(rf"(?<![\w.$^{{/–-])(?P<num>{NUM})(?P<gap>\s*(?:,|;|\band\b|\bor\b|/)\s*(?:(?:and|or)\s+)?"
                         r"(?:[^\W\d][\w'’+-]*\s+){0,3})$")
 
 # a measured duration or ratio written in words (it escapes every check): write its digits
@@ -166,6 +166,17 @@ def _sci_value(m):
     return "1", 10.0 ** int(m.group("only").translate(_SUPER))
 
 
+_SECTION_LIST = re.compile(r"(?:Secs?\.|Sections?|sections?)\s*\d+(?:\.\d+)*(?:\s*\([^)]*\))?"
+                           r"(?:\s*(?:,|and|or|–)\s*\d+(?:\.\d+)*(?:\s*\([^)]*\))?)*\s*(?:,|and|or|–)\s*$")
+
+
+def _not_a_figure(prose: str, start: int) -> bool:
+    """A section, an equation, an arXiv id, a version: by the words before the number (up to a list of sections,
+    "Sec. 3.2 (data), 3.3 (autoencoder)")."""
+    return bool(_NOT_A_FIGURE.search(prose[max(0, start - 24):start])
+                or _SECTION_LIST.search(prose[max(0, start - 200):start]))
+
+
 def figures(prose: str) -> list[Figure]:
     """Every figure of ``prose`` (already :func:`blank_non_prose`'d) that needs a source: numbers with a unit
     (each number of a list or range), scientific notation, bare decimals, and the bare integers of a list that
@@ -205,7 +216,7 @@ def figures(prose: str) -> list[Figure]:
                 break
             s = max(0, first.start - 80) + m.start("num")
             e = s + len(m.group("num"))
-            if any(a <= s < b for a, b in taken) or _NOT_A_FIGURE.search(prose[max(0, s - 24):s]):
+            if any(a <= s < b for a, b in taken) or _not_a_figure(prose, s):
                 break
             if "." in m.group("num"):
                 break                 # a bare decimal: read below
@@ -213,13 +224,18 @@ def figures(prose: str) -> list[Figure]:
             out.append(item)
             taken.append((s, e))
             first = item
+    last = None
     for m in _BARE_DECIMAL.finditer(prose):
         if any(a <= m.start() < b for a, b in taken):
             continue
-        if _NOT_A_FIGURE.search(prose[max(0, m.start() - 24):m.start()]):
+        if _not_a_figure(prose, m.start()):
             continue                  # a section, an equation, an arXiv id, a version
-        out.append(Figure(m.group("num"), m.group("num"), None, m.start(), m.end(), m.end(), group))
-        group += 1
+        if last is not None and re.fullmatch(_SEP, prose[last.end:m.start()]):
+            g = last.group            # a list of bare decimals ("0.5, 0.8, 0.95 and 0.999"): one figure
+        else:
+            g, group = group, group + 1
+        last = Figure(m.group("num"), m.group("num"), None, m.start(), m.end(), m.end(), g)
+        out.append(last)
     return sorted(out, key=lambda f: f.start)
 
 
@@ -450,8 +466,13 @@ def _unit_of_header(text: str):
 
 
 def _flex(anchor: str) -> re.Pattern:
-    """An anchor as a pattern: its text, any run of white space matching any other."""
-    return re.compile(r"\s+".join(re.escape(w) for w in anchor.split()))
+    """An anchor as a pattern: its text, any run of white space matching any other, never starting or ending
+    inside a word or a number ("fabrik 5" is not "fabrik 5point", "dls" not "dlsx")."""
+    words = anchor.split()
+    body = r"\s+".join(re.escape(w) for w in words)
+    head = r"(?<![\w.])" if re.match(r"[\w.]", words[0]) else ""
+    tail = r"(?![\w])" if re.search(r"\w$", words[-1]) else ""
+    return re.compile(head + body + tail)
 
 
 def _number_after(text: str, pos: int):
@@ -543,7 +564,7 @@ def _under_column(text: str, pos: int, header: str, where: str):
                 break
         if h is None:
             continue
-        best, overlap = None, 0
+        best, overlap = None, -3           # overlapping the header, else at most 2 characters beside it
         for n in _OUT_NUM.finditer(row):
             ov = min(n.end(), h.end()) - max(n.start(), h.start())
             if ov > overlap:
