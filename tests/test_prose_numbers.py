@@ -15,10 +15,11 @@ The markers
     (``<!-- out: "random benchmark" "fabrik" col "converged" -->``). After the texts, optionally:
     ``col "HEADER"`` — the number on the line of the last text under that column (fixed-width tables, right- or
     left-aligned, and Markdown tables); ``#N`` — the N-th number after it; ``unit U`` — the value's unit when
-    the output does not print it.
+    the output does not print it; ``scale N`` — the value times N, when the prose states it in other units than
+    the output prints (``5.3`` for an output's ``5.3e-3``, the prose's unit being 10⁻³ m²).
 ``<!-- data: FILE PATH -->``
     A results file's key: ``FILE`` under ``data_samples/results``, ``PATH`` keys joined by ``.``, ``[i]`` a
-    list's element, ``[k=v,k2=v2]`` the one element with those values
+    list's element, ``[k=v,k2=v2]`` the one element with those values (``unit`` and ``scale`` as above)
     (``<!-- data: bench_all.json rows[method=dls,effectors=2,start=rest].mpjpe_mm_median -->``).
 ``<!-- goal: REASON -->``, ``<!-- paper: REASON -->``, ``<!-- definition: REASON -->``, ``<!-- setting: REASON -->``
     A figure that is not measured here: a goal, a paper's figure, a definition, a setting — with its reason.
@@ -161,6 +162,8 @@ def test_a_marked_figure_is_checked_against_its_own_source(results):
     wrong = _problems("FABRIK lands 140.8 mm<!-- data: run.json rows[method=fabrik].mpjpe_mm_median -->", results)
     assert len(wrong) == 1 and "is not its source" in wrong[0] and "75.84" in wrong[0], wrong
     assert _problems("75.9 mm<!-- data: run.json rows[0].mpjpe_mm_median -->", results) != []
+    # a stated scale: the prose's figure is in thousandths of the key's unit-less value
+    assert _problems("198<!-- data: run.json rows[0].converged_fraction scale 1000 -->", results) == []
     # the key, the element or the file does not exist
     for bad_src, says in (("run.json rows[method=ccd].mpjpe_mm_median", "0 elements"),
                           ("run.json rows[0].mpjpe_mm_mean", "no key 'mpjpe_mm_mean'"),
@@ -190,7 +193,8 @@ def test_a_notebook_output_is_a_source():
           'of the cases, at 76 mm<!-- out: "fabrik" col "world joint mm" --> against '
           '54<!-- out: "protores" col "world joint mm" --> for ProtoRes, whose L_ikd-L2 is '
           '1.52<!-- out: "protores" #1 -->; DLS takes 0.52 ms<!-- out: "| dls" col "ms per solve" --> for '
-          '20.5 mm<!-- out: "| dls" col "MPJPE mm" -->.')
+          '20.5 mm<!-- out: "| dls" col "MPJPE mm" -->; the second anchor makes the first unique: '
+          '76 mm<!-- out: "mm" "fabrik" col "world joint mm" -->.')
     assert _problems(ok, nb=nb) == []
     outs = [c["outputs"][0]["text"] for c in nb["cells"][1:]]
     for text, says in (('29 ms<!-- out: "FABRIK median MPJPE" -->', "not a time"),
@@ -199,9 +203,15 @@ def test_a_notebook_output_is_a_source():
                        ('20.5<!-- out: "| dls" #3 -->', "no number #3"),
                        ('34%<!-- out: "fabrik" col "met" -->', 'no column "met"'),
                        ('76 mm<!-- out: "fabrik" -->', "is not its source"),          # its first number: 3.49
-                       ('3.49<!-- out: "mm" -->', "times (cells")):
+                       ('3.49<!-- out: "mm" -->', "times (cells"),
+                       ('0.52 ms<!-- out: "L_ikd-L2" "| dls" -->', 'followed by "| dls"')):
         bad = _problems(text, nb=_nb(*outs))
         assert len(bad) == 1 and says in bad[0], (text, bad)
+    # the same table in two cells: anchors must say which
+    twice = _nb("first run\n" + outs[1], "second run\n" + outs[1])
+    bad = _problems('76 mm<!-- out: "fabrik" col "world joint mm" -->', nb=twice)
+    assert len(bad) == 1 and "in the outputs 2 times (cells 1, 2)" in bad[0], bad
+    assert _problems('76 mm<!-- out: "second run" "fabrik" col "world joint mm" -->', nb=twice) == []
 
 
 def test_a_figure_without_a_source_fails_and_an_exemption_needs_a_reason():

@@ -70,6 +70,8 @@ EXEMPT = {
     ("04", "8 steps"): "setting: L-BFGS's memory",
     ("00", "30 fps"): "definition: the Bandai data's frame rate (a fact of the data)",
     ("01", "60°"): "setting: the near-extended step's threshold",
+    ("06", "99%"): "goal: the lesson's Aim", ("06", "5%"): "goal: the lesson's Aim",
+    ("05", "2,000 steps"): "setting: the studies' step count (posekit train protores-studies)",
 }
 
 # read and decided: (lesson, the text that ends with the figure, once in the lesson's markdown) -> marker body
@@ -83,6 +85,231 @@ DECIDED = [
     ("01", "with `ratio` 0.5, 0.8, 0.95 and 0.999", "setting: ratios for the exercise to try"),
     ("01", "convergence (0.60",
      'out: "method set effector mm MPJPE mm bone mm converged iters" "fabrik-constrained 5point" col "converged"'),
+    ("03", "for $k = 0.1$ and 1", "setting: a k of the study"),
+    ("03", "for the shipped 0.01", "setting: the shipped solvers' k"),
+    ("03", "The network alone misses by 7–29 mm", 'out: "start: same-clip" "neural-raw 2" col "effector mm"; '
+     'out: "start: rest" "neural-raw 5" col "effector mm"'),
+    ("03", "two hands within about 1 mm", 'out: "start: rest" "neural 2" col "effector mm"'),
+    ("03", "leaves five effectors 17–23 mm", 'out: "start: rest" "neural 5" col "effector mm"; '
+     'out: "start: other-clip" "neural 5" col "effector mm"'),
+    ("03", "(worst 59 mm", 'out: "5 effectors worst case"'),
+    ("03", "FABRIK's accuracy (0.1–0.3 mm", 'out: "start: rest" "neural-fabrik 2" col "effector mm"; '
+     'out: "start: same-clip" "neural-fabrik 2" col "effector mm"'),
+    ("03", "costs naturalness: 40–52 mm", 'out: "start: rest" "neural 2" col "natural mm"; '
+     'out: "start: other-clip" "neural 2" col "natural mm"'),
+    ("03", "after the backward pass against 33–44 mm", 'out: "start: rest" "neural-raw 2" col "natural mm"; '
+     'out: "start: other-clip" "neural-raw 2" col "natural mm"'),
+    ("03", "(five effectors: 24 / 18 / 24 mm", 'out: "full rest 5" col "neural"; out: "full same-clip 5" col '
+     '"neural"; out: "full other-clip 5" col "neural"'),
+    ("03", "another clip, against 29", 'out: "start: rest" "neural 5" col "MPJPE mm"'),
+    ("03", "another clip, against 29 / 20", 'out: "start: same-clip" "neural 5" col "MPJPE mm"'),
+    ("03", "another clip, against 29 / 20 / 25", 'out: "start: other-clip" "neural 5" col "MPJPE mm"'),
+    ("03", "falls from 17.0 / 20.0 / 23.1 mm", 'out: "start: rest" "neural 5" col "effector mm"; out: "start: '
+     'same-clip" "neural 5" col "effector mm"; out: "start: other-clip" "neural 5" col "effector mm"'),
+    ("03", "on two hands (56 against 55 mm", 'out: "cross same-clip 2" col "neural"; out: "cross same-clip 2" '
+     'col "FABRIK"'),
+    ("03", "(five effectors 18.8 / 14.0 / 15.9 mm", 'out: "cross rest 5" col "eff."; out: "cross same-clip 5" '
+     'col "eff."; out: "cross other-clip 5" col "eff."'),
+    ("04", "(`posekit train aegan`: 9,000 steps", "setting: the shipped training's step count"),
+    ("04", "against the neural solver's 68 / 54", 'out: "start: same-clip" "neural 2" col "MPJPE mm"'),
+    ("04", "with five effectors 23 / 21 / 24 mm", 'out: "start: rest" "latent-opt 5" col "MPJPE mm"; out: "start: '
+     'same-clip" "latent-opt 5" col "MPJPE mm"; out: "start: other-clip" "latent-opt 5" col "MPJPE mm"'),
+    ("04", "24 mm against 28", 'out: "start: rest" "neural 5" col "MPJPE mm"'),
+    ("04", "24 mm against 28 / 20", 'out: "start: same-clip" "neural 5" col "MPJPE mm"'),
+    ("04", "24 mm against 28 / 20 / 24", 'out: "start: other-clip" "neural 5" col "MPJPE mm"'),
+    ("04", "and FABRIK's 40", 'out: "start: rest" "fabrik 5" col "MPJPE mm"'),
+    ("04", "and FABRIK's 40 / 33", 'out: "start: same-clip" "fabrik 5" col "MPJPE mm"'),
+    ("04", "and FABRIK's 40 / 33 / 52", 'out: "start: other-clip" "fabrik 5" col "MPJPE mm"'),
+    ("04", "It is never more than 4 mm", 'out: "latent-opt\'s full pose is never more than"'),
+    ("04", "meets two targets to about 1 mm", 'out: "start: rest" "latent-opt-raw 2" col "effector mm"'),
+    ("04", "and five to 5–8 mm", 'out: "start: same-clip" "latent-opt-raw 5" col "effector mm"; out: "start: rest" '
+     '"latent-opt-raw 5" col "effector mm"'),
+    ("04", "drift to 17–19 mm", 'out: "start: same-clip" "latent-opt 5" col "effector mm"; out: "start: '
+     'other-clip" "latent-opt 5" col "effector mm"'),
+    ("04", "of reconstruction (31 against 4 mm", 'out: "AE-GAN 32"; out: "autoencoder 64"'),
+    ("04", "poses within 3 mm", 'out: "random codes >= 2x as natural as lesson 03\'s (beyond the floor)"'),
+    ("04", "it rates real held-out poses 0.28",
+     'out: "the pose discriminator calls held-out real poses real with median probability"'),
+    ("04", "generated ones 0.02", 'out: "AE-GAN 32" col "real"'),
+    ('05', 'in at most **1 ms',
+     "goal: the lesson's Aim"),
+    ('05', '**at least 50%',
+     "goal: the lesson's Aim"),
+    ('05', 'took 42,000 steps',
+     'out: "final validation world joint error 60 mm" "masked-fcr"'),
+    ('05', 'and trained for 2,000 steps',
+     "setting: the studies' step count (posekit train protores-studies)"),
+    ('05', 'The width runs take 2,000 steps',
+     "setting: the studies' step count"),
+    ('05', 'for 500 to 8,000 steps',
+     "setting: the scaling study's step counts"),
+    ('05', 'about 9x',
+     'out: "the shipped run: 1.4e+13 parameter-poses ("'),
+    ('05', 'with 9x',
+     'out: "the shipped run: 1.4e+13 parameter-poses ("'),
+    ('05', '(at 2,000 steps',
+     "setting: the studies' step count"),
+    ('05', 'at about 2e+03 core-hours',
+     'out: "9.6e+02x the shipped run, about"'),
+    ('05', "below FABRIK's 3.49",
+     'out: "5point benchmark, 1000 held-out cases" "L_gpd-L2" "fabrik" col "L_ikd-L2"'),
+    ('05', 'where the line predicted 5.3',
+     'out: "1.52e-3 measured," scale 1000'),
+    ('05', 'The products alone fit the 1 ms',
+     "goal: the lesson's Aim"),
+    ('05', 'and its 159 MB',
+     'out: "multiply-adds per pose (15x ours),"'),
+    ('05', 'the caches: one pose\'s products alone, measured, take over 10 times',
+     'out: "the paper\'s width: one pose\'s products alone take over"'),
+    ('05', "paper's whole 10 ms per pose",
+     'paper: Oreshkin et al. 2022, about 10 ms per pose in Unity on a GPU'),
+    ('05', 'an orange marker 1 m',
+     'setting: where a look-at target starts'),
+    ('05', 'L2}$: ProtoRes 1.52',
+     'out: "5point benchmark, 1000 held-out cases" "L_gpd-L2" "protores" col "L_ikd-L2"'),
+    ('05', 'Masked-FCR 3.03',
+     'out: "5point benchmark, 1000 held-out cases" "L_gpd-L2" "masked-fcr" col "L_ikd-L2"'),
+    ('05', 'the Transformer 1.23',
+     'out: "5point benchmark, 1000 held-out cases" "L_gpd-L2" "transformer" col "L_ikd-L2"'),
+    ('05', "1.23 against FABRIK's 3.49",
+     'out: "5point benchmark, 1000 held-out cases" "L_gpd-L2" "fabrik" col "L_ikd-L2"'),
+    ('05', "and DLS's 6.25",
+     'out: "5point benchmark, 1000 held-out cases" "L_gpd-L2" "dls" col "L_ikd-L2"'),
+    ('05', '(FABRIK / ProtoRes 2.3',
+     'out: "| classical / ProtoRes |" col "here"'),
+    ('05', 'FinalIK / ProtoRes is 4.1–4.6',
+     'paper: Oreshkin et al. 2022, Table 1 (FinalIK / ProtoRes)'),
+    ('05', '(median 35.3 mm',
+     'out: "5point benchmark, 1000 held-out cases" "L_gpd-L2" "protores" col "pos mm"'),
+    ('05', 'median miss is 0.0 mm',
+     'out: "5point benchmark, 1000 held-out cases" "L_gpd-L2" "fabrik" col "pos mm"'),
+    ('05', 'in only 34%',
+     'out: "5point benchmark, 1000 held-out cases" "converged" "fabrik" col "converged"'),
+    ('05', '(world joint error 54 against 76 mm',
+     'out: "5point benchmark, 1000 held-out cases" "L_gpd-L2" "protores" col "world joint mm"; out: "5point benchmark, 1000 held-out cases" "L_gpd-L2" "fabrik" col "world joint mm"'),
+    ('05', 'world joint error 54 mm',
+     'out: "5point benchmark, 1000 held-out cases" "L_gpd-L2" "protores" col "world joint mm"'),
+    ('05', 'L2}$ 2.91',
+     'out: "random benchmark, 1000 held-out cases" "L_gpd-L2" "protores" col "L_ikd-L2"'),
+    ('05', '2.91 against 4.49',
+     'out: "random benchmark, 1000 held-out cases" "L_gpd-L2" "masked-fcr" col "L_ikd-L2"'),
+    ('05', '(Masked-FCR) and 2.98',
+     'out: "random benchmark, 1000 held-out cases" "L_gpd-L2" "transformer" col "L_ikd-L2"'),
+    ('05', 'geo}$ 0.280',
+     'out: "random benchmark, 1000 held-out cases" "L_gpd-L2" "protores" col "L_loc-geo"'),
+    ('05', 'against 0.323',
+     'out: "random benchmark, 1000 held-out cases" "L_gpd-L2" "masked-fcr" col "L_loc-geo"'),
+    ('05', '0.323 and 0.284',
+     'out: "random benchmark, 1000 held-out cases" "L_gpd-L2" "transformer" col "L_loc-geo"'),
+    ('05', '(25.3 against 27.5 mm',
+     'out: "random benchmark, 1000 held-out cases" "L_gpd-L2" "transformer" col "pos mm"; out: "random benchmark, 1000 held-out cases" "L_gpd-L2" "protores" col "pos mm"'),
+    ('05', 'ahead of ProtoRes (1.23',
+     'out: "5point benchmark, 1000 held-out cases" "L_gpd-L2" "transformer" col "L_ikd-L2"'),
+    ('05', 'ahead of ProtoRes (1.23 against 1.52',
+     'out: "5point benchmark, 1000 held-out cases" "L_gpd-L2" "protores" col "L_ikd-L2"'),
+    ('05', 'stay at 28–29 mm',
+     'out: "Lambda pos mm rot deg look deg world joint mm" "0.7" col "pos mm"; out: "Lambda pos mm rot deg look deg world joint mm" "0.8" col "pos mm"'),
+    ('05', 'to 36 mm at 0.9',
+     'setting: a Λ of the table'),
+    ('05', '(at most 5.498 mm',
+     'out: "Lambda sigma (position)" "0.80"'),
+    ('05', 'at 2,000 steps of width 128',
+     "setting: the studies' step count"),
+    ('05', '(+0.9',
+     'out: "no GPD 10.36 ("'),
+    ('05', 'and +0.7',
+     'out: "fixed weights 10.10 ("'),
+    ('05', '128 and 256 for 2,000 steps',
+     "setting: the studies' step count"),
+    ('05', '(17.50 and 10.7',
+     'out: "core-min" "64 2000" col "5-pt L_ikd"'),
+    ('05', '13.81 / 9.42',
+     'out: "128 719,415" col "random L_ikd"'),
+    ('05', 'in the first, 9.4',
+     'out: "64 2000" col "random L_ikd"'),
+    ('05', 'in the first, 9.4 / 11.7',
+     'out: "128 2000" col "random L_ikd"'),
+    ('05', 'swing more: 17.50 / 17.73',
+     'out: "128 719,415" col "5-pt L_ikd"'),
+    ('05', '9.79 and 10.7',
+     'out: "64 2000" col "5-pt L_ikd"'),
+    ('05', '9.79 and 10.7 / 18.0',
+     'out: "128 2000" col "5-pt L_ikd"'),
+    ('05', 'At 2,000 steps',
+     "setting: the studies' step count"),
+    ('05', 'single pose fit the 1 ms',
+     "goal: the lesson's Aim"),
+    ('05', "At the paper's width one pose's products alone, measured, take over 10 times",
+     'out: "the paper\'s width: one pose\'s products alone take over"'),
+    ('05', '(at least 99%',
+     "goal: the threshold the claims after section 9's table assert"),
+    ('05', 'L2}$ 2.22',
+     'out: "random benchmark, 1000 held-out cases" "converged" "protores+dls" col "L_ikd-L2"'),
+    ('05', 'of all (1.19',
+     'out: "5point benchmark, 1000 held-out cases" "converged" "protores+dls" col "L_ikd-L2"'),
+    ('05', "of all (1.19 against FABRIK's 3.49",
+     'out: "5point benchmark, 1000 held-out cases" "converged" "fabrik" col "L_ikd-L2"'),
+    ('05', '0.302 against 0.264',
+     'out: "5point benchmark, 1000 held-out cases" "converged" "protores" col "L_loc-geo"'),
+    ('05', '0.302',
+     'out: "5point benchmark, 1000 held-out cases" "converged" "protores+dls" col "L_loc-geo"'),
+    ('05', '0.236 against 0.280',
+     'out: "random benchmark, 1000 held-out cases" "converged" "protores" col "L_loc-geo"'),
+    ('05', '0.236',
+     'out: "random benchmark, 1000 held-out cases" "converged" "protores+dls" col "L_loc-geo"'),
+    ('05', "against DLS's 3.40",
+     'out: "random benchmark, 1000 held-out cases" "converged" "dls" col "L_ikd-L2"'),
+    ('05', "and ProtoRes's 2.91",
+     'out: "random benchmark, 1000 held-out cases" "converged" "protores" col "L_ikd-L2"'),
+    ('05', "one pose's products alone fit the 1 ms",
+     "goal: the lesson's Aim"),
+    ('05', 'width take over 10 times',
+     'out: "the paper\'s width: one pose\'s products alone take over"'),
+    ("05", "(ProtoRes 1.52", 'out: "5point benchmark, 1000 held-out cases" "L_gpd-L2" "protores" col "L_ikd-L2"'),
+    ("05", "(ProtoRes 1.52 against 3.49", 'out: "5point benchmark, 1000 held-out cases" "L_gpd-L2" "fabrik" col "L_ikd-L2"'),
+    ("05", "(ProtoRes 1.52 against 3.49 and 6.25", 'out: "5point benchmark, 1000 held-out cases" "L_gpd-L2" "dls" col "L_ikd-L2"'),
+    ('06', 'against 41.1',
+     'data: bench_all.json rows[method=latent-opt+dls,effectors=2,start=rest].natural_mm_median'),
+    ('06', 'against 41.1 and 39.7',
+     'data: bench_all.json rows[method=neural+dls,effectors=2,start=rest].natural_mm_median'),
+    ('06', 'are (47.3',
+     'data: bench_all.json rows[method=neural+dls,effectors=2,start=other-clip].natural_mm_median'),
+    ('06', 'are (47.3 and 50.1',
+     'data: bench_all.json rows[method=latent-opt+dls,effectors=2,start=other-clip].natural_mm_median'),
+    ('06', "against FABRIK's 59.3",
+     'data: bench_all.json rows[method=fabrik,effectors=2,start=other-clip].natural_mm_median'),
+    ('06', 'is the closest (18.0',
+     'data: bench_all.json rows[method=latent-opt+dls,effectors=5,start=rest].mpjpe_mm_median'),
+    ('06', 'is the closest (28.3',
+     'data: bench_all.json rows[method=protores+dls,effectors=random,start=rest].mpjpe_mm_median'),
+    ('06', '(natural 49.1 and 63.3 mm',
+     'data: bench_all.json rows[method=fabrik,effectors=5,start=rest].natural_mm_median; data: bench_all.json rows[method=fabrik,effectors=5,start=other-clip].natural_mm_median'),
+    ('06', "the true poses' own 35.7 mm",
+     'data: bench_all.json natural_floor_mm_median.rest'),
+    ('06', 'ProtoRes by 63.4 mm',
+     'data: bench_all.json rows[method=protores,effectors=5,start=rest].effector_error_mm_median'),
+    ('06', '(median) on set 5',
+     "definition: an effector set's name"),
+    ('06', 'and up to 183 mm',
+     'out: "protores 23 frames; worst effector"'),
+    ('06', 'in only 20%',
+     'data: bench_all.json rows[method=fabrik,effectors=random,start=rest].converged_fraction'),
+    ('06', 'from the rest pose too (18.0',
+     'data: bench_all.json rows[method=latent-opt+dls,effectors=5,start=rest].mpjpe_mm_median'),
+    ('06', 'every finish takes 2.49 ms per solve',
+     'data: bench_all.json rows[method=latent-opt+dls,effectors=random,start=other-clip].latency_ms_median'),
+    ('06', 'or less (0.690–2.49 ms',
+     'data: bench_all.json rows[method=neural+dls,effectors=2,start=rest].latency_ms_median; data: bench_all.json rows[method=latent-opt+dls,effectors=random,start=other-clip].latency_ms_median'),
+    ('06', 'behind FABRIK (75.8 mm',
+     'data: bench_all.json rows[method=fabrik,effectors=2,start=rest].mpjpe_mm_median'),
+    ('06', 'ProtoRes alone (108.3 mm',
+     'data: bench_all.json rows[method=protores,effectors=2,start=rest].mpjpe_mm_median'),
+    ('06', "the learned pose's in 48%",
+     'data: bench_all.json rows[method=protores+dls,effectors=5,start=rest].learned_kept_fraction'),
+    ('06', 'in every set (20.5',
+     'data: bench_all.json rows[method=dls,effectors=5,start=rest].mpjpe_mm_median'),
+    ('06', 'ignores the start: 44.1 mm',
+     'data: bench_all.json rows[method=protores,effectors=5,start=rest].mpjpe_mm_median'),
     ("01", "a converged fraction of 1.00",
      'out: "method set effector mm MPJPE mm bone mm converged iters" "fabrik 5" col "converged"'),
 ]
@@ -195,6 +422,8 @@ def _fmt(src: Source) -> str:
         body += f" #{src.nth}"
     if src.unit:
         body += f" unit {src.unit}"
+    if src.scale != 1:
+        body += f" scale {src.scale:g}"
     return f"out: {body}"
 
 
@@ -280,9 +509,15 @@ def _json_leaves(node, path=""):
         for i, e in enumerate(node):
             sel = f"[{i}]"
             if isinstance(e, dict):
+                # the fewest identifying fields that pick this element alone: method, effectors, start first
                 ids = {k: v for k, v in e.items() if isinstance(v, str) and len(v) < 40 and re.fullmatch(r"[^,\]=]+", v)}
-                if ids and sum(all(isinstance(o, dict) and o.get(k) == v for k, v in ids.items()) for o in node) == 1:
-                    sel = "[" + ",".join(f"{k}={v}" for k, v in ids.items()) + "]"
+                order = [k for k in ("method", "effectors", "start") if k in ids] + \
+                    [k for k in ids if k not in ("method", "effectors", "start")]
+                for n in range(1, len(order) + 1):
+                    want = {k: ids[k] for k in order[:n]}
+                    if sum(all(isinstance(o, dict) and o.get(k) == v for k, v in want.items()) for o in node) == 1:
+                        sel = "[" + ",".join(f"{k}={v}" for k, v in want.items()) + "]"
+                        break
             yield from _json_leaves(e, path + sel)
     elif isinstance(node, (int, float)) and not isinstance(node, bool):
         yield path, float(node)
@@ -301,8 +536,8 @@ def data_sources(files, fig):
             fam = family(unit)[0]
             if fig.unit and fam and fam != family(fig.unit)[0]:
                 continue
-            if not (fig.unit and fam) and fig.unit:
-                continue              # a unit in the prose wants a key that names one
+            if not (fig.unit and fam):
+                continue              # a key must name the prose's unit: a bare number matches too much
             if agrees(fig, value, unit)[0]:
                 out.append(src)
     return out
@@ -332,6 +567,8 @@ def insert_after(nb: dict, snippet: str, body: str) -> str | None:
         plain, where = _plain(text)
         pattern = r"\s+".join(re.escape(w) for w in snippet.split())
         hits += [(c, text, where, m.end()) for m in re.finditer(pattern, plain)]
+    if not re.search(r"\d[\d,.]*(?:\s?[\w/°%+-]+(?:\s(?:per|a)\s\w+)?)?$", snippet.strip()):
+        return "the text does not end with its figure"
     if len(hits) != 1:
         return f"{len(hits)} places"
     c, text, where, end = hits[0]
@@ -357,6 +594,21 @@ def carry(old: dict, new: dict, width: int = 40) -> list[str]:
             if why:
                 lost.append(f"{mk.raw} after '{snippet}': {why}")
     return lost
+
+
+def _row_score(src: Source, window: str) -> int:
+    """How well the prose around a figure names a results row: its method (in backticks or not), its effector set
+    and its start condition."""
+    sel = dict(re.findall(r"(\w+)=([^,\]]+)", src.path))
+    score = 0
+    if sel.get("method") and re.search(rf"(?<![\w+-]){re.escape(sel['method'].lower())}(?![\w+-])", window):
+        score += 4
+    eff = {"2": ("two hands", "`2`", "2 effectors"), "5": ("five", "`5`", "5 effectors"),
+           "random": ("random", "mixed kinds")}.get(sel.get("effectors", ""), ())
+    score += any(e in window for e in eff)
+    st = {"rest": ("rest",), "other-clip": ("other-clip", "another clip", "other clip")}.get(sel.get("start", ""), ())
+    score += any(e in window for e in st)
+    return score
 
 
 def propose(path: Path, exempt: dict, write: bool) -> tuple[int, list]:
@@ -419,6 +671,16 @@ def propose(path: Path, exempt: dict, write: bool) -> tuple[int, list]:
                     overlap = -sum(1 for w in words if w in said)
                     cands.append((same, overlap, dist, cell, otext, li, line, m, header, value, hint))
                 cands.sort(key=lambda t: (t[0], t[2], t[1]))
+                # a results row the prose names (its method, with its effector set or start): bound to the file
+                ds = data_sources(files, fig)
+                window = text[max(0, fig.start - 160):fig.end + 40].lower()
+                scored = sorted(((_row_score(d, window), k, d) for k, d in enumerate(ds)), key=lambda t: (-t[0], t[1]))
+                if scored and scored[0][0] >= 5 and (len(scored) == 1 or scored[1][0] < scored[0][0]):
+                    cands = []
+                    found = (f"data: {scored[0][2].file} {scored[0][2].path}", "the prose names its row", len(ds))
+                # a long report printed whole (lesson 06's bench_all.md): its numbers are bound to the results
+                # file's keys instead, which name the row
+                cands = [c for c in cands if len(c[4]) < 4000]
                 for same, overlap, dist, cell, otext, li, line, m, header, value, hint in cands[:12]:
                     srcs = out_sources(outputs, cell, otext, li, line, m, header, fig, value, hint)
                     if srcs:
@@ -426,8 +688,11 @@ def propose(path: Path, exempt: dict, write: bool) -> tuple[int, list]:
                         break
                 if found is None:
                     ds = data_sources(files, fig)
-                    if len(ds) >= 1:
-                        found = (f"data: {ds[0].file} {ds[0].path}", f"{len(ds)} keys agree", len(ds))
+                    window = text[max(0, fig.start - 160):fig.end + 40].lower()
+                    scored = sorted(((_row_score(d, window), k, d) for k, d in enumerate(ds)), key=lambda t: (-t[0], t[1]))
+                    if scored and scored[0][0] > 0 and (len(scored) == 1 or scored[1][0] < scored[0][0]):
+                        d = scored[0][2]
+                        found = (f"data: {d.file} {d.path}", f"{len(ds)} keys agree, best named", len(ds))
                 if found is None:
                     unbound.append((i, fig.written, fig.num, _sentence(text, fig.start)))
                     continue

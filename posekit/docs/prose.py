@@ -84,7 +84,7 @@ _NOT_A_FIGURE = re.compile(r"(?:Secs?\.|Sections?|sections?|Alg\.|Algorithm|Eqs?
                            r"\s*(?:\d+(?:\.\d+)*\s*[–-]\s*)?[(]?$")
 _BARE_DECIMAL = re.compile(r"(?<![\w.$^{/-])(?P<num>\d+\.\d+)(?![\w.%°×/-])")
 # a bare integer of a list that ends in a figure: "FABRIK 71, DLS 56 and CCD 80 mm" -> 71 and 56
-_LIST_ITEM = re.compile(rf"(?<![\w.$^{{/–-])(?P<num>{NUM})(?P<gap>\s*(?:,|;|\band\b|\bor\b|/)\s*(?:(?:and|or)\s+)?"
+_LIST_ITEM = re.compile(rf"(?<![\w.$^{{/–-])(?P<num>{NUM})(?P<gap>\s*(?:,|\band\b|\bor\b|/)\s*(?:(?:and|or)\s+)?"
                         r"(?:[^\W\d][\w'’+-]*\s+){0,3})$")
 
 # a measured duration or ratio written in words (it escapes every check): write its digits
@@ -216,6 +216,8 @@ def figures(prose: str) -> list[Figure]:
                 break
             s = max(0, first.start - 80) + m.start("num")
             e = s + len(m.group("num"))
+            if s > 0 and re.match(r"[\w.$^{/–-]", prose[s - 1]):
+                break                 # the window began inside a number or a word
             if any(a <= s < b for a, b in taken) or _not_a_figure(prose, s):
                 break
             if "." in m.group("num"):
@@ -275,6 +277,7 @@ class Source:
     file: str | None = None
     path: str | None = None
     unit: str | None = None
+    scale: float = 1.0
     reason: str = ""
 
 
@@ -318,6 +321,14 @@ def _parse_source(kind: str, body: str) -> Source:
             src.unit = tokens[k + 1][1]
             if family(src.unit)[0] is None:
                 raise SourceError(f"unknown unit '{src.unit}' (known: {', '.join(UNITS)})")
+            k += 2
+            continue
+        if t == "w" and v == "scale" and k + 1 < len(tokens):
+            try:
+                src.scale = float(tokens[k + 1][1])
+            except ValueError:
+                raise SourceError(f"scale takes a number ('scale 1000': the value times 1000), not "
+                                  f"'{tokens[k + 1][1]}'") from None
             k += 2
             continue
         if t == "w" and v == "col" and k + 1 < len(tokens) and tokens[k + 1][0] == "q":
@@ -510,17 +521,26 @@ class Outputs:
         hits = [(i, m) for i, t in self.cells for m in first.finditer(t)]
         if not hits:
             raise SourceError(f'no output shows "{src.anchors[0]}"')
-        if len(hits) > 1:
-            cells = sorted({i for i, _ in hits})
-            raise SourceError(f'"{src.anchors[0]}" is in the outputs {len(hits)} times (cells '
-                              f'{", ".join(map(str, cells))}): add text that makes it unique, or a second anchor')
-        cell, m = hits[0]
+        # the anchors in order, each after the one before in the same cell's output: one place must have them all
+        found = []
+        for cell, m in hits:
+            text = dict(self.cells)[cell]
+            for a in src.anchors[1:]:
+                m = _flex(a).search(text, m.end())
+                if not m:
+                    break
+            if m:
+                found.append((cell, m))
+        if not found:
+            raise SourceError(f'no output shows "{src.anchors[0]}" followed by '
+                              + " then ".join(f'"{a}"' for a in src.anchors[1:]))
+        if len(found) > 1:
+            cells = sorted({i for i, _ in found})
+            raise SourceError(f'{" then ".join(chr(34) + a + chr(34) for a in src.anchors)} is in the outputs '
+                              f'{len(found)} times (cells {", ".join(map(str, cells))}): add text that makes it '
+                              'unique, or an anchor before it')
+        cell, m = found[0]
         text = dict(self.cells)[cell]
-        for a in src.anchors[1:]:
-            m2 = _flex(a).search(text, m.end())
-            if not m2:
-                raise SourceError(f'cell {cell}\'s output has no "{a}" after "{src.anchors[0]}"')
-            m = m2
         where = f"cell {cell}"
         if src.col is not None:
             return (*_under_column(text, m.end(), src.col, where), where)
@@ -546,7 +566,7 @@ def _under_column(text: str, pos: int, header: str, where: str):
     pat = _flex(header)
     for k in range(row_i - 1, -1, -1):
         line = lines[k]
-        if "|" in row and "|" in line:
+        if row.strip().startswith("|") and "|" in line:
             cells = [c.strip() for c in line.strip().strip("|").split("|")]
             if header in cells:
                 vals = [c.strip() for c in row.strip().strip("|").split("|")]
@@ -688,6 +708,7 @@ def check_text(text: str, *, results_dir, outputs: Outputs | None = None, allowe
                 value, unit, at = outputs.resolve(src)
             else:
                 value, unit, at = resolve_data(results_dir, src)
+            value *= src.scale
         except SourceError as e:
             problems.append((line, f"'{fig.written}' ({fig.num}): {e}"))
             continue
