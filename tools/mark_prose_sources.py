@@ -74,6 +74,10 @@ EXEMPT = {
     ("05", "2,000 steps"): "setting: the studies' step count (posekit train protores-studies)",
 }
 
+# results files whose rows a lesson's prose reads (lesson 06 prints bench_all.md whole): bound by key there; no
+# other lesson's figure is bound to a results file by the script (a value a file shares by chance would do)
+DATA_FIRST = {"06": ("bench_all.json",)}
+
 # read and decided: (lesson, the text that ends with the figure, once in the lesson's markdown) -> marker body
 DECIDED = [
     ("00", "in 720 small steps of 0.5°", "setting: the demonstration's step"),
@@ -310,6 +314,14 @@ DECIDED = [
      'data: bench_all.json rows[method=dls,effectors=5,start=rest].mpjpe_mm_median'),
     ('06', 'ignores the start: 44.1 mm',
      'data: bench_all.json rows[method=protores,effectors=5,start=rest].mpjpe_mm_median'),
+    ('03', 'the network still wins (20',
+     'out: "start: same-clip" "neural 5" col "MPJPE mm"'),
+    ('05', 'ends level with it (60',
+     'out: "188 ms per step): final validation world joint error"'),
+    ('05', 'ends level with it (60 against 61 mm',
+     'out: "365 ms per step): final validation world joint error"'),
+    ('02', 'on the others 15%',
+     'out: "of those with a control beyond the training range,"'),
     ("01", "a converged fraction of 1.00",
      'out: "method set effector mm MPJPE mm bone mm converged iters" "fabrik 5" col "converged"'),
 ]
@@ -346,12 +358,17 @@ def _header_over(lines, li, m):
     nearest line above with no decimal that overlaps the number's span."""
     for k in range(li - 1, max(-1, li - 40), -1):
         line = lines[k]
-        if not line.strip():
-            continue
+        if not line.strip() or re.search(r"%\|[#█ ]*\||\d+/s\]|it/s", line):
+            continue                  # blank, or a progress bar
         if any(re.fullmatch(r"-?[\d,.]+%?", t) for t in re.sub(r"\([^)]*\)", "", line).split()):
             continue                  # a data line (a number of its own outside parentheses): a header has none
         # the header word over the number (overlapping it, else at most 2 characters beside it), with the words
         # before it when it alone is not unique on the line ("model kB" beside "solver kB")
+        # a short run of words over the number ("frames 0-199", "world joint mm"), else one word
+        for run in re.finditer(r"\S+(?: \S+)*", line):
+            g = max(run.start() - m.end(), m.start() - run.end(), -1)
+            if g < 0 and len(run.group(0).split()) <= 3 and re.search(r"[A-Za-z]", run.group(0)):
+                return run.group(0)
         toks = list(re.finditer(r"\S+", line))
         best, gap = None, 3
         for k, t in enumerate(toks):
@@ -457,7 +474,7 @@ def out_sources(outputs: Outputs, cell, text, li, line, m, header, fig, value, u
     cells = [c.strip() for c in re.split(r"\s{2,}|\|", line[:m.start()].strip()) if c.strip()]
     col = None
     rows = []
-    if header and len(header) <= 30 and _quote_ok(header):
+    if header and len(header) <= 30 and _quote_ok(header) and len(re.split(r"\s{2,}", line.strip())) >= 3:
         for k in range(1, len(cells) + 1):
             row = " ".join(" ".join(cells[:k]).split())
             if _quote_ok(row):
@@ -672,7 +689,7 @@ def propose(path: Path, exempt: dict, write: bool) -> tuple[int, list]:
                     cands.append((same, overlap, dist, cell, otext, li, line, m, header, value, hint))
                 cands.sort(key=lambda t: (t[0], t[2], t[1]))
                 # a results row the prose names (its method, with its effector set or start): bound to the file
-                ds = data_sources(files, fig)
+                ds = data_sources([f for f in files if f.name in DATA_FIRST.get(lesson, ())], fig)
                 window = text[max(0, fig.start - 160):fig.end + 40].lower()
                 scored = sorted(((_row_score(d, window), k, d) for k, d in enumerate(ds)), key=lambda t: (-t[0], t[1]))
                 if scored and scored[0][0] >= 5 and (len(scored) == 1 or scored[1][0] < scored[0][0]):
@@ -687,7 +704,7 @@ def propose(path: Path, exempt: dict, write: bool) -> tuple[int, list]:
                         found = (_fmt(srcs[0]), f"cell {cell}: {line.strip()[:110]}", len(cands))
                         break
                 if found is None:
-                    ds = data_sources(files, fig)
+                    ds = data_sources([f for f in files if f.name in DATA_FIRST.get(lesson, ())], fig)
                     window = text[max(0, fig.start - 160):fig.end + 40].lower()
                     scored = sorted(((_row_score(d, window), k, d) for k, d in enumerate(ds)), key=lambda t: (-t[0], t[1]))
                     if scored and scored[0][0] > 0 and (len(scored) == 1 or scored[1][0] < scored[0][0]):
