@@ -312,7 +312,7 @@ def build_parser() -> argparse.ArgumentParser:
                        "every process trains its share of each batch (data-parallel, docs/training.md)")
         p.set_defaults(fn=_train, trainer=name)
     p = sub.add_parser("warm", help="compile every solver's kernels into the cache (make lab, studio and test run it "
-                       "first; about 2 s once done)")
+                       "first; quick once the cache holds them)")
     p.add_argument("--workers", type=int, default=2, help="processes compiling side by side (default: 2)")
     p.add_argument("--force", action="store_true", help="compile again even when the cache is warm")
     p.set_defaults(fn=_warm)

@@ -100,6 +100,11 @@ def _class_rows():
              "worst_p95_ms": 157.4, "kernels_after_cull": 0, "cull_s": 23.1}]
 
 
+def _rendered(page: str) -> str:
+    """The page as a reader sees it: without the HTML comments (the source markers, posekit.docs.prose)."""
+    return re.sub(r"<!--.*?-->", "", page, flags=re.S)
+
+
 def test_the_class_sizing_table_appears_when_its_results_file_does(tmp_path):
     without = bench_page.markdown(tmp_path)
     assert bench_page.STUDIO_COMMAND in without and "No class-sizing results" in without
@@ -108,9 +113,11 @@ def test_the_class_sizing_table_appears_when_its_results_file_does(tmp_path):
          "machine": {"platform": "Linux x86_64", "processor": "Some CPU", "cpu_count": 8}, "rows": _class_rows()}))
     (tmp_path / "mine.json").write_text(json.dumps({"command": "posekit bench mine", "date": "2031-01-03",
                                                     "rows": [{"method": "x", "ms": 1.25}]}))
-    page = bench_page.markdown(tmp_path)
+    marked = bench_page.markdown(tmp_path)
+    page = _rendered(marked)
     assert "No class-sizing results" not in page
     assert "| 2 | 2 | 473.9 | 0 | 157.4 | 0 | 23.1 |" in page
+    assert f"473.9<!-- data: {bench_page.STUDIO_SESSIONS} rows[2].rss_mb_total -->" in marked
     assert "`posekit bench studio --sessions 1,2`" in page and "2031-01-02" in page and "Some CPU, 8 CPUs" in page
     assert "## mine.json" in page and "| x | 1.25 |" in page  # a results file without a layout still shows
 
@@ -127,7 +134,7 @@ def test_bench_studio_out_writes_its_rows_with_command_machine_and_date(tmp_path
     assert d["command"] == "posekit bench studio --sessions 1,2 --updates 50"
     assert re.fullmatch(r"20\d\d-\d\d-\d\d", d["date"]) and d["machine"]["cpu_count"] >= 1
     assert d["rows"] == _class_rows()
-    assert "| 2 | 2 | 473.9 |" in bench_page.markdown(out.parent)
+    assert "| 2 | 2 | 473.9 |" in _rendered(bench_page.markdown(out.parent))
 
 
 # --------------------------------------------------------------------------------------------- the guides

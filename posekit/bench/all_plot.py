@@ -4,14 +4,14 @@ condition, labelled.
 Introduced in ``notebooks/06_posing_studio.ipynb`` with :mod:`posekit.bench.all`, which writes it as
 ``bench_all.png``: median time per solve (ms) against median MPJPE (mm), both log, in the spirit of Fig. 5
 of Victor et al. 2021; :func:`_label_points` places the solver names so that they overlap neither the
-points nor each other.
+points nor each other, with a margin between labels; solvers whose points of one start coincide share one label.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["plot", "DPI"]
+__all__ = ["plot", "DPI", "LABEL_GAP_PX", "label_groups"]
 
 DPI = 150
 """Resolution of the saved scatter, dots per inch."""
@@ -87,16 +87,39 @@ def _panel(ax, rows: list[dict], starts: list, meta: dict, effectors: str) -> No
     ax.legend(handles=handles, loc="upper left", fontsize=8, frameon=False)
 
 
+LABEL_GAP_PX = 3.0
+"""Least space between two labels of the scatter, pixels at :data:`DPI`."""
+
+
+def label_groups(rows: list[dict], pts, within_px: float) -> list[list[int]]:
+    """Rows of one start whose points lie within ``within_px`` of each other (drawn as one point): one label
+    names them all. Returns lists of row indices, each list in the rows' order."""
+    groups: list[list[int]] = []
+    for i, r in enumerate(rows):
+        for g in groups:
+            j = g[0]
+            if rows[j]["start"] == r["start"] and np.hypot(*(np.asarray(pts[i]) - pts[j])) <= within_px:
+                g.append(i)
+                break
+        else:
+            groups.append([i])
+    return groups
+
+
 def _label_points(fig, ax, rows: list[dict], colours: dict, fontsize: float = 6.5) -> None:
-    """Name every point (in a darker shade of its start's colour). Each label takes the nearest spot (a
-    greedy search over 16 directions and 7 distances, the most crowded points first) that overlaps no
-    other label, point, the legend or the frame, and is nearer its own point than any other; a leader line
-    joins a label that is not next to its point."""
+    """Name every point (in a darker shade of its start's colour); solvers whose points of one start coincide
+    share one label ("neural-raw / neural-chained-raw"). Each label takes the nearest spot (a greedy search over
+    16 directions and 7 distances, the most crowded points first) that overlaps no other label (nor comes
+    within :data:`LABEL_GAP_PX` of one), point, the legend or the frame, and is nearer its own point than any
+    other; a leader line joins a label that is not next to its point."""
     from matplotlib.colors import to_rgb
 
     renderer = fig.canvas.get_renderer()
     pts = ax.transData.transform([(r["latency_ms_median"], r["mpjpe_mm_median"]) for r in rows])
     pt_r = 4.0 * DPI / 72  # half a marker and a little air, px
+    groups = label_groups(rows, pts, 0.5 * pt_r)
+    names = [" / ".join(rows[i]["method"] for i in g) for g in groups]
+    rows, pts = [rows[g[0]] for g in groups], pts[[g[0] for g in groups]]
     frame = ax.get_window_extent(renderer)
     taken = [(p[0] - pt_r, p[1] - pt_r, p[0] + pt_r, p[1] + pt_r) for p in pts]
     if ax.get_legend() is not None:
@@ -124,7 +147,7 @@ def _label_points(fig, ax, rows: list[dict], colours: dict, fontsize: float = 6.
     crowd = [int(np.sum(np.hypot(*(pts - p).T) < 60)) for p in pts]
     for i in sorted(range(len(rows)), key=lambda k: -crowd[k]):
         r = rows[i]
-        text = ax.annotate(r["method"], (r["latency_ms_median"], r["mpjpe_mm_median"]), fontsize=fontsize,
+        text = ax.annotate(names[i], (r["latency_ms_median"], r["mpjpe_mm_median"]), fontsize=fontsize,
                            textcoords="offset points", xytext=(0, 0), zorder=4, color=ink[r["start"]])
         best = None
         for dist in (5, 11, 19, 30, 45, 65, 90):
@@ -134,7 +157,8 @@ def _label_points(fig, ax, rows: list[dict], colours: dict, fontsize: float = 6.
                 text.set_ha(align[0][int(np.sign(dx))])
                 text.set_va(align[1][int(np.sign(dy))])
                 b = text.get_window_extent(renderer)
-                box = (b.x0 - 1, b.y0 - 1, b.x1 + 1, b.y1 + 1)
+                g = LABEL_GAP_PX / 2  # each label keeps half the gap: two labels stay LABEL_GAP_PX apart
+                box = (b.x0 - g, b.y0 - g, b.x1 + g, b.y1 + g)
                 c = cost(box, i)
                 if best is None or c < best[0]:
                     best = (c, dx * step, dy * step, dx, dy, box)
@@ -148,8 +172,8 @@ def _label_points(fig, ax, rows: list[dict], colours: dict, fontsize: float = 6.
         text.set_va(align[1][int(np.sign(dy))])
         if np.hypot(ox, oy) > 6:
             ax.annotate("", (r["latency_ms_median"], r["mpjpe_mm_median"]), textcoords="offset points",
-                        xytext=(ox, oy), zorder=2, arrowprops={"arrowstyle": "-", "color": colours[r["start"]],
-                                                               "lw": 0.6, "shrinkA": 1, "shrinkB": 3})
+                        xytext=(ox, oy), zorder=2, arrowprops={"arrowstyle": "-", "color": ink[r["start"]],
+                                                               "lw": 0.8, "shrinkA": 1, "shrinkB": 3})
         taken.append(box)
 
 

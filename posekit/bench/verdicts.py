@@ -23,11 +23,14 @@ def _learned(name: str) -> bool:
     return name in solver_names() and bool(solver_info(name).data)
 
 
-def verdicts(rows: list[dict], sets=None, starts=None) -> list[str]:
+def verdicts(rows: list[dict], sets=None, starts=None, mark=None) -> list[str]:
     """One sentence per effector set and start condition that holds learned solvers and plain DLS or FABRIK: whether
     a learned solver lands closer to the true pose (median MPJPE, shown to 0.1 mm: a tie is not closer) than the
     better of DLS and FABRIK, and which learned solver is closest (with how often an exact finish kept its learned
-    pose). Cells without a learned solver, or without DLS and FABRIK, get none."""
+    pose). Cells without a learned solver, or without DLS and FABRIK, get none. ``mark(row, key)``, when given,
+    returns the text written right after each figure (the benchmarks page's source marker,
+    :mod:`posekit.docs.prose`)."""
+    mark = mark or (lambda row, key: "")
     sets = list(dict.fromkeys(r["effectors"] for r in rows)) if sets is None else list(sets)
     starts = list(dict.fromkeys(r["start"] for r in rows)) if starts is None else list(starts)
     out = []
@@ -45,17 +48,19 @@ def verdicts(rows: list[dict], sets=None, starts=None) -> list[str]:
             ahead = [r for r in learned if round(r["mpjpe_mm_median"], 1) < bar]
             best = learned[0]
             kept = best.get("learned_kept_fraction")
-            kept = f", keeping its learned pose in {100 * kept:.0f}% of the cases" if kept is not None else ""
-            refs = " and ".join(f"`{r['method']}` ({r['mpjpe_mm_median']:.1f} mm)" for r in
-                                sorted(classic, key=lambda r: (r["mpjpe_mm_median"], r["method"])))
+            kept = (f", keeping its learned pose in {100 * kept:.0f}%{mark(best, 'learned_kept_fraction')} of the "
+                    "cases" if kept is not None else "")
+            refs = " and ".join(f"`{r['method']}` ({r['mpjpe_mm_median']:.1f} mm{mark(r, 'mpjpe_mm_median')})"
+                                for r in sorted(classic, key=lambda r: (r["mpjpe_mm_median"], r["method"])))
+            closest = f"{best['mpjpe_mm_median']:.1f} mm{mark(best, 'mpjpe_mm_median')}{kept}"
             if ahead:
                 out.append(f"Effectors `{e}` from {st}: {len(ahead)} of {len(learned)} learned solvers "
                            f"{'lands' if len(ahead) == 1 else 'land'} closer "
                            f"to the true pose than {refs}; the closest is `{best['method']}`, "
-                           f"{best['mpjpe_mm_median']:.1f} mm{kept}.")
+                           f"{closest}.")
             else:
                 out.append(f"Effectors `{e}` from {st}: no learned solver lands closer to the true pose than {refs}; "
-                           f"the closest learned one is `{best['method']}`, {best['mpjpe_mm_median']:.1f} mm{kept}.")
+                           f"the closest learned one is `{best['method']}`, {closest}.")
     return out
 
 

@@ -95,6 +95,7 @@ def fingerprint(nb, view: int) -> str:
 
 _PROBE = """
 import json as _json
+from posekit.data.metrics import body_joints as _body_joints
 from posekit.viz.viewer import SkeletonViewer as _SV
 
 def _views(o, depth=0):
@@ -115,6 +116,7 @@ _sk = _found[0][1].skeleton if _found else None
 print("POSEKIT-STILL" + _json.dumps({{
     "parents": [int(p) for p in _sk.parents] if _sk is not None else [],
     "names": list(_sk.names) if _sk is not None else [],
+    "body": [int(j) for j in _body_joints(_sk)] if _sk is not None else [],
     "views": [{{"title": t, "pose": _v.pose.round(4).tolist(),
                "targets": {{str(k): [round(float(x), 4) for x in p] for k, p in _v.targets.items()}}}}
               for t, _v in _found]}}))
@@ -189,7 +191,8 @@ def render_png(still: dict, height_in: float = 4.2) -> str:
     for k, v in enumerate(views):
         ax = fig.add_subplot(1, len(views), k + 1, projection="3d")
         targets = np.asarray(list(v["targets"].values())) if v["targets"] else None
-        plot_pose(skeleton, np.asarray(v["pose"]), ax=ax, targets=targets, title=v["title"] or None)
+        plot_pose(skeleton, np.asarray(v["pose"]), ax=ax, targets=targets, title=v["title"] or None,
+                  body=still.get("body") or None)  # a helper root is no bone (stills recorded before: every joint)
     fig.tight_layout()
     buf = io.BytesIO()
     fig.savefig(buf, format="png")

@@ -1,7 +1,9 @@
 """``docs/benchmarks.md``: the measured figures, rendered from the results files under ``data_samples/results``.
 
 Each file carries how it was made — ``command``, ``date``, ``machine`` (:mod:`posekit.provenance`) — and the page
-shows them beside its rows, so a figure on the page always names the run it comes from. Re-running a benchmark and
+shows them beside its rows, so a figure on the page always names the run it comes from. Every measured figure
+carries a source marker naming its file and key (``<!-- data: FILE PATH -->``, :mod:`posekit.docs.prose`), which
+``tests/test_prose_numbers.py`` compares with the file. Re-running a benchmark and
 then ``posekit docs build`` updates both. Files this module has no layout for are shown as a plain table of their
 rows, so a new results file appears on the page without code.
 """
@@ -10,6 +12,8 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+
+from .prose import data_marker, mark_figures
 
 __all__ = ["markdown", "results_dir", "STUDIO_SESSIONS", "STUDIO_COMMAND"]
 
@@ -54,15 +58,39 @@ def _num(v) -> str:
     return " ".join(str(v).split()).replace("|", "\\|")
 
 
-def _table(rows: list[dict], columns: list[str], labels: dict | None = None) -> str:
-    """A Markdown table of ``columns`` (those empty in every row left out)."""
+def _marked(v, file: str | None, path: str) -> str:
+    """``v`` as :func:`_num` shows it, with the marker of its source when it is a number and ``file`` is given."""
+    text = _num(v)
+    if file and isinstance(v, (int, float)) and not isinstance(v, bool) and v == v:
+        text += data_marker(file, path)
+    elif file and isinstance(v, str):
+        text = _settings(text, file, path)
+    return text
+
+
+def _settings(text: str, file: str, path: str) -> str:
+    """A text of a results file (a run's label, its description): the figures it holds are the run's settings."""
+    return mark_figures(text, f"<!-- setting: {file} {path} -->")
+
+
+def _table(rows: list[dict], columns: list[str], labels: dict | None = None, file: str | None = None,
+           paths: list[str] | None = None) -> str:
+    """A Markdown table of ``columns`` (those empty in every row left out). With ``file``, each number carries the
+    marker of its source: ``paths[i]`` is row ``i``'s path in the file (``rows[3]``)."""
     columns = [c for c in columns if any(r.get(c) is not None for r in rows)]
     labels = labels or {}
+    paths = paths or [""] * len(rows)
     lines = ["| " + " | ".join(labels.get(c, f"`{c}`") for c in columns) + " |",
              "|" + "|".join(":--" if k == 0 else "--:" for k in range(len(columns))) + "|"]
-    for r in rows:
-        lines.append("| " + " | ".join(_num(r.get(c)) for c in columns) + " |")
+    for r, path in zip(rows, paths):
+        lines.append("| " + " | ".join(_marked(r.get(c), file, f"{path}.{c}") for c in columns) + " |")
     return "\n".join(lines)
+
+
+def _indexed(d: dict, key: str, keep=lambda r: True) -> tuple[list[dict], list[str]]:
+    """The elements of ``d[key]`` that ``keep`` keeps, and their paths in the file (``key[i]``)."""
+    pairs = [(r, f"{key}[{i}]") for i, r in enumerate(d.get(key, [])) if keep(r)]
+    return [r for r, _ in pairs], [p for _, p in pairs]
 
 
 def _scalar_columns(rows: list[dict], limit: int = 12) -> list[str]:
@@ -81,16 +109,17 @@ def _machine(m) -> str:
     return ", ".join(p for p in parts if p)
 
 
-def _seconds(s) -> str | None:
+def _seconds(s, name: str) -> str | None:
+    path = "seconds"
     if isinstance(s, dict):
-        s = s.get("total")
-    return None if s is None else f"{_num(s)} s"
+        s, path = s.get("total"), "seconds.total"
+    return None if s is None else f"{_marked(s, name, path)} s"
 
 
 def _provenance(name: str, d: dict) -> str:
     rows = [("made by", f"`{d['command']}`" if d.get("command") else "not recorded"),
             ("date", d.get("date") or "not recorded"), ("machine", _machine(d.get("machine")))]
-    took = _seconds(d.get("seconds"))
+    took = _seconds(d.get("seconds"), name)
     if took:
         rows.append(("the run took", took))
     rows.append(("file", f"[`{name}`](../data_samples/results/{name})"))
@@ -106,11 +135,15 @@ def _bench_all(name: str, d: dict) -> str:
 
     rows = d["rows"]
 
+    def mark(r, key):
+        return data_marker(name, f"rows[method={r['method']},effectors={r['effectors']},start={r['start']}].{key}")
+
     def cell(r):
         if r is None:
             return "—"
-        return (f"`{r['method']}` {r['mpjpe_mm_median']:.1f}, {r['converged_fraction']:.3f}, "
-                f"{_num(r['latency_ms_median'])}")
+        return (f"`{r['method']}` {r['mpjpe_mm_median']:.1f}{mark(r, 'mpjpe_mm_median')}, "
+                f"{r['converged_fraction']:.3f}{mark(r, 'converged_fraction')}, "
+                f"{_num(r['latency_ms_median'])}{mark(r, 'latency_ms_median')}")
 
     lines = ["| effectors | start | closest pose | closest that meets its effectors | `dls` | `fabrik` |",
              "|:-:|:--|:--|:--|:--|:--|"]
@@ -123,11 +156,12 @@ def _bench_all(name: str, d: dict) -> str:
         f"condition and every column defined: [`bench_all.md`](../data_samples/results/bench_all.md).",
         _provenance(name, d),
         f"**Who wins where.** Each cell: solver, median MPJPE in mm (as the report defines it), the share of cases "
-        f"that converged, median ms per solve. *Meets its effectors*: converged in at least {_num(EXACT)} of the "
-        "cases.",
+        f"that converged, median ms per solve. *Meets its effectors*: converged in at least {_num(EXACT)}"
+        "<!-- definition: posekit.bench.all.EXACT --> of the cases.",
         "\n".join(lines),
-        *(["**Learned solvers against plain DLS and FABRIK** (median MPJPE, shown to 0.1 mm: a tie is not closer).",
-           "\n".join(f"- {v}" for v in verdicts(rows, list(d["effectors"]), list(d["starts"])))]
+        *(["**Learned solvers against plain DLS and FABRIK** (median MPJPE, shown to 0.1 mm<!-- definition: the "
+           "precision posekit.bench.verdicts compares at -->: a tie is not closer).",
+           "\n".join(f"- {v}" for v in verdicts(rows, list(d["effectors"]), list(d["starts"]), mark=mark))]
           if verdicts(rows) else []),
         "![median time per solve against median MPJPE, every solver](../data_samples/results/bench_all.png)"])
 
@@ -137,7 +171,7 @@ def _studio(name: str, d: dict) -> str:
     parts = ["The posing studio served by Voila to headless Chromium (`posekit bench studio`, lesson 06). The "
              "browsers ran on the same machine as the server, so their software WebGL shared its cores: with a "
              "class, a pessimistic figure for students on their own machines.", _provenance(name, d)]
-    klass = [r for r in rows if "class" in r]
+    klass, kpaths = _indexed(d, "rows", lambda r: "class" in r)
     if klass:
         parts += ["**A class at once** (every session moving its target at the same time; the kernels left after "
                   "the sessions closed and the idle cull ran):",
@@ -145,14 +179,15 @@ def _studio(name: str, d: dict) -> str:
                                  "kernels_after_cull", "cull_s"],
                          {"sessions": "sessions", "kernels": "kernels", "rss_mb_total": "kernels' memory MB",
                           "lost": "updates lost", "worst_p95_ms": "worst p95 ms per session",
-                          "kernels_after_cull": "kernels left after the cull", "cull_s": "culled after s"})]
-    sessions = [r for r in rows if "session" in r]
+                          "kernels_after_cull": "kernels left after the cull", "cull_s": "culled after s"},
+                         name, kpaths)]
+    sessions, spaths = _indexed(d, "rows", lambda r: "session" in r)
     if sessions:
         parts += ["Each session:", _table(sessions, ["sessions", "session", "updates", "lost", "p50_ms", "p95_ms",
-                                                     "max_ms", "rss_mb"])]
-    other = [r for r in rows if "class" not in r and "session" not in r]
+                                                     "max_ms", "rss_mb"], None, name, spaths)]
+    other, opaths = _indexed(d, "rows", lambda r: "class" not in r and "session" not in r)
     if other:
-        parts += ["Other rows:", _table(other, _scalar_columns(other))]
+        parts += ["Other rows:", _table(other, _scalar_columns(other), None, name, opaths)]
     return "\n\n".join(parts)
 
 
@@ -165,9 +200,10 @@ def _protores(name: str, d: dict) -> str:
             "lesson 05's 5-point and random benchmarks" if "scaling" not in name else
             "ProtoRes's scaling curve: widths and step counts, scored on lesson 05's benchmarks")
     parts = [what + ". Column names are the file's keys; lesson 05 defines each measure.", _provenance(name, d),
-             _table(d["rows"], PROTORES_COLUMNS + (["compute"] if "scaling" in name else []))]
+             _table(*_indexed(d, "rows")[:1], PROTORES_COLUMNS + (["compute"] if "scaling" in name else []), None,
+                    name, _indexed(d, "rows")[1])]
     if d.get("width"):
-        parts += ["The width study:", _table(d["width"], PROTORES_COLUMNS)]
+        parts += ["The width study:", _table(d["width"], PROTORES_COLUMNS, None, name, _indexed(d, "width")[1])]
     return "\n\n".join(parts)
 
 
@@ -175,9 +211,10 @@ def _protores_speed(name: str, d: dict) -> str:
     """``posekit bench protores --speed-only --out``: each network's speed against the machine's arithmetic."""
     labels = {"method": "network", "macs_per_pose": "multiply-adds per pose", "gemm_gmacs": "GEMM rate GMAC/s",
               "ideal_poses_per_s": "ideal poses/s", "poses_per_s": "measured poses/s",
-              "fraction_of_ideal": "of ideal", "fraction_met": f"goal >= {_num(d.get('goal_fraction'))} met",
+              "fraction_of_ideal": "of ideal",
+              "fraction_met": f"goal >= {_marked(d.get('goal_fraction'), name, 'goal_fraction')} met",
               "ms_products_one": "one pose: products ms", "ms_solve_median": "one pose: solve ms (median)",
-              "ms_met": f"goal <= {_num(d.get('goal_ms'))} ms met"}
+              "ms_met": f"goal <= {_marked(d.get('goal_ms'), name, 'goal_ms')} ms met"}
     return "\n\n".join([
         "ProtoRes and its baselines against the roofline (lesson 05), one thread, 5-point poses: the multiply-adds "
         "of one pose counted from the layer sizes, the float32 GEMM rate measured on each network's own matrix "
@@ -185,12 +222,13 @@ def _protores_speed(name: str, d: dict) -> str:
         "that batch, and one pose: its products alone, then a whole pose through `solve` (medians of every round, "
         "in the thread's CPU time).",
         _provenance(name, d) + (f"\n\n*The 1-minute load average when the run began: "
-                                f"{_num(d['load_avg_1min_before'])} on {_num((d.get('machine') or {}).get('cpu_count'))} "
+                                f"{_marked(d['load_avg_1min_before'], name, 'load_avg_1min_before')} on "
+                                f"{_num((d.get('machine') or {}).get('cpu_count'))} "
                                 "CPUs; other work slows every timing, so each is a median.*"
                                 if d.get("load_avg_1min_before") is not None else ""),
         _table(d["rows"], ["method", "width", "macs_per_pose", "gemm_gmacs", "ideal_poses_per_s", "poses_per_s",
                            "fraction_of_ideal", "fraction_met", "ms_products_one", "ms_solve_median", "ms_met"],
-               labels)])
+               labels, name, _indexed(d, "rows")[1])])
 
 
 def _ae_scale(name: str, d: dict) -> str:
@@ -199,17 +237,20 @@ def _ae_scale(name: str, d: dict) -> str:
             if isinstance(data, dict) and "frames" in data and "clips" in data else "")
     return "\n\n".join([
         f"Lesson 03's autoencoder and latent solvers trained on the full Bandai Namco datasets and benchmarked "
-        f"against FABRIK, protocol `{d.get('protocol')}`: {d.get('description', '')}{size}.",
+        f"against FABRIK, protocol `{d.get('protocol')}`: {_settings(d.get('description', ''), name, 'description')}"
+        f"{size}.",
         _provenance(name, d),
         _table(d["rows"], ["method", "effectors", "start", "cases", "mpjpe_mm_median", "effector_error_mm_median",
-                           "natural_mm_median", "converged_fraction", "latency_ms_median"])])
+                           "natural_mm_median", "converged_fraction", "latency_ms_median"], None, name,
+               _indexed(d, "rows")[1])])
 
 
 def _generic(name: str, d: dict) -> str:
     rows = d.get("rows") if isinstance(d, dict) else d
     parts = [_provenance(name, d if isinstance(d, dict) else {})]
     if isinstance(rows, list) and rows and all(isinstance(r, dict) for r in rows):
-        parts.append(_table(rows, _scalar_columns(rows)))
+        parts.append(_table(rows, _scalar_columns(rows), None, name,
+                            [f"rows[{i}]" if isinstance(d, dict) else f"[{i}]" for i in range(len(rows))]))
     return "\n\n".join(parts)
 
 
@@ -217,7 +258,8 @@ def _nbgrader(name: str, d: dict) -> str:
     cols = ["lesson", "assignment", "autograde_s", "autograde_cpu_s", "load_avg_1min_before", "score", "max_score"]
     labels = {"autograde_s": "autograde s (wall)", "autograde_cpu_s": "CPU s", "load_avg_1min_before":
               "load before", "max_score": "of"}
-    return "\n\n".join([_provenance(name, d), _num(d.get("what", "")), _table(d["lessons"], cols, labels),
+    return "\n\n".join([_provenance(name, d), _num(d.get("what", "")),
+                         _table(d["lessons"], cols, labels, name, _indexed(d, "lessons")[1]),
                          "How to grade a class: [grading with nbgrader](nbgrader.md)."])
 
 

@@ -3,14 +3,19 @@
 Every subcommand, positional argument and option appears with its help text, in the parser's order, so the page
 cannot drift from what ``posekit ... --help`` says. The usage lines are composed here rather than taken from
 argparse's formatter, whose wrapping follows the terminal's width and whose layout changes between Python
-releases: the page is the same wherever it is built.
+releases: the page is the same wherever it is built. The figures of the help texts are the parser's settings
+(defaults, tolerances, conversions), never measurements, and each carries the marker that says so
+(:data:`SETTING`, :mod:`posekit.docs.prose`).
 """
 
 from __future__ import annotations
 
 import argparse
 
-__all__ = ["markdown", "commands"]
+__all__ = ["markdown", "commands", "SETTING"]
+
+SETTING = "<!-- setting: posekit's argument parser -->"
+"""The source marker after every figure of the page: what the parser's help says is a setting of the code."""
 
 INTRO = """\
 # The `posekit` command line
@@ -114,4 +119,6 @@ def markdown(parser: argparse.ArgumentParser | None = None) -> str:
                 if a.option_strings and a.nargs != 0:
                     name += f" {_metavar(a)}"
                 body.append(f"| `{_cell(name)}` | {_cell(_help(a, p.prog))} |")
-    return INTRO + "\n## Commands\n\n" + "\n".join(toc) + "\n" + "\n".join(body) + "\n"
+    from .prose import mark_figures
+
+    return INTRO + "\n## Commands\n\n" + mark_figures("\n".join(toc) + "\n" + "\n".join(body), SETTING) + "\n"

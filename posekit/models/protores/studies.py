@@ -243,8 +243,8 @@ register_trainer(
     args=[arg("--workers", type=int, default=2, help="runs side by side, one thread each (default: 2)"),
           arg("--seed", type=int, default=0, help="(default: 0)"),
           arg("--scaling", action="store_true",
-              help="the scaling study instead: widths x step counts (about 48 minutes of one core), written to "
-                   "data_samples/results/protores_scaling.json"),
+              help="the scaling study instead: widths x step counts, the longest study (its time is the file's "
+                   "seconds), written to data_samples/results/protores_scaling.json"),
           arg("--shipped", action="store_true",
               help="no training: score the shipped ProtoRes again into both files' shipped row (after new weights)"),
           arg("--out", default=None, help="JSON file (default data_samples/results/protores_ablation.json, or "

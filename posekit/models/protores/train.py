@@ -252,7 +252,7 @@ def train_protores(motions=None, *, arch: str = "protores", seed: int = 0, out=N
                 curves["step"].append(done)
                 curves["seconds"].append(train_seconds)
                 if bar is not None:
-                    bar.set_postfix(val_mpjpe_mm=f"{m['mpjpe_mm']:.1f}")
+                    bar.set_postfix(val_world_mm=f"{m['mpjpe_mm']:.1f}")  # the world joint error, not MPJPE (lesson 05)
             if bar is not None:
                 bar.update()
     if bar is not None:
