@@ -161,6 +161,15 @@ def glossary_markdown() -> str:
     return "\n".join(lines) + "\n"
 
 
+# the page's figures and the source markers that say why they need no measured source (the syntax of
+# tests/test_prose_numbers.py, docs/testing.md); the glossary shown in the lessons goes without them
+_PAGE_MARKERS = {
+    "(1 mm, 1 degree)": "(1 mm<!-- setting: an Effector's default tolerance -->, "
+                        "1 degree<!-- setting: an Effector's default tolerance -->)",
+    "1e-3 m^2 in tables": "1e-3<!-- definition: the tables' unit --> m^2 in tables",
+}
+
+
 def docs_page() -> str:
     """``docs/measures.md``: the glossary with where each measure is computed and reported."""
     out = ["# Measures: one meaning each", "",
@@ -171,7 +180,10 @@ def docs_page() -> str:
            "## Where each is computed and reported", ""]
     for m in MEASURES:
         out.append(f"- **{m.name}**: `{m.code}` — lessons {m.lessons}.")
-    return "\n".join(out) + "\n"
+    page = "\n".join(out) + "\n"
+    for figure, marked in _PAGE_MARKERS.items():
+        page = page.replace(figure, marked)
+    return page
 
 
 def verdict_table(rows) -> str:
@@ -180,16 +192,24 @@ def verdict_table(rows) -> str:
     Parameters
     ----------
     rows : iterable of (goal, measured, met)
-        ``goal`` as set in the lesson's Aim, ``measured`` the value shown (a string), ``met`` a bool, or
-        None when the lesson does not judge it (printed "not judged here").
+        ``goal`` as set in the lesson's Aim, ``measured`` the value shown (a string), ``met`` a bool, None
+        when the lesson does not judge it (printed "not judged here"), or a string for a verdict that is
+        neither (for example "not shown: within the noise" when the ordering holds by less than two runs of
+        one setting differ); a string must not be empty.
 
     Returns
     -------
     str
         A fixed-width text table.
     """
-    rows = [(str(g), str(v), "not judged here" if ok is None else "met" if bool(ok) else "not met")
-            for g, v, ok in rows]
+    def verdict(ok):
+        if isinstance(ok, str):
+            if not ok.strip():
+                raise ValueError("verdict_table: a verdict given as text must say something (got an empty string)")
+            return ok
+        return "not judged here" if ok is None else "met" if bool(ok) else "not met"
+
+    rows = [(str(g), str(v), verdict(ok)) for g, v, ok in rows]
     if not rows:
         raise ValueError("verdict_table: expected at least one (goal, measured, met) row")
     wg = max(len("goal"), *(len(g) for g, _, _ in rows))

@@ -53,6 +53,13 @@ def test_verdict_table():
         verdict_table([])
 
 
+def test_a_verdict_in_words_is_printed_as_given_and_never_empty():
+    out = verdict_table([("ahead of the baseline", "2.91 vs 2.98", "not shown: within the noise"), ("g", "v", True)])
+    assert out.splitlines()[1].endswith("  not shown: within the noise") and out.splitlines()[2].endswith("  met")
+    with pytest.raises(ValueError, match="must say something"):
+        verdict_table([("g", "v", " ")])
+
+
 def _header_literals(code):
     """Column headers a cell prints: the string literals of f-string fields with a width ("{'MPJPE mm':>10}")."""
     return re.findall(r"\{'([^'{}]+)':[<>^]?\d+\}|\{\"([^\"{}]+)\":[<>^]?\d+\}", code)
