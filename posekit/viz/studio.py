@@ -74,7 +74,8 @@ class PosingStudio(StudioExport, StudioTimeline):
         a page neither reads nor writes any other file of the server. Default ``False``: any path (a notebook's own
         kernel).
     width, height : int
-        Each view's canvas, pixels (default width: the views share about 1,250 px, 300-560 px each).
+        Each view's canvas, pixels (default width: the views share about 1,250 px, 300-560 px each). The page scales
+        a canvas down to the width it has (:mod:`posekit.viz.screen_fit`), never up.
 
     Attributes
     ----------
@@ -153,10 +154,13 @@ class PosingStudio(StudioExport, StudioTimeline):
         self.timeline_box = widget(w.VBox, [])
         self.views_box = widget(w.VBox, [])
         row = lambda *ws: widget(w.HBox, list(ws), layout=WRAP)  # noqa: E731
+        # the views and the selected joint's controls first: with the studio's top at the screen's top, every view,
+        # the selection and its X/Y/Z sliders lie on one 1280 x 800 screen (posekit.viz.screen_fit); the choice of
+        # solvers under them
         self.widget = widget(w.VBox, [
+            self.views_box,
             widget(w.HTML, f"<b>Solvers</b> — tick {MIN_SOLVERS} to {MAX_SOLVERS}, then compare"),
             row(self.choose, widget(w.VBox, [self.compare_button, self.busy, lines["solvers"]])),
-            self.views_box,
             widget(w.HTML, "<b>All solvers</b>"), self.summary,
             row(self.undo_button, self.redo_button, self.setup_path, self.save_button, self.load_button, self.upload,
                 lines["setup"]),
@@ -164,7 +168,7 @@ class PosingStudio(StudioExport, StudioTimeline):
             widget(w.HTML, "<b>Timeline</b> — key setups; in-betweens posed by the export solver"),
             row(add_key, clear, self.inbetweens, self.ease, build, anim, lines["timeline"]), self.keys_label,
             self.timeline_box], layout={"max_width": "100%"})
-        for part, name in ((self.summary, "summary"), (self.choose, "solver-choice"), (self.busy, "busy"),
+        for part, name in ((self.widget, "studio"), (self.summary, "summary"), (self.choose, "solver-choice"), (self.busy, "busy"),
                              (self.compare_button, "compare"), (self.views_box, "views")):
             part.add_class(f"posekit-{name}")  # for a browser test (and a stylesheet)
         self.editor = None
