@@ -106,7 +106,9 @@ def solver_views(skeleton, names, pose, truth=None, width: int = 300, height: in
         labels[name].add_class("posekit-view-label")
         # the views share the row's width, each scaled down from its canvas's width (posekit.viz.screen_fit), never
         # squeezed into a scrolled box; a page narrower than four small views wraps them onto rows
-        boxes.append(widget(w.VBox, [widget(w.HTML, f"<b>{html.escape(str(name))}</b>"), v.renderer, labels[name]],
+        title = widget(w.HTML, f"<b>{html.escape(str(name))}</b>")
+        title.add_class("posekit-view-title")
+        boxes.append(widget(w.VBox, [title, v.renderer, labels[name]],
                             layout=view_box_layout(width)))
         boxes[-1].add_class("posekit-view")
     return viewers, labels, boxes

@@ -23,12 +23,12 @@ MIN_VIEW_WIDTH = 160
 """A view's box never gets narrower than this (pixels): below it the row wraps."""
 
 FIT_CSS = """
-.posekit-canvas { width: 100%; max-width: 100%; }
+.posekit-canvas { width: auto; align-self: stretch; min-width: 0; }
 .posekit-canvas > canvas, .posekit-canvas > img { width: 100% !important; height: auto !important; display: block; }
 .posekit-viewer .widget-slider { max-width: 100%; }
 .posekit-viewer button, .posekit-viewer .widget-toggle-button { flex-shrink: 0; }
 """
-"""The page's rules: a renderer (class ``posekit-canvas``) as wide as its box, its canvas (or the picture pythreejs
+"""The page's rules: a renderer (class ``posekit-canvas``) as wide as its box (stretched, its margins inside), its canvas (or the picture pythreejs
 shows in place of a frozen view) scaled to that width with its own aspect ratio; inside a viewer's controls (class
 ``posekit-viewer``), a slider never wider than its box (its track gives way, its label and readout keep their
 width) and a button never squeezed below its text."""

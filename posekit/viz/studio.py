@@ -13,7 +13,8 @@ dragging in 3D) with what an animator expects around it:
 * **setups** — save and load the effectors as JSON (:mod:`posekit.viz.setup_file`), from a path on the
   server or uploaded from the browser; a malformed file is reported and nothing is lost;
 * **export** — the chosen solver's pose as BVH (read back through :func:`posekit.io.bvh.read_bvh` to check it)
-  and all views as a PNG, each with a download link; a start pose can be read from a BVH file;
+  and all views as a PNG (the views' own pixels, read from the page), each with a download link; a start pose can
+  be read from a BVH file;
 * **timeline** — key effector setups, in-betweens posed by one solver (:mod:`posekit.ik.keyframes`),
   played back and exported as an animated BVH.
 
@@ -32,6 +33,7 @@ import numpy as np
 from ..ik.api import Effector, Pose
 from ..ik.registry import make_solver, solver_names
 from .compare import ignored_effectors, reached_mark, status_table, worst_errors
+from .canvas_capture import CanvasCapture
 from .effector_editor import EffectorEditor
 from .studio_export import StudioExport, link
 from .studio_messages import BUSY_SIGN, WRAP, StudioMessages
@@ -137,7 +139,8 @@ class PosingStudio(StudioExport, StudioTimeline):
         bvh = widget(w.Button, description="pose as BVH")
         bvh.on_click(lambda _: self._safely(lambda: self.export_bvh(), "export"))
         png = widget(w.Button, description="views as PNG")
-        png.on_click(lambda _: self._safely(lambda: self.export_png(), "export"))
+        png.on_click(lambda _: self._safely(lambda: self.export_png(from_page=True), "export"))
+        self.views_capture = CanvasCapture(scope=".posekit-studio", views=".posekit-view")  # reads the views' pixels
         self.inbetweens = widget(w.BoundedIntText, value=10, min=0, max=120, description="in-betweens",
                                  layout={"width": "180px"})
         self.ease = widget(w.Dropdown, options=["smooth", "linear"], value="smooth", description="ease",
@@ -164,7 +167,7 @@ class PosingStudio(StudioExport, StudioTimeline):
             widget(w.HTML, "<b>All solvers</b>"), self.summary,
             row(self.undo_button, self.redo_button, self.setup_path, self.save_button, self.load_button, self.upload,
                 lines["setup"]),
-            row(self.export_solver, bvh, png, lines["export"]),
+            row(self.export_solver, bvh, png, lines["export"], self.views_capture),
             widget(w.HTML, "<b>Timeline</b> — key setups; in-betweens posed by the export solver"),
             row(add_key, clear, self.inbetweens, self.ease, build, anim, lines["timeline"]), self.keys_label,
             self.timeline_box], layout={"max_width": "100%"})
