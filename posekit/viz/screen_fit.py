@@ -25,7 +25,7 @@ MIN_VIEW_WIDTH = 160
 FIT_CSS = """
 .posekit-canvas { width: auto; align-self: stretch; min-width: 0; }
 .posekit-canvas > canvas, .posekit-canvas > img { width: 100% !important; height: auto !important; display: block; }
-.posekit-viewer .widget-slider { max-width: 100%; }
+.posekit-viewer .widget-slider { max-width: calc(100% - 2 * var(--jp-widgets-margin, 2px)); }
 .posekit-viewer button, .posekit-viewer .widget-toggle-button { flex-shrink: 0; }
 """
 """The page's rules: a renderer (class ``posekit-canvas``) as wide as its box (stretched, its margins inside), its canvas (or the picture pythreejs

@@ -11,10 +11,15 @@ MEASURE = """(root) => {
   root.scrollIntoView({block: 'start'});
   const box = (el) => { const r = el.getBoundingClientRect();
     return {x: r.x, y: r.y, right: r.right, bottom: r.bottom, width: r.width, height: r.height}; };
-  let scroller = root.parentElement;
-  while (scroller && !/(auto|scroll)/.test(getComputedStyle(scroller).overflowY)) scroller = scroller.parentElement;
-  const seen = scroller && scroller !== document.body && scroller !== document.documentElement
-    ? box(scroller) : {x: 0, y: 0, right: innerWidth, bottom: innerHeight};
+  // what of the page is visible there: the screen cut by every ancestor that hides or scrolls its overflow
+  const seen = {x: 0, y: 0, right: innerWidth, bottom: innerHeight};
+  for (let a = root.parentElement; a && a !== document.body; a = a.parentElement) {
+    const style = getComputedStyle(a);
+    if (!/(auto|scroll|hidden)/.test(style.overflowX + style.overflowY)) continue;
+    const r = a.getBoundingClientRect();
+    seen.x = Math.max(seen.x, r.x); seen.y = Math.max(seen.y, r.y);
+    seen.right = Math.min(seen.right, r.right); seen.bottom = Math.min(seen.bottom, r.bottom);
+  }
   const visible = (el) => el.offsetParent !== null;
   const views = [...root.querySelectorAll('canvas')].filter(visible).map(box);
   const selected = [...root.querySelectorAll('.widget-dropdown')].filter(d => d.textContent.includes('selected'))
@@ -28,7 +33,10 @@ MEASURE = """(root) => {
   // a box that scrolls sideways hides part of what it holds
   const scrolled = [...root.querySelectorAll('.widget-box')].filter(visible)
     .filter(el => el.scrollWidth > el.clientWidth + 2)
-    .map(el => `${el.className.split(' ').slice(0, 3).join('.')}: ${el.scrollWidth} px in ${el.clientWidth} px`);
+    .map(el => `${el.className.split(' ').slice(0, 3).join('.')}: ${el.scrollWidth} px in ${el.clientWidth} px (` +
+      [...el.children].filter(c => c.getBoundingClientRect().right > el.getBoundingClientRect().right + 1)
+        .map(c => `${c.className.split(' ').slice(-2).join('.')} ${c.getBoundingClientRect().width.toFixed(0)} px`)
+        .join(', ') + ')');
   return {root: box(root), seen, viewport: {width: innerWidth, height: innerHeight}, views, selected, sliders,
           clipped, scrolled, texts: texts.length};
 }"""

@@ -8,6 +8,9 @@ that area and on the 1280 x 800 screen, and that no label, readout, button or te
 (``scrollWidth <= clientWidth``) nor any of its boxes scrolls sideways. Screenshots go to ``$POSEKIT_SHOTS`` when it
 is set.
 
+The same Voila page checks *views as PNG* (issue 57, item 4): the picture it exports holds every view's own canvas
+pixels, titles and status lines.
+
 Needs Debian's ``chromium`` and Playwright's Python package.
 """
 
@@ -16,6 +19,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from posekit.bench.studio import CHROMIUM, blank_tab, open_studio, serve_voila
@@ -111,3 +115,50 @@ def test_the_rig_view_fits_one_screen_in_jupyterlab_with_the_file_browser_open(l
         _check(m, "lesson 02's rig view in JupyterLab")
     finally:
         page.close()
+
+
+_TEXTS = """(root) => [...root.querySelectorAll('.posekit-view')].filter(b => b.offsetParent !== null).map(b => [
+  b.querySelector('.posekit-view-title .widget-html-content').innerText.trim(),
+  b.querySelector('.posekit-view-label .widget-html-content').innerText.trim(),
+  b.querySelector('canvas').width, b.querySelector('canvas').height])"""
+
+
+def test_views_as_png_holds_the_views_own_pixels_and_labels(studio_page):
+    """Issue 57, item 4: *views as PNG* in the app gives one picture whose every view is that view's canvas (mean
+    absolute difference to a screenshot of the canvas, scaled to the same size, under 2.5 of 255 and under half its
+    difference to any other view's screenshot), not blank, with each view's title and status lines around it."""
+    from PIL import Image
+
+    from posekit.viz.canvas_capture import decode_data_url
+    from posekit.viz.views_picture import compose_views
+    from tests.viz.browser_helpers import BACKGROUND, wait_still
+
+    page = studio_page
+    canvases = page.locator(".posekit-views canvas").all()
+    shots = [wait_still(c, 30, "a view to stand still") for c in canvases]
+    texts = page.locator(".posekit-studio").first.evaluate(_TEXTS)
+    page.get_by_role("button", name="views as PNG").click()
+    link = page.locator(".posekit-message-export a[download='views.png']")
+    link.wait_for(timeout=60_000)
+    raw = decode_data_url(link.get_attribute("href"))
+    image = Image.open(__import__("io").BytesIO(raw)).convert("RGB")
+    if os.environ.get("POSEKIT_SHOTS"):
+        image.save(Path(os.environ["POSEKIT_SHOTS"]) / "voila_views_export.png")
+    a = np.asarray(image).astype(int)
+    # where compose_views put each view, given the texts and canvas sizes the page shows
+    _, boxes = compose_views([np.zeros((h, w, 3)) for _, _, w, h in texts], [t[0] for t in texts],
+                             [t[1] for t in texts])
+    assert image.size[0] >= sum(w for _, _, w, _ in texts) and image.size[1] > max(h for *_, h in texts) + 40
+    assert [b[2:] for b in boxes] == [(w, h) for *_, w, h in texts]
+    diffs = []
+    for k, ((x, y, w, h), shot) in enumerate(zip(boxes, shots)):
+        region = a[y:y + h, x:x + w]
+        assert (np.abs(region - BACKGROUND).sum(-1) > 60).mean() > 0.002, f"view {k + 1} is blank in the PNG"
+        scaled = np.asarray(Image.fromarray(region.astype(np.uint8)).resize(shot.shape[1::-1], Image.BILINEAR))
+        diffs.append([float(np.abs(scaled.astype(int) - s).mean()) for s in shots])
+        assert (a[:y, x:x + w] < 100).all(-1).any(), f"no title above view {k + 1}"
+        assert (a[y + max(b[3] for b in boxes):, x:x + w] < 100).all(-1).sum() > 50, f"no status under view {k + 1}"
+    print("mean absolute difference, PNG view k vs screenshot of canvas j:", np.round(diffs, 2).tolist())
+    for k, row in enumerate(diffs):  # its own canvas (a half-pixel offset of the scaled canvas: about 1.3)
+        others = min(d for j, d in enumerate(row) if j != k)  # another view's canvas: 4-6 here
+        assert row[k] < 2.5 and row[k] < others / 2, f"view {k + 1} of the PNG vs the screenshots: {row}"
