@@ -119,7 +119,7 @@ def views_row(boxes):
     no room, :func:`~posekit.viz.screen_fit.stylesheet`)."""
     import ipywidgets as w
 
-    return widget(w.HBox, [stylesheet(), *boxes], layout={"flex_flow": "row wrap", "width": "100%"})
+    return widget(w.HBox, [*boxes, stylesheet()], layout={"flex_flow": "row wrap", "width": "100%"})
 
 
 def solve_views(skeleton, solvers: dict, viewers: dict, labels: dict, start, effectors, results: dict,

@@ -267,7 +267,8 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         import ipywidgets as w
 
         self._extra = widget(w.VBox, [])
-        self.widget = widget(w.VBox, [stylesheet(), self.renderer, self.controls, self._extra], layout=VIEWER_LAYOUT)
+        # the page's rules last: the first text of the widget stays the selection's readout
+        self.widget = widget(w.VBox, [self.renderer, self.controls, self._extra, stylesheet()], layout=VIEWER_LAYOUT)
         self.widget.add_class("posekit-viewer")
 
     # ------------------------------------------------------------------ helpers
