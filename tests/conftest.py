@@ -50,7 +50,7 @@ def rng():
 # (A scheduler rather than xdist_group marks: pytest 9 no longer reads the node ids those marks rewrite.
 # Without this file -- `pytest notebooks/...` -- plain loadfile still keeps each notebook on one worker.)
 _BROWSER_MODULES = {"test_browser.py", "test_slides_fit.py", "test_studio_browser.py", "test_studio_class_browser.py",
-                    "test_hub_browser.py"}
+                    "test_hub_browser.py", "test_one_screen_browser.py"}
 # measured on 2 cores, longest first; groups not listed come after, in collection order
 _FIRST = ["test_nbgrader.py", "browser", "04_aegan_latent_space.ipynb", "05_protores.ipynb",
           "02_inverse_rig_mapping.ipynb", "03_autoencoder_solvers.ipynb", "01_fabrik.ipynb"]

@@ -14,11 +14,12 @@ import numpy as np
 
 from ..ik.api import Effector, Pose
 from ..ik.effectors import resolve_effectors
+from .screen_fit import stylesheet, view_box_layout
 from .shared import widget
 from .viewer import SkeletonViewer, show_widget
 
 __all__ = ["SolverPanel", "ignored_effectors", "reached_mark", "solver_views", "solve_views", "status_line",
-           "status_table", "worst_errors"]
+           "status_table", "views_row", "worst_errors"]
 
 
 def _kinds_text(kinds) -> str:
@@ -101,11 +102,24 @@ def solver_views(skeleton, names, pose, truth=None, width: int = 300, height: in
     for k, name in enumerate(names):
         v = SkeletonViewer(skeleton, pose, ghost=truth, width=width, height=height, controls=(k == 0),
                            selectable=selectable if k == 0 else None)
-        viewers[name], labels[name] = v, widget(w.HTML, layout={"width": f"{width}px"})  # a long message wraps
-        # a view keeps its width (never squeezed into a scrolled box): a narrow page wraps the views onto rows
-        boxes.append(widget(w.VBox, [widget(w.HTML, f"<b>{html.escape(str(name))}</b>"), v.renderer, labels[name]],
-                            layout={"flex": "0 0 auto", "margin": "0 8px 8px 0"}))
+        viewers[name], labels[name] = v, widget(w.HTML)  # as wide as its view: a long message wraps
+        labels[name].add_class("posekit-view-label")
+        # the views share the row's width, each scaled down from its canvas's width (posekit.viz.screen_fit), never
+        # squeezed into a scrolled box; a page narrower than four small views wraps them onto rows
+        title = widget(w.HTML, f"<b>{html.escape(str(name))}</b>")
+        title.add_class("posekit-view-title")
+        boxes.append(widget(w.VBox, [title, v.renderer, labels[name]],
+                            layout=view_box_layout(width)))
+        boxes[-1].add_class("posekit-view")
     return viewers, labels, boxes
+
+
+def views_row(boxes):
+    """The row of view boxes (:func:`solver_views`), with the page's rules that scale them (a stylesheet that takes
+    no room, :func:`~posekit.viz.screen_fit.stylesheet`)."""
+    import ipywidgets as w
+
+    return widget(w.HBox, [*boxes, stylesheet()], layout={"flex_flow": "row wrap", "width": "100%"})
 
 
 def solve_views(skeleton, solvers: dict, viewers: dict, labels: dict, start, effectors, results: dict,
@@ -223,7 +237,7 @@ class SolverPanel:
                                     tooltip="take the selected joint's effector away")
         self.remove_button.on_click(lambda _: self.remove_effector(first.selected))
         self.message = widget(w.HTML)
-        self.widget = widget(w.VBox, [widget(w.HBox, boxes, layout={"flex_flow": "row wrap"}), first.controls,
+        self.widget = widget(w.VBox, [views_row(boxes), first.controls,
                                       widget(w.HBox, [self.remove_button, self.message],
                                              layout={"align_items": "center"})])
         self.solve()

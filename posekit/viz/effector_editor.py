@@ -29,7 +29,7 @@ from ..ik.api import Effector, Pose
 from ..kinematics import fk
 from ..rotations import euler_to_quat, quat_to_matrix
 from ..transforms import facing_angle
-from .compare import solve_views, solver_views
+from .compare import solve_views, solver_views, views_row
 from .shared import widget
 from .viewer import show_widget
 
@@ -93,7 +93,7 @@ class EffectorEditor:
         self.message = widget(w.HTML)
         self.rows_box = widget(w.VBox, [])
         wrap = {"flex_flow": "row wrap", "align_items": "center"}  # a narrow page: views and controls wrap
-        self.widget = widget(w.VBox, [widget(w.HBox, boxes, layout=wrap), self.first.controls,
+        self.widget = widget(w.VBox, [views_row(boxes), self.first.controls,
                                       widget(w.HBox, [self.add_joint, self.add_kind, self.add_button, self.message],
                                              layout=wrap),
                                       self.rows_box])

@@ -13,7 +13,8 @@ dragging in 3D) with what an animator expects around it:
 * **setups** — save and load the effectors as JSON (:mod:`posekit.viz.setup_file`), from a path on the
   server or uploaded from the browser; a malformed file is reported and nothing is lost;
 * **export** — the chosen solver's pose as BVH (read back through :func:`posekit.io.bvh.read_bvh` to check it)
-  and all views as a PNG, each with a download link; a start pose can be read from a BVH file;
+  and all views as a PNG (the views' own pixels, read from the page), each with a download link; a start pose can
+  be read from a BVH file;
 * **timeline** — key effector setups, in-betweens posed by one solver (:mod:`posekit.ik.keyframes`),
   played back and exported as an animated BVH.
 
@@ -32,6 +33,7 @@ import numpy as np
 from ..ik.api import Effector, Pose
 from ..ik.registry import make_solver, solver_names
 from .compare import ignored_effectors, reached_mark, status_table, worst_errors
+from .canvas_capture import CanvasCapture
 from .effector_editor import EffectorEditor
 from .studio_export import StudioExport, link
 from .studio_messages import BUSY_SIGN, WRAP, StudioMessages
@@ -74,7 +76,8 @@ class PosingStudio(StudioExport, StudioTimeline):
         a page neither reads nor writes any other file of the server. Default ``False``: any path (a notebook's own
         kernel).
     width, height : int
-        Each view's canvas, pixels (default width: the views share about 1,250 px, 300-560 px each).
+        Each view's canvas, pixels (default width: the views share about 1,250 px, 300-560 px each). The page scales
+        a canvas down to the width it has (:mod:`posekit.viz.screen_fit`), never up.
 
     Attributes
     ----------
@@ -136,7 +139,8 @@ class PosingStudio(StudioExport, StudioTimeline):
         bvh = widget(w.Button, description="pose as BVH")
         bvh.on_click(lambda _: self._safely(lambda: self.export_bvh(), "export"))
         png = widget(w.Button, description="views as PNG")
-        png.on_click(lambda _: self._safely(lambda: self.export_png(), "export"))
+        png.on_click(lambda _: self._safely(lambda: self.export_png(from_page=True), "export"))
+        self.views_capture = CanvasCapture(scope=".posekit-studio", views=".posekit-view")  # reads the views' pixels
         self.inbetweens = widget(w.BoundedIntText, value=10, min=0, max=120, description="in-betweens",
                                  layout={"width": "180px"})
         self.ease = widget(w.Dropdown, options=["smooth", "linear"], value="smooth", description="ease",
@@ -153,18 +157,21 @@ class PosingStudio(StudioExport, StudioTimeline):
         self.timeline_box = widget(w.VBox, [])
         self.views_box = widget(w.VBox, [])
         row = lambda *ws: widget(w.HBox, list(ws), layout=WRAP)  # noqa: E731
+        # the views and the selected joint's controls first: with the studio's top at the screen's top, every view,
+        # the selection and its X/Y/Z sliders lie on one 1280 x 800 screen (posekit.viz.screen_fit); the choice of
+        # solvers under them
         self.widget = widget(w.VBox, [
+            self.views_box,
             widget(w.HTML, f"<b>Solvers</b> — tick {MIN_SOLVERS} to {MAX_SOLVERS}, then compare"),
             row(self.choose, widget(w.VBox, [self.compare_button, self.busy, lines["solvers"]])),
-            self.views_box,
             widget(w.HTML, "<b>All solvers</b>"), self.summary,
             row(self.undo_button, self.redo_button, self.setup_path, self.save_button, self.load_button, self.upload,
                 lines["setup"]),
-            row(self.export_solver, bvh, png, lines["export"]),
+            row(self.export_solver, bvh, png, lines["export"], self.views_capture),
             widget(w.HTML, "<b>Timeline</b> — key setups; in-betweens posed by the export solver"),
             row(add_key, clear, self.inbetweens, self.ease, build, anim, lines["timeline"]), self.keys_label,
             self.timeline_box], layout={"max_width": "100%"})
-        for part, name in ((self.summary, "summary"), (self.choose, "solver-choice"), (self.busy, "busy"),
+        for part, name in ((self.widget, "studio"), (self.summary, "summary"), (self.choose, "solver-choice"), (self.busy, "busy"),
                              (self.compare_button, "compare"), (self.views_box, "views")):
             part.add_class(f"posekit-{name}")  # for a browser test (and a stylesheet)
         self.editor = None

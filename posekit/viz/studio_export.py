@@ -4,6 +4,19 @@ read from a BVH file.
 Introduced in ``notebooks/06_posing_studio.ipynb`` with :class:`posekit.viz.studio.PosingStudio`, whose mixin
 this is. Every file is read back or linked for download in the studio's message line; written under the
 studio's ``export_dir``. Positions in metres (:mod:`posekit.conventions`).
+
+**Views as PNG: the views themselves.** The *views as PNG* button asks the page for every view's own pixels: a
+page-side widget in the studio (:class:`~posekit.viz.canvas_capture.CanvasCapture`) reads each view's WebGL canvas
+(``canvas.toDataURL()``; pythreejs keeps the drawn frame, ``preserveDrawingBuffer``) with the view's title and
+status text as the page shows them, and sends them back; the kernel lays them out in one row, each title above its
+view and its status lines (reached, worst effector, iterations, time) below
+(:func:`~posekit.viz.views_picture.compose_views`), and writes the PNG. The picture is what the views show: the
+same camera (an orbit or zoom included), colours, ghost, targets, scale and the status of the same solve. The page
+answers after the button's handler has returned, so the file is written, and its link shown, a moment later.
+
+A kernel without a page (a script, a notebook run by nbval, :meth:`StudioExport.export_png` called in a cell, where
+the kernel cannot read the page's answer until the cell ends) gets the earlier drawing instead: each pose redrawn by
+matplotlib, titled with its solve time — another camera and style than the views, and the message says so.
 """
 
 from __future__ import annotations
@@ -54,8 +67,43 @@ class StudioExport:
                               f"{diff:.3f} mm — {link(path, 'text/plain')}")
         return path
 
-    def export_png(self, path=None) -> Path:
-        """Draw every view's pose (matplotlib, one 3D axes each, titled with its errors) into a PNG."""
+    def export_png(self, path=None, from_page: bool = False) -> Path:
+        """Write every view as one PNG (default ``export_dir/views.png``); returns its path.
+
+        With ``from_page`` (the *views as PNG* button) and a page showing the studio, the views' own pixels, titles
+        and status lines are read from the page and the file is written when they arrive (the module docstring);
+        otherwise, or without a page, each pose is drawn here by matplotlib (another camera and style than the
+        views, titled with its solve time) and the file is there when this returns."""
+        path = Path(path or self.export_dir / "views.png")
+        capture = getattr(self, "views_capture", None)
+        if from_page and capture is not None and capture.shown:
+            self.message.row = "export"
+            self.message.value = f"reading the {len(self.solvers)} views from the page…"
+            capture.capture(lambda views: self._write_views(path, views))
+            return path
+        return self._draw_views(path)
+
+    def _write_views(self, path: Path, views) -> None:
+        """Compose the pictures the page sent (:meth:`CanvasCapture.capture`) into ``path``; say so, or what went
+        wrong, on the export line."""
+        from .views_picture import compose_views
+
+        self.message.row = "export"
+        try:
+            if not views or any(v["png"] is None for v in views):
+                raise ValueError("the page sent no picture of some view (is every view drawn?)")
+            image, _ = compose_views([v["png"] for v in views], [v["title"] for v in views],
+                                     [v["label"] for v in views])
+            path.parent.mkdir(parents=True, exist_ok=True)
+            image.save(path)
+        except (ValueError, OSError) as err:
+            self.message.value = f"<span style='color:#b03a2e'>views as PNG: {html.escape(str(err))}</span>"
+            return
+        self.message.value = (f"wrote {html.escape(str(path))}: the {len(views)} views as the page shows them — "
+                              f"{link(path, 'image/png')}")
+
+    def _draw_views(self, path: Path) -> Path:
+        """Draw every view's pose (matplotlib, one 3D axes each, titled with its solve time) into ``path``."""
         import matplotlib
 
         from matplotlib.figure import Figure
@@ -74,11 +122,11 @@ class StudioExport:
                 continue
             plot_pose(self.skeleton, res.pose.global_pos, ax=ax, targets=np.array(targets) if targets else None,
                       title=f"{name}\n{self.editor.times.get(name, 0):.1f} ms")
-        path = Path(path or self.export_dir / "views.png")
         path.parent.mkdir(parents=True, exist_ok=True)
         fig.savefig(path, dpi=100)
         self.message.row = "export"
-        self.message.value = f"wrote {html.escape(str(path))} — {link(path, 'image/png')}"
+        self.message.value = (f"wrote {html.escape(str(path))}: the poses drawn by the kernel (no page to read the "
+                              f"views from) — {link(path, 'image/png')}")
         return path
 
     def load_start_bvh(self, path, frame: int = 0):

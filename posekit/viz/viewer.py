@@ -46,6 +46,7 @@ from ..skeleton import Skeleton
 from .camera import FramedCamera, orthographic_matrix, perspective_matrix, translation_matrix
 from .drag import DragTargets
 from .meshes import Bones, Figure, Spheres, icosphere
+from .screen_fit import VIEWER_LAYOUT, WRAP_ROW, stylesheet
 from .shared import layout, model, widget
 from .sliders import TargetSliders
 
@@ -206,6 +207,7 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
                                        width=width, height=height, layout=layout(),
                                        shadowMap=model(three.WebGLShadowMap),  # no shadow drawn: one for every view
                                        antialias=antialias_default() if antialias is None else bool(antialias))
+        self.renderer.add_class("posekit-canvas")  # scaled to its box's width (posekit.viz.screen_fit)
 
         self._show_controls, self._controls_made, self._sliders_due = bool(controls), False, False
         if controls:
@@ -248,9 +250,14 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         self.reset_button.on_click(lambda _: self.reset_view())
         self._init_sliders()
         # a layout of its own: showing or hiding the controls changes it
-        self.controls = widget(w.VBox, [widget(w.HBox, [self.joint_select, self.drag_mode, self.reset_button]),
-                                        self.handle_choice, self.slider_box, self.status],
+        # the selection's row and the sliders beside the readout, each wrapping on a narrow page (screen_fit)
+        self.controls = widget(w.VBox, [widget(w.HBox, [self.joint_select, self.drag_mode, self.reset_button],
+                                               layout=WRAP_ROW),
+                                        self.handle_choice,
+                                        widget(w.HBox, [self.slider_box, self.status],
+                                               layout={**WRAP_ROW, "align_items": "flex-start"})],
                                layout=w.Layout(display=None if self._show_controls else "none"))
+        self.controls.add_class("posekit-viewer")
         if self.selected is not None:  # made after a selection: the sliders and the readout show it
             self._sync_sliders(recentre=True)
             self._update_status()
@@ -260,7 +267,9 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         import ipywidgets as w
 
         self._extra = widget(w.VBox, [])
-        self.widget = widget(w.VBox, [self.renderer, self.controls, self._extra])
+        # the page's rules last: the first text of the widget stays the selection's readout
+        self.widget = widget(w.VBox, [self.renderer, self.controls, self._extra, stylesheet()], layout=VIEWER_LAYOUT)
+        self.widget.add_class("posekit-viewer")
 
     # ------------------------------------------------------------------ helpers
     def _check(self, pos, what):
