@@ -365,7 +365,8 @@ def test_key_presses_right_after_a_selection_all_reach_the_new_joint(page):
         for i in range(20):
             old, new = joints[(i - 1) % len(joints)], joints[i % len(joints)]
             # the old joint's sliders are shown (their X readout is its target's x), its X handle has the keyboard
-            wait_for(lambda: readout.inner_text() == f"{expected[old][0] / 1000:.3f}", 30, f"{old}'s X slider")
+            wait_for(lambda: readout.inner_text().replace("\u2212", "-") == f"{expected[old][0] / 1000:.3f}", 30,
+                     f"{old}'s X slider")  # (d3's readout writes a minus sign, not a hyphen)
             handle.focus()
             assert page.evaluate("() => document.activeElement.classList.contains('noUi-handle')")
             _select_quietly(page, new)
