@@ -9,7 +9,14 @@ pickers report mouse events to the kernel:
 * *mouse move*: the browser reports where the mouse ray meets a large invisible sphere around the scene;
   the kernel draws the line from the camera through that point and moves the target to where it crosses
   the drag plane (:func:`drag_point`, :meth:`DragTargets.drag_to`);
-* *mouse up*: the target is let go.
+* *mouse up* — wherever it happens: the target is let go (:meth:`DragTargets._let_go`).
+
+The pickers see the mouse on the canvas only: a button let go over another part of the page, or outside the
+window, never reaches the *mouse up* picker, and the drag went on with no button down (hovering moved the target).
+So the view's :class:`~posekit.viz.page_watch.PageWatch` listens on the whole page and tells the kernel of the first
+``pointerup`` or ``pointercancel`` anywhere, of the window losing focus, and of a mouse moving with no button down,
+once a drag may be held (the kernel marks the switch with :data:`DRAG_HELD_CLASS` while it holds one); the canvas'
+*mouse up* picker stays, for a page without that script. Letting go twice is harmless.
 
 So the target follows the cursor in the plane of the screen, at the depth it had, and the arithmetic runs
 in the kernel: the browser only reports points. Units: metres; positions in the world frame.
@@ -22,11 +29,15 @@ import numpy as np
 from .meshes import icosphere
 from .shared import constant_attribute, constant_geometry, material, widget
 
-__all__ = ["drag_point", "DragTargets", "DRAG_ON_CLASS"]
+__all__ = ["drag_point", "DragTargets", "DRAG_ON_CLASS", "DRAG_HELD_CLASS"]
 
 DRAG_ON_CLASS = "posekit-drag-on"
 """The CSS class the kernel puts on the *drag in 3D* switch once it has stopped orbiting (and takes off once it
 orbits again): a page, or a test driving one, presses in the view after it shows."""
+
+DRAG_HELD_CLASS = "posekit-drag-held"
+"""The CSS class the kernel puts on the *drag in 3D* switch while it holds a drag (from the press on a joint until
+the release): a test reads the kernel's drag state from the page by it."""
 
 SURFACE_RADIUS = 40.0
 """Radius (metres) of the invisible sphere every mouse ray from inside the scene meets."""
@@ -54,7 +65,8 @@ class DragTargets:
 
     Expects of the viewer: ``camera``, ``orbit``, ``_offset`` (world position of the scene origin),
     ``_grabbable`` (the group of joints and markers), ``pose``, ``targets``, ``look_targets``,
-    ``_joint_radius``, ``select``, ``move_target``, ``move_look_target``, ``_look_callbacks``.
+    ``_joint_radius``, ``select``, ``move_target``, ``move_look_target``, ``_look_callbacks``, ``page_watch`` (a
+    :class:`~posekit.viz.page_watch.PageWatch`, made with the controls, which calls :meth:`_let_go` on a release).
 
     Attributes
     ----------
@@ -109,14 +121,18 @@ class DragTargets:
         if change["new"] and not getattr(self, "_drag_made", False):  # a view without controls: made when needed
             self.renderer.controls = [*self.renderer.controls, *self._drag_pickers()]
         self.orbit.enabled = not change["new"]
+        self.page_watch.armed = bool(change["new"])  # a press on the canvas may start a drag: the page watches
         # the page learns that the kernel has switched orbiting (a class on the switch, sent after ``enabled``): a
         # press before it orbits the camera instead of grabbing a joint
         (self.drag_mode.add_class if change["new"] else self.drag_mode.remove_class)(DRAG_ON_CLASS)
         self._let_go()
 
     def _let_go(self):
-        """End a drag: the sliders show where the target went (they wait while the mouse is down)."""
+        """End a drag (the page's release, the canvas' *mouse up*, the switch turned off; again: nothing): the
+        sliders show where the target went (they wait while the mouse is down)."""
         held, self.dragging = self.dragging, None
+        if held is not None:
+            self._show_held(False)
         if self._sliders_due:
             self._sync_sliders()
         if held is not None:
@@ -136,12 +152,21 @@ class DragTargets:
             self._refuse(name)
             return
         self.dragging = name
+        self._show_held(True)
         if self.selected != name:
             self.select(name)
         anchor = (self.look_targets[name] if self.dragging_look
                   else self.targets.get(name, self.pose[self.skeleton.index(name)]))
         camera = np.asarray(self.camera.position, float) + self._offset  # world frame
         self._drag_plane = (anchor.copy(), (camera - anchor) / max(np.linalg.norm(camera - anchor), 1e-9))
+
+    def _show_held(self, held: bool):
+        """Tell the page whether a drag is held: its watcher then ends it on any release, and the switch carries
+        :data:`DRAG_HELD_CLASS` meanwhile."""
+        if not self._controls_made:
+            return
+        self.page_watch.holding = held
+        (self.drag_mode.add_class if held else self.drag_mode.remove_class)(DRAG_HELD_CLASS)
 
     def drag_to(self, through):
         """Move the dragged target to where the mouse ray (camera -> ``through``, world frame) meets the

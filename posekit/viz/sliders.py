@@ -17,7 +17,10 @@ it to the handle of the joint selected *now* — the selection the kernel has al
 messages arriving in order. A press on a slider the browser had not yet replaced after a new selection thus moves
 the new joint by one step, never to the old joint's value; a value the browser sends back unchanged (its snap to
 the step grid) is zero steps and moves nothing. The last :attr:`TargetSliders.KEEP_OLD` replaced sets stay open
-for presses still on their way; older ones are closed. Units: metres, world frame (:mod:`posekit.conventions`).
+for presses still on their way; older ones are closed. The page keeps the keyboard across the swap: when the
+handle that had the focus is replaced, its view's :class:`~posekit.viz.page_watch.PageWatch` gives the focus to the
+new handle of the same axis, and keys pressed in between to it (before, the focus fell to the page's body and those
+presses went nowhere). Units: metres, world frame (:mod:`posekit.conventions`).
 """
 
 from __future__ import annotations

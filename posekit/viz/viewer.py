@@ -21,12 +21,14 @@ orbit drag); the X/Y/Z sliders then move that joint's target, in 1 mm steps with
 value, so any point can be reached). A joint with both a target and a look-at target gets a choice of
 which one the sliders move. Selecting never moves anything, and a key press moves the joint selected when it
 arrives by exactly its steps, however soon after a selection: the kernel never changes a slider the browser
-shows, it replaces it (:mod:`posekit.viz.sliders`). Helper joints that are not part of the body (Bandai's
+shows, it replaces it (:mod:`posekit.viz.sliders`), and the page gives the keyboard to the new slider of the axis
+whose handle had it (:mod:`posekit.viz.page_watch`). Helper joints that are not part of the body (Bandai's
 ``joint_Root``, the world point under the feet) cannot be selected, nor joints a view does not offer
 (``selectable``: a panel offers the joints its solvers were given). With **drag in 3D** on, orbiting stops and
 pressing the mouse on a target marker or a joint and moving it drags that target across the plane through it that faces
 the camera (the camera waits for the mouse to be released before it takes a far target in, so the drag
-keeps its scale). ``on_target_change`` callbacks (an IK solver, in later lessons) receive
+keeps its scale); letting the button go anywhere, on the page or outside the window, ends the drag
+(:mod:`posekit.viz.drag`). ``on_target_change`` callbacks (an IK solver, in later lessons) receive
 ``(joint_name, position)``; targets are always stored under the joint's own name, whatever name, role
 or index the caller used.
 
@@ -46,6 +48,7 @@ from ..skeleton import Skeleton
 from .camera import FramedCamera, orthographic_matrix, perspective_matrix, translation_matrix
 from .drag import DragTargets
 from .meshes import Bones, Figure, Spheres, icosphere
+from .page_watch import PageWatch
 from .screen_fit import VIEWER_LAYOUT, WRAP_ROW, stylesheet
 from .shared import layout, model, widget
 from .sliders import TargetSliders
@@ -219,7 +222,7 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         self.set_targets(targets or {})
 
     _LAZY = {**dict.fromkeys(("controls", "status", "joint_select", "drag_mode", "reset_button", "handle_choice",
-                              "slider_box", "sliders", "slider_generation"), "_make_controls"),
+                              "slider_box", "sliders", "slider_generation", "page_watch"), "_make_controls"),
              "widget": "_make_widget", "_extra": "_make_widget"}
     """The parts a view without controls makes when first asked for, and the method that makes them."""
 
@@ -249,15 +252,23 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
                                    tooltip="frame the pose again, seen from the front")
         self.reset_button.on_click(lambda _: self.reset_view())
         self._init_sliders()
+        # what only the page sees (a release anywhere, the focused slider handle) for the canvas and the controls,
+        # which carry its CSS class: shows nothing
+        scope = f"posekit-view-{self.renderer.model_id}"
+        self.page_watch = widget(PageWatch, scope=scope, layout={"display": "none"})
+        self.page_watch.on_release(self._let_go)
+        self.renderer.add_class(scope)
         # a layout of its own: showing or hiding the controls changes it
         # the selection's row and the sliders beside the readout, each wrapping on a narrow page (screen_fit)
         self.controls = widget(w.VBox, [widget(w.HBox, [self.joint_select, self.drag_mode, self.reset_button],
                                                layout=WRAP_ROW),
                                         self.handle_choice,
                                         widget(w.HBox, [self.slider_box, self.status],
-                                               layout={**WRAP_ROW, "align_items": "flex-start"})],
+                                               layout={**WRAP_ROW, "align_items": "flex-start"}),
+                                        self.page_watch],
                                layout=w.Layout(display=None if self._show_controls else "none"))
         self.controls.add_class("posekit-viewer")
+        self.controls.add_class(scope)
         if self.selected is not None:  # made after a selection: the sliders and the readout show it
             self._sync_sliders(recentre=True)
             self._update_status()

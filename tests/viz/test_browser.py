@@ -563,3 +563,75 @@ def test_presses_right_after_selections_in_lessons_01_and_02(lab, chromium):
         assert max(gaps) < 50 and on_old >= 1, (gaps, on_old)
     finally:
         page.close()
+
+
+def test_a_drag_ends_outside_the_view_and_keys_reach_the_new_slider_in_lab(lab, chromium):
+    """Issue 57 in JupyterLab (the studio's tests run the same in Voila), lesson 01's panel: a drag in 3D let go
+    beyond the window's edge ends in the kernel (the *drag in 3D* switch loses DRAG_HELD_CLASS) and hovering then
+    moves nothing; with the X slider's handle focused, choosing another joint and pressing ArrowRight 5 times at once
+    moves the new joint's target +5 mm, 5 times over (the page's watcher, posekit.viz.page_watch)."""
+    from posekit.viz.drag import DRAG_HELD_CLASS
+    from tests.viz.browser_helpers import drag_in_3d, press_in_3d, selected_joint, target_mm
+
+    page = _lab_page(chromium, {"width": 1280, "height": 1000})
+    try:
+        cell, labels, canvases, before = _open_panel(page, lab, PANEL_NOTEBOOK, 3, "the solver panel")
+        toggle = cell.get_by_role("button", name="drag in 3D").first
+
+        def held():
+            return DRAG_HELD_CLASS in (toggle.get_attribute("class") or "").split()
+
+        drag_in_3d(page, cell, True)
+        canvas = canvases.first
+        canvas.scroll_into_view_if_needed()  # (the switch's click scrolls the page)
+        img = wait_still(canvas, 30, "the view to stand still")
+        box = canvas.bounding_box()
+        x, y = press_in_3d(page, canvas, selected_joint(img), cell)  # the switch is on already: no click, no scroll
+        _wait_for(held, 30, "the kernel to hold the drag")
+        page.mouse.move(x + 20, y - 30, steps=6)
+        page.mouse.move(x + 20, box["y"] - 20, steps=4)  # up, out of the view
+        page.mouse.move(-40, box["y"] - 20, steps=6)  # and beyond the window's left edge
+        page.mouse.up()
+        _wait_for(lambda: not held(), 60, "the kernel to let go of the drag released outside the window")
+        joint = cell.locator(".widget-dropdown", has_text="selected").first.locator("select").input_value()
+        where = _wait_for(lambda: target_mm(cell, joint), 30, "the dragged target in the status table")
+        for fx, fy in ((0.5, 0.5), (0.2, 0.8), (0.8, 0.3)):
+            page.mouse.move(box["x"] + fx * box["width"], box["y"] + fy * box["height"], steps=5)
+        kernel_round_trip(page, cell)  # every hover handled
+        assert target_mm(cell, joint) == where, "hovering with no button down moved the target"
+        drag_in_3d(page, cell, False)
+
+        joints = (joint, "right_wrist", "head", "left_ankle")
+        listing = cell.locator(".widget-dropdown", has_text="selected").first.locator("select")
+        expected = {}
+        for j in joints[1:] + joints[:1]:
+            listing.select_option(j)
+            expected[j] = _wait_for(lambda j=j: target_mm(cell, j), 30, f"{j}'s target")
+        kernel_round_trip(page, cell)
+        handle = cell.locator(".posekit-target-x .noUi-handle").first
+        moved = []
+        for i in range(1, 6):
+            new = joints[i % len(joints)]
+            handle.focus()
+            page.evaluate("""([scope, joint]) => {
+              const list = [...scope.querySelectorAll('.widget-dropdown')].find(d => d.textContent.includes('selected'))
+                .querySelector('select');
+              list.value = joint;
+              list.dispatchEvent(new Event('change', {bubbles: true}));
+            }""", [cell.element_handle(), new])
+            for _ in range(5):
+                page.keyboard.press("ArrowRight")
+                time.sleep(0.03)
+            goal = (expected[new][0] + 5, *expected[new][1:])
+            try:
+                _wait_for(lambda: target_mm(cell, new) == goal, 15, f"{new}'s target +5 mm", every=0.2)
+            except pytest.fail.Exception:
+                pass
+            now = _wait_for(lambda: target_mm(cell, new), 30, f"{new}'s target")
+            moved.append(now[0] - expected[new][0])
+            expected[new] = now
+            kernel_round_trip(page, cell)  # the new joint's sliders shown before the next trial focuses one
+        assert moved == [5] * 5, moved
+        page.screenshot(path=str(lab[2] / "lab_drag_and_keys.png"))
+    finally:
+        page.close()

@@ -675,3 +675,33 @@ def test_the_protores_diagram_refuses_another_architecture_and_an_empty_request(
         draw_protores(ProtoResConfig(21, arch="transformer"))
     with pytest.raises(ValueError, match="at least 1 effector, got 0"):
         draw_protores(ProtoResConfig(21), n_effectors=0)
+
+
+def test_a_release_the_page_reports_ends_the_drag_and_the_view_takes_the_target_in(sample):
+    """Issue 57: the page's watcher (posekit.viz.page_watch) reports a release anywhere, outside the view or the
+    window; the kernel lets go at once (hovering then moves nothing) and the camera takes the far target in. It knows
+    whether *drag in 3D* is on and whether a drag is held (the switch carries DRAG_HELD_CLASS meanwhile)."""
+    from posekit.viz.drag import DRAG_HELD_CLASS
+
+    s = sample.skeleton
+    v = SkeletonViewer(s, sample.global_pos[0])
+    moves = []
+    v.on_target_change(lambda name, p: moves.append(p))
+    hand = sample.global_pos[0][s.index("left_wrist")]
+    assert v.page_watch.scope in v.renderer._dom_classes and v.page_watch.scope in v.controls._dom_classes
+    v.drag_mode.value = True
+    assert v.page_watch.armed and not v.page_watch.holding
+    v.grab(hand)
+    assert v.page_watch.holding and DRAG_HELD_CLASS in v.drag_mode._dom_classes
+    cam0 = list(v.camera.position)
+    camera = np.asarray(cam0, float) + v._offset
+    v.drag_to(camera + 0.5 * (hand + [0.0, 2.0, 0.0] - camera))  # far up, out of the framed region
+    v.page_watch._on_page_message(v.page_watch, {"event": "release", "why": "pointerup"}, [])
+    assert v.dragging is None and not v.page_watch.holding and DRAG_HELD_CLASS not in v.drag_mode._dom_classes
+    assert np.linalg.norm(v.camera.position) > np.linalg.norm(cam0)  # the view widened once let go
+    n = len(moves)
+    v.drag_to(camera + 0.5 * (hand - camera))  # hovering with no button down
+    assert len(moves) == n
+    v.page_watch._on_page_message(v.page_watch, {"event": "release", "why": "blur"}, [])  # again: nothing
+    v.drag_mode.value = False
+    assert not v.page_watch.armed

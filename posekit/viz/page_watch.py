@@ -1,0 +1,151 @@
+"""What only the page can see, told to the kernel: the mouse button let go anywhere, and the slider handle that had
+the keyboard when the kernel replaced it.
+
+Introduced with :class:`~posekit.viz.SkeletonViewer` (``notebooks/00_skeletons_and_poses.ipynb``; dragging in
+``notebooks/06_posing_studio.ipynb``); a part of its controls. pythreejs' pickers report mouse events on the canvas
+only, and the kernel never sees the keyboard's focus; :class:`PageWatch` is a small `anywidget
+<https://anywidget.dev>`_ whose script listens on the page's ``window`` (in JupyterLab and in Voila alike) for one
+view — the elements that carry the CSS class :attr:`PageWatch.scope` (its canvas and its controls):
+
+1. **A drag always ends.** Once a press on the canvas has started a drag in 3D (*drag in 3D* on, :attr:`armed`), or
+   the kernel says it holds one (:attr:`holding`), the first ``pointerup`` or ``pointercancel`` anywhere — over
+   another part of the page, outside the window —, the window losing focus, or a ``pointermove`` with no button down
+   (the button let go where the page could not see it) sends the kernel ``{"event": "release"}``: the view's
+   :meth:`~posekit.viz.drag.DragTargets._let_go` runs (:meth:`PageWatch.on_release`).
+2. **Key presses survive the slider swap.** The kernel puts new X/Y/Z slider models in place of the old ones
+   whenever what they show changes (:mod:`posekit.viz.sliders`), and a focused handle that leaves the page drops the
+   keyboard's focus to the page's body. The script remembers which axis's handle (``.posekit-target-x`` ...
+   ``.noUi-handle``) had focus; when that handle has left the page and nothing else took focus, it focuses the
+   newest handle of the same axis as soon as it is shown, and keys pressed in between (arrows, Page Up/Down,
+   Home, End) are held back and then given to that handle, in order.
+
+A page without the script (a front end without anywidget) still ends a drag with the canvas' ``mouseup`` picker.
+"""
+
+from __future__ import annotations
+
+import anywidget
+import traitlets
+
+__all__ = ["PageWatch"]
+
+_ESM = r"""
+const AXES = ["x", "y", "z"];
+const SLIDER_KEYS = new Set(["ArrowLeft", "ArrowRight", "ArrowUp", "ArrowDown", "PageUp", "PageDown", "Home", "End"]);
+
+// the set a slider belongs to: its box carries posekit-sliders-<n>, n counting up with every set the kernel makes
+function generation(handle) {
+  const box = handle.closest("[class*='posekit-sliders-']");
+  const found = box && box.className.match(/posekit-sliders-(\d+)/);
+  return found ? Number(found[1]) : -1;
+}
+
+function initialize({ model }) {
+  const scope = () => "." + model.get("scope");
+  const inScope = (node) => node instanceof Element && node.closest(scope()) !== null;
+  const axisOf = (node) => (node instanceof Element && node.classList.contains("noUi-handle") && inScope(node)
+    ? AXES.find((a) => node.closest(".posekit-target-" + a)) ?? null : null);
+
+  // 1. a drag always ends: the first release, wherever it happens, once a drag may be held
+  let held = false;
+  const down = (e) => { if (model.get("armed") && inScope(e.target)) held = true; };
+  const end = (e) => {
+    if (!held || (e.type === "pointermove" && e.buttons !== 0) || (e.type === "blur" && e.target !== window)) return;
+    held = false;
+    model.send({ event: "release", why: e.type });
+  };
+  const holding = () => { if (model.get("holding")) held = true; };  // a drag the press above did not see
+  model.on("change:holding", holding);
+
+  // 2. the handle that had the keyboard: its axis, and keys pressed while its successor is not yet shown
+  let last = null, lastAxis = null, queued = [];
+  const focusIn = (e) => {
+    lastAxis = axisOf(e.target);
+    last = lastAxis ? e.target : null;
+    queued = [];
+  };
+  const lost = () => {
+    if (last === null || last.isConnected) return false;
+    const now = document.activeElement, here = document.querySelector(scope());
+    // the focus fell to the body, or to a box around the view (JupyterLab's output area): nothing else took it
+    return !now || now === document.body || now === document.documentElement || (here !== null && now.contains(here));
+  };
+  const newest = () => {
+    let best = null;
+    for (const h of document.querySelectorAll(`${scope()} .posekit-target-${lastAxis} .noUi-handle`)) {
+      if (best === null || generation(h) > generation(best)) best = h;
+    }
+    return best;
+  };
+  const restore = () => {
+    if (!lost()) return;
+    const handle = newest();
+    if (handle === null) return;
+    const keys = queued;
+    handle.focus({ preventScroll: true });  // focusin: the new handle is the one remembered
+    last = handle;
+    for (const k of keys) {
+      handle.dispatchEvent(new KeyboardEvent("keydown", { key: k.key, code: k.code, shiftKey: k.shiftKey,
+                                                          bubbles: true, cancelable: true }));
+    }
+  };
+  const key = (e) => {
+    if (!SLIDER_KEYS.has(e.key) || e.altKey || e.ctrlKey || e.metaKey || !lost()) return;
+    e.preventDefault();
+    e.stopPropagation();
+    queued.push({ key: e.key, code: e.code, shiftKey: e.shiftKey });
+    restore();
+  };
+  const watcher = new MutationObserver(() => { if (last !== null && !last.isConnected) restore(); });
+  watcher.observe(document.body, { childList: true, subtree: true });
+
+  const listeners = [["pointerdown", down, true], ["pointerup", end, true], ["pointercancel", end, true],
+                     ["pointermove", end, true], ["blur", end, false], ["focusin", focusIn, true],
+                     ["keydown", key, true]];
+  for (const [type, fn, capture] of listeners) window.addEventListener(type, fn, capture);
+  return () => {
+    for (const [type, fn, capture] of listeners) window.removeEventListener(type, fn, capture);
+    watcher.disconnect();
+    model.off("change:holding", holding);
+  };
+}
+
+export default { initialize };
+"""
+
+
+class PageWatch(anywidget.AnyWidget):
+    """The page-side watcher of one view (see the module docstring); shows nothing.
+
+    Parameters
+    ----------
+    scope : str
+        The CSS class the view's canvas and controls carry.
+
+    Attributes
+    ----------
+    armed : bool
+        Set by the kernel: *drag in 3D* is on, so a press on the canvas may start a drag.
+    holding : bool
+        Set by the kernel: it holds a drag (``DragTargets.dragging``).
+    """
+
+    _esm = _ESM
+    scope = traitlets.Unicode("").tag(sync=True)
+    armed = traitlets.Bool(False).tag(sync=True)
+    holding = traitlets.Bool(False).tag(sync=True)
+
+    def __init__(self, scope: str, **kwargs):
+        super().__init__(scope=scope, **kwargs)
+        self._release_callbacks = []
+        self.on_msg(self._on_page_message)
+
+    def on_release(self, callback):
+        """Call ``callback()`` whenever the page says the mouse button was let go (or the window lost focus) after a
+        press that may have started a drag."""
+        self._release_callbacks.append(callback)
+
+    def _on_page_message(self, _, content, buffers):
+        if isinstance(content, dict) and content.get("event") == "release":
+            for callback in self._release_callbacks:
+                callback()
