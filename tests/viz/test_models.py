@@ -72,7 +72,9 @@ def test_a_view_without_controls_holds_its_scene_alone_and_makes_its_controls_wh
     v, second = _made_by(lambda: SkeletonViewer(s, pose, controls=False))
     assert sum(second.values()) <= 35, second  # 94 before: its scene (32) and nothing else
     assert "FloatSlider" not in second and "Layout" not in second and "MeshLambertMaterial" not in second, second
-    assert sum(first.values()) <= 85, first  # 94 before, with the page's first Layouts, Styles and materials
+    # 94 before, with the page's first Layouts, Styles and materials; 89 with the page-side watcher (drag end, slider
+    # focus) and the wrapping rows of the one-screen layout
+    assert sum(first.values()) <= 90, first
     v.select(hand)  # a double-click on this view: the joint turns yellow; the controls follow when made
     assert v.controls.layout.display == "none"  # made now, hidden as before
     assert v.joint_select.value == hand and not v.sliders[0].disabled
