@@ -209,6 +209,21 @@ def test_a_summary_keeps_its_key_points_on_the_slide_and_its_detail_in_the_notes
     assert lecture.summary_slide("## 2. Summary\n\n- no key points") == ("## 2. Summary\n\n- no key points", "")
 
 
+def test_the_figures_source_markers_stay_out_of_the_deck_and_do_not_fill_its_slides():
+    """A source marker (``<!-- out: ... -->``, tests/test_prose_numbers.py) is for the tests: the deck and the page
+    drop it, and a paragraph with long markers takes the slides it takes without them."""
+    marker = '<!-- out: "a long anchor text of some printed table" "a row" col "a column header" -->'
+    prose = "\n".join(f"- Figure {k}: 12.{k} mm{marker} against 3{k} mm{marker}, " + "words " * 12 for k in range(9))
+    marked = _lesson(*BASE, ("md", f"## 2. Discussion\n\n{prose}"))
+    plain = _lesson(*BASE, ("md", f"## 2. Discussion\n\n{prose.replace(marker, '')}"))
+    (page, leaves), (_, plain_leaves) = _slides(marked), _slides(plain)
+    assert "<!-- out:" not in page and "Figure 8: 12.8 mm against 38 mm" in page
+    assert len(leaves) == len(plain_leaves)
+    assert "<!-- out:" not in rules.export(marked, "page")
+    assert rules.strip_source_markers("1 mm<!-- data: f.json a.b --> and 2<!-- setting: x -->; <!-- other -->") \
+        == "1 mm and 2; <!-- other -->"
+
+
 @pytest.mark.parametrize("number", [le.number for le in lessons()])
 def test_each_deck_is_a_lecture(number):
     le = find_lesson(number)

@@ -157,6 +157,16 @@ def key_outputs(cell: dict) -> list[str]:
     return keys
 
 
+_SOURCE_MARKER = re.compile(r"<!--\s*(?:out|data|goal|paper|definition|setting):.*?-->", re.DOTALL)
+
+
+def strip_source_markers(source: str) -> str:
+    """Drop the source markers after the figures of a markdown cell (``<!-- out: ... -->``, read by
+    ``tests/test_prose_numbers.py``): they are for the tests, not for the lecture, and would count as text when a
+    slide is fitted."""
+    return _SOURCE_MARKER.sub("", source)
+
+
 def strip_test_markers(source: str) -> str:
     """Drop the ``# NBVAL_...`` lines nbval reads: they are for the tests, not for the lecture."""
     return "\n".join(ln for ln in source.splitlines() if not ln.strip().startswith("# NBVAL_"))
@@ -197,6 +207,8 @@ def _presentable(nb: dict) -> dict:
         if cell["cell_type"] == "code":
             cell["source"] = strip_test_markers(_source(cell))
             cell["outputs"] = static_outputs(cell.get("outputs", []))
+        elif cell["cell_type"] == "markdown":
+            cell["source"] = strip_source_markers(_source(cell))
     return nb
 
 

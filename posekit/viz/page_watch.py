@@ -17,7 +17,8 @@ view — the elements that carry the CSS class :attr:`PageWatch.scope` (its canv
    keyboard's focus to the page's body. The script remembers which axis's handle (``.posekit-target-x`` ...
    ``.noUi-handle``) had focus; when that handle has left the page and nothing else took focus, it focuses the
    newest handle of the same axis as soon as it is shown, and keys pressed in between (arrows, Page Up/Down,
-   Home, End) are held back and then given to that handle, in order.
+   Home, End) are held back and then given to that handle, in order. A handle with no successor within 5 s (its
+   view was closed, not swapped) is forgotten, and the page's keys are the page's again.
 
 A page without the script (a front end without anywidget) still ends a drag with the canvas' ``mouseup`` picker.
 """
@@ -31,6 +32,8 @@ __all__ = ["PageWatch"]
 
 _ESM = r"""
 const AXES = ["x", "y", "z"];
+// how long keys wait for a replaced handle's successor before the page has them back (a view closed, not swapped)
+const GIVE_UP_MS = 5000;
 const SLIDER_KEYS = new Set(["ArrowLeft", "ArrowRight", "ArrowUp", "ArrowDown", "PageUp", "PageDown", "Home", "End"]);
 
 // the set a slider belongs to: its box carries posekit-sliders-<n>, n counting up with every set the kernel makes
@@ -64,8 +67,15 @@ function initialize({ model }) {
     last = lastAxis ? e.target : null;
     queued = [];
   };
+  let goneAt = null;  // when the remembered handle was first seen gone
   const lost = () => {
-    if (last === null || last.isConnected) return false;
+    if (last === null || last.isConnected) { goneAt = null; return false; }
+    goneAt = goneAt ?? performance.now();
+    if (performance.now() - goneAt > GIVE_UP_MS) {  // no successor came (the view was closed): let the keys be
+      last = null;
+      queued = [];
+      return false;
+    }
     const now = document.activeElement, here = document.querySelector(scope());
     // the focus fell to the body, or to a box around the view (JupyterLab's output area): nothing else took it
     return !now || now === document.body || now === document.documentElement || (here !== null && now.contains(here));
