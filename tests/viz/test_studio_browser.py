@@ -12,6 +12,8 @@ Needs Debian's ``chromium`` (``make test`` installs it) and Playwright's Python 
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import pytest
 
@@ -291,8 +293,16 @@ def test_a_drag_ends_wherever_the_button_is_let_go(page, server, release):
     press_in_3d(page, first, selected_joint(img), VIEWS)
     wait_for(lambda: _held(page), 30, "the kernel to hold the drag")
     page.mouse.move(box["x"] + box["width"] - 3, box["y"] + 3, steps=12)  # the target to the top-right corner
-    held = wait_still(first, 60, "the view to stand still with the target at the corner")
-    assert _magenta(held[:12]).sum() > 3, "the dragged target is not at the view's top edge"
+    # a state, not a pause: on a loaded machine each move waits for a solve of every view, and two screenshots half a
+    # second apart can look alike while the target is still on its way (a marker that moved a few pixels)
+    t0 = time.time()
+    while _magenta(_pixels(first)[:12]).sum() <= 3:
+        if time.time() - t0 > 90:
+            where = np.argwhere(_magenta(_pixels(first)))
+            pytest.fail("the dragged target did not reach the view's top edge in 90 s (the kernel "
+                        f"{'still holds' if _held(page) else 'has let go of'} the drag; magenta pixels from row, col "
+                        f"{where.min(0).tolist() if len(where) else None} to {where.max(0).tolist() if len(where) else None})")
+        time.sleep(0.5)
     page.mouse.move(box["x"] + box["width"] - 3, box["y"] - 14, steps=3)  # up, out of the view, over its heading
     if release == "over the page":
         page.mouse.move(box["x"] + 30, box["y"] - 14, steps=4)
