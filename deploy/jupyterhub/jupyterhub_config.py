@@ -7,10 +7,11 @@
 # (deploy/jupyterhub/package.json, installed by `make hub`).
 #
 # STUDENTS KEPT APART (posekit_spawner.py, when the hub runs as root): each student's server runs as their own system
-# user (posekit-<name>, made on their first start), in a sandbox of its own (sandbox.py: a mount and PID namespace):
-# it sees no other process, no other student's home, not the hub's database or secrets, not the instructor's folder
-# (instructor/: the exercises' solutions), and a private /tmp. Not as root, the hub cannot: every server then runs as
-# the hub's user, with no isolation, and the log says so.
+# user (posekit-<name>, made on their first start), in a sandbox of its own (sandbox.py: a mount, PID, IPC and
+# network namespace): it sees no other process, no other student's home or kernel, not the hub's database or
+# secrets, not the instructor's folder (instructor/: the exercises' solutions), private /tmp, /var/tmp, /dev/shm and
+# /run/lock, with limits on memory, CPU and processes (limits.py, from class_sizing.json). Not as root, the hub
+# cannot: every server then runs as the hub's user, with no isolation, and the log says so.
 # TRIAL LOGIN: the authenticator is JupyterHub's SharedPasswordAuthenticator (any user name, one password): whoever
 # knows the password can log in under any name, another student's included. A real class uses a real authenticator
 # (docs/hub.md).
@@ -30,10 +31,14 @@
 #   POSEKIT_HUB_COURSE          an nbgrader course id: students get nbgrader's Assignments panel (default: none)
 #   POSEKIT_HUB_EXCHANGE        nbgrader's exchange folder, shared by the instructor and the students
 #                               (default <state>/exchange)
+#   POSEKIT_HUB_INSTRUCTOR      the system user who releases and collects (owns the course's exchange folder;
+#                               default the hub's own user)
 
 import json
+import math
 import os
-import shutil
+import pwd
+import stat
 import sys
 from pathlib import Path
 
@@ -53,10 +58,17 @@ CULL_EVERY = min(int(os.environ.get("POSEKIT_HUB_CULL_EVERY") or 300), max(1, CU
 ACTIVITY_EVERY = min(int(os.environ.get("POSEKIT_HUB_ACTIVITY_EVERY") or 300), max(1, CULL_TIMEOUT // 2))
 COURSE = os.environ.get("POSEKIT_HUB_COURSE") or ""
 EXCHANGE = Path(os.environ.get("POSEKIT_HUB_EXCHANGE") or STATE / "exchange").resolve()
+INSTRUCTOR = os.environ.get("POSEKIT_HUB_INSTRUCTOR") or ""
+SIZING = HERE / "class_sizing.json"
 STATE.mkdir(parents=True, exist_ok=True)
+STATE.chmod(0o700)  # the hub's alone: its database, secrets, the sandboxes' job files
 (STATE / "users").mkdir(exist_ok=True)
 (STATE / "users").chmod(0o711)  # each student walks through to their own home; none can list the others
+DB = STATE / "jupyterhub.sqlite"
+os.close(os.open(DB, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o600))  # made by us, so never readable by others
+DB.chmod(0o600)
 sys.path.insert(0, str(HERE))
+from measure_class import z2jh_resources  # noqa: E402 - deploy/jupyterhub/measure_class.py
 from posekit_spawner import ClassSpawner  # noqa: E402 - deploy/jupyterhub/posekit_spawner.py
 
 c = get_config()  # noqa: F821 - JupyterHub defines it when it loads this file
@@ -68,7 +80,7 @@ c.JupyterHub.hub_bind_url = f"http://127.0.0.1:{os.environ.get('POSEKIT_HUB_API_
 c.ConfigurableHTTPProxy.api_url = f"http://127.0.0.1:{os.environ.get('POSEKIT_HUB_PROXY_API_PORT', '8001')}"
 c.ConfigurableHTTPProxy.command = [str(PROXY)]
 c.ConfigurableHTTPProxy.pid_file = str(STATE / "jupyterhub-proxy.pid")
-c.JupyterHub.db_url = f"sqlite:///{STATE / 'jupyterhub.sqlite'}"
+c.JupyterHub.db_url = f"sqlite:///{DB}"
 c.JupyterHub.cookie_secret_file = str(STATE / "jupyterhub_cookie_secret")
 c.JupyterHub.last_activity_interval = ACTIVITY_EVERY
 # a student may retry after a failed start at once; a start slower than this is reported as failed
@@ -116,6 +128,42 @@ c.ClassSpawner.expose_ro = [p for p in dict.fromkeys(filter(None, _needed)) if o
 c.ClassSpawner.hide = [str(STATE), str(ROOT / "instructor")]
 c.ClassSpawner.overlay = c.Spawner.environment["POSEKIT_NUMBA_CACHE"]
 
+# -- limits per student (limits.py): the measured peak of the worst lesson with the studio open, as the
+# zero-to-jupyterhub values have it (measure_class.z2jh_resources: twice the peak rounded up to 64 MB, one CPU)
+_RESOURCES = z2jh_resources(json.loads(SIZING.read_text()))
+
+
+def limits_from_sizing(resources=_RESOURCES) -> dict:
+    """The spawner's limits from the zero-to-jupyterhub resources: ``mem_limit`` (bytes), ``cpu_limit`` (CPUs)."""
+    mb = int(resources["memory"]["limit"].rstrip("M"))
+    return {"mem_limit": mb * 1024 * 1024, "cpu_limit": float(resources["cpu"]["limit"])}
+
+
+for _name, _value in limits_from_sizing().items():
+    setattr(c.Spawner, _name, _value)
+c.ClassSpawner.pids_limit = 1024  # a choice (not measured): a kernel with torch and numba runs some 40 threads
+
+
+def harden_links() -> list[str]:
+    """Root never follows a link a student planted in a shared sticky folder, nor hands over a hard link: the
+    kernel's protected_symlinks / protected_hardlinks / protected_regular on (machine-wide, where the hub may set
+    them). Returns what could not be set."""
+    missed = []
+    for name in ("protected_symlinks", "protected_hardlinks", "protected_regular"):
+        path = Path("/proc/sys/fs") / name
+        try:
+            if path.read_text().strip() in ("", "0"):
+                path.write_text("1")
+        except OSError:
+            missed.append(name)
+    return missed
+
+
+if os.geteuid() == 0:
+    _missed = harden_links()
+    if _missed:
+        print(f"posekit: could not set fs.{', fs.'.join(_missed)} to 1 (docs/hub.md)", file=sys.stderr)
+
 # -- nbgrader for the students (POSEKIT_HUB_COURSE): the Assignments panel, on one exchange folder ------------------
 STUDENT_CONFIG = STATE / "student-config"
 """A Jupyter configuration folder put first on every student server's JUPYTER_CONFIG_PATH."""
@@ -136,18 +184,52 @@ def student_config(course: str, exchange: Path, folder: Path = STUDENT_CONFIG) -
            "lockedExtensions": {"@jupyter/nbgrader": True}}
     (folder / "labconfig" / "page_config.json").write_text(json.dumps(lab, indent=1))
     (folder / "nbgrader_config.py").write_text(
+        "import os\n"
         "c = get_config()  # noqa: F821 - written by deploy/jupyterhub/jupyterhub_config.py\n"
         f"c.CourseDirectory.course_id = {course!r}\n"
-        f"c.Exchange.root = {str(exchange)!r}\n")
+        f"c.Exchange.root = {str(exchange)!r}\n"
+        "# the student's id in the course is their hub name (not their system user, posekit-<name>): the class list\n"
+        "# is the hub's. nbgrader collect checks it against the submission's owner (posekit.course.exchange)\n"
+        "if os.environ.get('JUPYTERHUB_USER'):\n"
+        "    c.CourseDirectory.student_id = os.environ['JUPYTERHUB_USER']\n")
     for p in [folder, *folder.rglob("*")]:
         p.chmod(0o755 if p.is_dir() else 0o644)
     return folder
 
 
+def make_exchange(exchange: Path, course: str, instructor: int | None = None) -> Path:
+    """nbgrader's exchange as nbgrader means it on a shared machine, made before any student starts.
+
+    The root is ``1777`` (anyone may make an entry; the sticky bit: no one may move or remove another's), and the
+    course's folder is made and owned by the instructor (``instructor``, a uid; default the calling user) before
+    the first release: ``outbound`` ``0755`` (students read what is released), ``inbound`` ``3733`` (students submit
+    but cannot list, and cannot move or remove another's submission), ``feedback`` ``0711``. A course folder or a
+    part of it owned by anyone else (a student who made it first) is refused with a sentence, not used."""
+    uid = os.geteuid() if instructor is None else instructor
+    gid = pwd.getpwuid(uid).pw_gid
+    exchange.mkdir(parents=True, exist_ok=True)
+    exchange.chmod(0o1777)
+    folder = exchange / course
+    for path, mode in ((folder, 0o755), (folder / "outbound", 0o755), (folder / "inbound", 0o3733),
+                       (folder / "feedback", 0o711)):
+        try:
+            os.mkdir(path)
+        except FileExistsError:
+            pass
+        st = os.lstat(path)
+        if not stat.S_ISDIR(st.st_mode) or st.st_uid != uid:
+            owner = st.st_uid
+            raise SystemExit(f"posekit: {path} is not a folder of the instructor's (uid {uid}) but "
+                             f"{'a link or file' if not stat.S_ISDIR(st.st_mode) else 'owned by uid %d' % owner}: "
+                             f"someone made it before the hub did; move it away and start the hub again")
+        os.lchown(path, uid, gid)
+        os.chmod(path, mode)
+    return folder
+
+
 if COURSE:
     student_config(COURSE, EXCHANGE)
-    EXCHANGE.mkdir(parents=True, exist_ok=True)
-    EXCHANGE.chmod(0o777)  # nbgrader's exchange: every student fetches from it and submits into it
+    make_exchange(EXCHANGE, COURSE, pwd.getpwnam(INSTRUCTOR).pw_uid if INSTRUCTOR else None)
     c.Spawner.environment["JUPYTER_CONFIG_PATH"] = os.pathsep.join(
         filter(None, [str(STUDENT_CONFIG), os.environ.get("JUPYTER_CONFIG_PATH")]))
     c.ClassSpawner.expose_ro = [*c.ClassSpawner.expose_ro, str(STUDENT_CONFIG)]
@@ -167,23 +249,46 @@ class LessonCopyError(HTTPError):
 def copy_lessons(home: Path, lessons: Path = LESSONS) -> list[str]:
     """Copy every lesson notebook of ``lessons`` that ``home``/lessons lacks; never overwrite a file there.
 
-    Returns the names copied. Raises ``LessonCopyError`` with a sentence naming the path when the copy cannot be made
-    (the hub shows it on the student's error page)."""
+    Run as root by the hub, so it never follows a path the student controls: ``lessons`` is opened without
+    following a link (a link there, to another student's home or a folder of root's, is refused), and each file is
+    made new in that open folder (``O_EXCL | O_NOFOLLOW``: an existing file or link is left alone, never written
+    through). Returns the names copied. Raises ``LessonCopyError`` with a sentence naming the path when the copy
+    cannot be made (the hub shows it on the student's error page)."""
     dest = home / LESSON_FOLDER
-    if dest.exists() and not dest.is_dir():
-        raise LessonCopyError(f"posekit: cannot copy the lessons: {dest} is a file, expected a folder "
-                           f"(move it away and start the server again)")
     copied = []
     try:
-        dest.mkdir(parents=True, exist_ok=True)
-        for src in sorted(lessons.glob("*.ipynb")):
-            if src.name.startswith("_"):  # the lesson template is for authors
-                continue
-            target = dest / src.name
-            if target.exists() or target.is_symlink():
-                continue  # the student's own copy, perhaps edited: kept as it is
-            shutil.copyfile(src, target)
-            copied.append(src.name)
+        home.mkdir(parents=True, exist_ok=True)
+        top = os.open(home, os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW)
+        try:
+            try:
+                os.mkdir(LESSON_FOLDER, 0o755, dir_fd=top)
+            except FileExistsError:
+                pass
+            st = os.stat(LESSON_FOLDER, dir_fd=top, follow_symlinks=False)
+            if stat.S_ISLNK(st.st_mode):
+                raise LessonCopyError(f"posekit: cannot copy the lessons: {dest} is a link, expected a folder of "
+                                      f"your own (remove the link and start the server again)")
+            if not stat.S_ISDIR(st.st_mode):
+                raise LessonCopyError(f"posekit: cannot copy the lessons: {dest} is a file, expected a folder "
+                                      f"(move it away and start the server again)")
+            folder = os.open(LESSON_FOLDER, os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW, dir_fd=top)
+        finally:
+            os.close(top)
+        try:
+            for src in sorted(lessons.glob("*.ipynb")):
+                if src.name.startswith("_"):  # the lesson template is for authors
+                    continue
+                try:
+                    fd = os.open(src.name, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o644, dir_fd=folder)
+                except FileExistsError:
+                    continue  # the student's own copy, perhaps edited (or a link of theirs): kept as it is
+                with os.fdopen(fd, "wb") as out:
+                    out.write(src.read_bytes())
+                copied.append(src.name)
+        finally:
+            os.close(folder)
+    except LessonCopyError:
+        raise
     except OSError as err:
         raise LessonCopyError(f"posekit: cannot copy the lessons into {dest}: {err}") from err
     return copied

@@ -71,6 +71,10 @@ c.OverwriteCells.add_missing_cells = True
 
 # On a JupyterHub, the exchange directory every student and the instructor can reach, e.g.
 # c.Exchange.root = "/srv/nbgrader/exchange"
+
+# `nbgrader collect` refuses a submission made in another student's name or holding a link, and keeps that
+# student's own (nbgrader's collect only warns, and takes the newest): posekit.course.exchange
+c.ExchangeFactory.collect = "posekit.course.exchange.OwnerCheckedCollect"
 '''
 
 _TESTS = '''\
