@@ -113,8 +113,10 @@ def join_cgroup(user: str, limits: dict, root: Path = CGROUP) -> tuple[str, bool
     for controller, d in dirs.items():
         d.mkdir(parents=True, exist_ok=True)
     if mem:
-        _write(dirs["memory"] / "memory.limit_in_bytes", int(mem))
         swap = dirs["memory"] / "memory.memsw.limit_in_bytes"
+        if swap.exists():  # memory and swap together may never be below memory alone: lift it first
+            _write(swap, -1)
+        _write(dirs["memory"] / "memory.limit_in_bytes", int(mem))
         if swap.exists():
             _write(swap, int(mem))
     if cpu:

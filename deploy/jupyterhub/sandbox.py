@@ -220,6 +220,14 @@ def run(job, cmd) -> int:
                 pipes.stop()
 
 
+def _where(err: BaseException) -> str:
+    """The file and line an error came from, for the hub's log."""
+    tb = err.__traceback__
+    while tb is not None and tb.tb_next is not None:
+        tb = tb.tb_next
+    return f"{Path(tb.tb_frame.f_code.co_filename).name}:{tb.tb_lineno}" if tb else "?"
+
+
 def main(argv) -> int:
     if "--" not in argv or len(argv) < 4:
         print("usage: sandbox.py JOB.json -- COMMAND ...", file=sys.stderr)
@@ -236,7 +244,8 @@ def main(argv) -> int:
         print(f"sandbox.py: {job['user']}: {said}", file=sys.stderr)
         build(job)
     except (SandboxError, OSError) as err:
-        print(f"sandbox.py: {job['user']}'s server is not started: {err}", file=sys.stderr)
+        where = "" if isinstance(err, SandboxError) else f" ({type(err).__name__} in {_where(err)})"
+        print(f"sandbox.py: {job['user']}'s server is not started: {err}{where}", file=sys.stderr)
         return 3
     return run(job, cmd)
 

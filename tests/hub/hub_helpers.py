@@ -123,3 +123,63 @@ def running_hub(folder: Path, cull_timeout: int = 3600, cull_every: int = 300, a
             with contextlib.suppress(psutil.Error):
                 child.kill()
         out.close()
+
+
+def start_server(hub: Hub, user: str, timeout_s: float = 120.0):
+    """Make ``user`` (when new) and start their server through the hub's API; wait until it is ready."""
+    hub.api("POST", f"/users/{user}")
+    status, _ = hub.api("POST", f"/users/{user}/server")
+    if status not in (201, 202, 400):  # 400: already running
+        raise RuntimeError(f"{user}'s server did not start: {status}\n{hub.log_text()[-3000:]}")
+    t0 = time.time()
+    while not (hub.server(user) or {}).get("ready"):
+        if time.time() - t0 > timeout_s:
+            raise RuntimeError(f"{user}'s server was not ready within {timeout_s:.0f} s:\n{hub.log_text()[-3000:]}")
+        time.sleep(0.5)
+
+
+def run_code(hub: Hub, user: str, code: str, timeout_s: float = 120.0, kernel: str | None = None) -> tuple[str, str]:
+    """Run ``code`` in a kernel of ``user``'s server, as their JupyterLab would (the server's REST API and kernel
+    websocket, through the hub's proxy, with the test service's token): ``(kernel id, what it printed)``. A new
+    kernel unless ``kernel`` names one; an error in the code is part of what it printed."""
+    import asyncio
+    import uuid
+
+    from tornado.httpclient import HTTPRequest
+    from tornado.websocket import websocket_connect
+
+    headers = {"Authorization": f"token {ADMIN_TOKEN}"}
+    base = f"{hub.url}/user/{user}/api"
+    if kernel is None:
+        req = urllib.request.Request(f"{base}/kernels", method="POST", data=b"{}", headers=headers)
+        with urllib.request.urlopen(req, timeout=60) as r:
+            kernel = json.loads(r.read())["id"]
+
+    async def go():
+        url = f"{base.replace('http', 'ws', 1)}/kernels/{kernel}/channels"
+        ws = await websocket_connect(HTTPRequest(url, headers=headers, connect_timeout=60))
+        msg_id = uuid.uuid4().hex
+        ws.write_message(json.dumps({
+            "header": {"msg_id": msg_id, "msg_type": "execute_request", "username": "test", "session": msg_id,
+                       "version": "5.3", "date": ""},
+            "parent_header": {}, "metadata": {}, "channel": "shell", "buffers": [],
+            "content": {"code": code, "silent": False, "store_history": False, "user_expressions": {},
+                        "allow_stdin": False, "stop_on_error": True}}))
+        out = []
+        while True:
+            raw = await asyncio.wait_for(ws.read_message(), timeout_s)
+            if raw is None:
+                raise RuntimeError(f"{user}'s kernel closed the connection; printed so far: {''.join(out)}")
+            msg = json.loads(raw)
+            if msg.get("parent_header", {}).get("msg_id") != msg_id:
+                continue
+            kind, content = msg["header"]["msg_type"], msg["content"]
+            if kind == "stream":
+                out.append(content["text"])
+            elif kind == "error":
+                out.append(f"{content['ename']}: {content['evalue']}\n")
+            elif kind == "status" and content["execution_state"] == "idle":
+                ws.close()
+                return "".join(out)
+
+    return kernel, asyncio.run(go())
