@@ -158,6 +158,8 @@ def test_a_student_runs_with_limits_and_no_privilege(hub):
 
 
 def test_the_hubs_state_is_the_hubs_alone(hub):
+    # root follows no link a student plants in a shared sticky folder (machine-wide, set by the hub as root)
+    assert Path("/proc/sys/fs/protected_symlinks").read_text().strip() == "1"
     assert stat.S_IMODE(hub.state.stat().st_mode) == 0o700
     assert stat.S_IMODE((hub.state / "jupyterhub.sqlite").stat().st_mode) == 0o600
     out = _in(hub, "alice", f"""

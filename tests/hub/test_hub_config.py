@@ -193,3 +193,75 @@ def test_the_lessons_to_measure_are_read_from_their_numbers(tmp_path):
     empty.write_text('{"cells": [{"cell_type": "markdown", "source": ["# only prose"]}]}')
     with pytest.raises(SystemExit, match="empty.ipynb: expected a notebook with code cells"):
         m["lesson_code"](empty)
+
+
+def test_a_lessons_link_is_refused_and_nothing_is_written_through_it(config, tmp_path):
+    ns, _ = config
+    elsewhere = tmp_path / "bob" / "lessons"
+    elsewhere.mkdir(parents=True)
+    home = tmp_path / "alice"
+    home.mkdir()
+    (home / "lessons").symlink_to(elsewhere)
+    with pytest.raises(ns["LessonCopyError"], match="is a link, expected a folder of your own"):
+        ns["copy_lessons"](home)
+    assert list(elsewhere.iterdir()) == []
+    # a link in place of one lesson is the student's: left alone, never written through
+    (home / "lessons").unlink()
+    (home / "lessons").mkdir()
+    target = tmp_path / "root-only.txt"
+    target.write_text("root's")
+    (home / "lessons" / "01_fabrik.ipynb").symlink_to(target)
+    copied = ns["copy_lessons"](home)
+    assert "01_fabrik.ipynb" not in copied and "00_skeletons_and_poses.ipynb" in copied
+    assert target.read_text() == "root's"
+
+
+def test_the_exchange_is_made_by_the_instructor_and_refuses_a_squatter(config, tmp_path):
+    import os
+    import stat
+
+    ns, _ = config
+    exchange = tmp_path / "exchange"
+    folder = ns["make_exchange"](exchange, "posekit")
+    assert stat.S_IMODE(exchange.stat().st_mode) == 0o1777
+    modes = {p.name: stat.S_IMODE(p.stat().st_mode) for p in [folder, *folder.iterdir()]}
+    assert modes == {"posekit": 0o755, "outbound": 0o755, "inbound": 0o3733, "feedback": 0o711}
+    assert all(p.stat().st_uid == os.geteuid() for p in [folder, *folder.iterdir()])
+    assert ns["make_exchange"](exchange, "posekit") == folder  # a second start keeps it
+    if os.geteuid() == 0:  # a folder a student made first is refused, not used
+        squat = exchange / "other"
+        squat.mkdir()
+        os.chown(squat, 64_123, 64_123)
+        with pytest.raises(SystemExit, match="someone made it before the hub did"):
+            ns["make_exchange"](exchange, "other")
+
+
+def test_the_limits_per_student_come_from_the_measured_class(config):
+    import math
+
+    ns, c = config
+    peak = json.loads(RESULTS.read_text())["per_student_peak_mb"]
+    assert c.Spawner.mem_limit == 2 * math.ceil(peak / 64) * 64 * 1024 * 1024  # twice the peak, as z2jh's limit
+    assert c.Spawner.cpu_limit == 1.0 and c.ClassSpawner.pids_limit == 1024
+
+
+def test_students_submit_under_their_hub_name(tmp_path, monkeypatch):
+    monkeypatch.setenv("POSEKIT_HUB_STATE", str(tmp_path / "state"))
+    monkeypatch.setenv("POSEKIT_HUB_COURSE", "posekit")
+    runpy.run_path(str(CONFIG), init_globals={"get_config": Config})
+    said = (tmp_path / "state" / "student-config" / "nbgrader_config.py").read_text()
+    c = Config()
+    monkeypatch.setenv("JUPYTERHUB_USER", "bob")
+    exec(compile(said, "nbgrader_config.py", "exec"), {"get_config": lambda: c})
+    assert c.CourseDirectory.student_id == "bob"
+
+
+def test_the_hub_user_marker_is_the_one_collect_reads():
+    import sys
+
+    sys.path.insert(0, str(HUB))
+    import posekit_spawner
+
+    from posekit.course import exchange
+
+    assert posekit_spawner.HUB_USER_COMMENT == exchange.HUB_USER_COMMENT
