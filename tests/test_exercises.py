@@ -147,3 +147,110 @@ def test_report_sees_a_forbidden_function_called_under_another_name(capsys):
     assert report("demo", lambda x: x * 2, cases, forbid=(reference,))
     assert not report("demo", lambda x: alias(x), cases, forbid=(reference,))
     assert "calls " in capsys.readouterr().out and sys.getprofile() is None
+
+
+# -- the key out of the answer's reach (posekit.exercises._judge) ----------------------------------------------------
+
+PEEK = '''
+def exercise_fabrik_planted(positions, target, tolerance, max_iter):
+    """Walks the call stack to the checker's cases and returns the expected answer of the case in hand."""
+    import sys
+    import numpy as np
+    frame = sys._getframe(1)
+    while frame is not None:
+        for value in list(frame.f_locals.values()):
+            for case in (value if isinstance(value, list) else []):
+                if isinstance(case, tuple) and len(case) == 3 and isinstance(case[0], tuple):
+                    if np.array_equal(case[0][0], positions) and np.array_equal(case[0][1], target) \\
+                            and case[0][2] == tolerance and case[0][3] == max_iter:
+                        return case[1]
+        frame = frame.f_back
+    return positions
+'''
+
+IN_A_THREAD = '''
+def exercise_fabrik_planted(positions, target, tolerance, max_iter):
+    import threading
+    from posekit.ik.single_chain import fabrik_chain
+    out = {}
+    t = threading.Thread(target=lambda: out.update(r=fabrik_chain(positions[::-1], target, tolerance, max_iter)))
+    t.start()
+    t.join()
+    return out["r"][0][::-1]
+'''
+
+HOOK_OFF = '''
+def exercise_fabrik_planted(positions, target, tolerance, max_iter):
+    import sys
+    from posekit.ik.single_chain import fabrik_chain
+    hook = sys.getprofile()
+    sys.setprofile(None)
+    result = fabrik_chain(positions[::-1], target, tolerance, max_iter)[0][::-1]
+    sys.setprofile(hook)
+    return result
+'''
+
+RENAMED_COPY = '''
+import types
+from posekit.ik.single_chain import fabrik_chain as _f
+_mine = types.FunctionType(_f.__code__.replace(co_name="my_own_fabrik"), _f.__globals__, "my_own_fabrik",
+                           _f.__defaults__)
+
+def exercise_fabrik_planted(positions, target, tolerance, max_iter):
+    return _mine(positions[::-1], target, tolerance, max_iter)[0][::-1]
+'''
+
+
+def _define(source):
+    namespace = {}
+    exec(compile(source, "<answer cell>", "exec"), namespace)  # noqa: S102 - the cheats under test
+    return namespace["exercise_fabrik_planted"]
+
+
+def test_an_answer_that_reads_the_checkers_frames_finds_no_key(capsys):
+    assert check_fabrik_planted(_define(PEEK)) is False
+    assert "differs" in capsys.readouterr().out
+    from posekit.course.grading import fresh_check
+
+    fresh = fresh_check("01", "check_fabrik_planted", "exercise_fabrik_planted", PEEK)
+    assert not fresh.passed and "differs" in fresh.said, fresh.said
+
+
+@pytest.mark.parametrize("cheat", ["IN_A_THREAD", "HOOK_OFF", "RENAMED_COPY"])
+def test_calling_the_reference_is_seen_in_a_thread_with_the_hook_off_and_through_a_renamed_copy(cheat, capsys):
+    source = globals()[cheat]
+    assert check_fabrik_planted(_define(source)) is False
+    out = capsys.readouterr().out
+    assert "calls posekit.ik.single_chain.fabrik_chain" in out or "switched the checker's watch off" in out, out
+    from posekit.course.grading import fresh_check
+
+    fresh = fresh_check("01", "check_fabrik_planted", "exercise_fabrik_planted", source)
+    assert not fresh.passed, fresh.said
+    assert "calls posekit.ik.single_chain.fabrik_chain" in fresh.said or "watch off" in fresh.said, fresh.said
+
+
+def test_rebinding_the_checkers_machinery_in_the_kernel_changes_no_verdict(capsys, monkeypatch):
+    """What a student's kernel rebinds (the comparison, the report, the reference function) is not what the judge
+    uses: a wrong answer stays wrong."""
+    import posekit.exercises._check as check
+    import posekit.exercises.nb01 as nb01
+    import posekit.ik.single_chain as single_chain
+
+    def wrong(positions, target, tolerance, max_iter):
+        return positions.copy()
+
+    monkeypatch.setattr(check, "_allclose", lambda *a, **k: True)
+    monkeypatch.setattr(nb01, "report", lambda *a, **k: True)
+    monkeypatch.setattr(single_chain, "fabrik_chain", lambda p, *a, **k: (p, 0))
+    assert check_fabrik_planted(wrong) is False
+    assert "differs" in capsys.readouterr().out
+
+
+def test_the_fresh_check_passes_the_reference_solution():
+    import inspect
+
+    from posekit.course.grading import fresh_check
+
+    fresh = fresh_check("01", "check_fabrik_planted", "exercise_fabrik_planted", inspect.getsource(PLANTED),
+                        imports="import numpy as np")
+    assert fresh.passed, fresh.said

@@ -6,9 +6,9 @@ those cells did to that kernel, the tests cell inherits: an answer cell that reb
 So ``posekit course autograde`` does not take the kernel's word for it (:func:`regrade`):
 
 * **a fresh check**: for each autograded exercise, the answer cell's source (from the submitted notebook) is run in
-  a new Python process, with the lesson's imports (from its read-only cells) before it, *after* the lesson's
-  checker has been imported and has computed its expected answers; the points in the grade book are the fresh
-  check's (``python -m posekit.course.grading`` is that process);
+  a new Python process, with the lesson's imports (from its read-only cells) before it, and the lesson's checker
+  judges it from another process that holds the expected answers and never runs the answer
+  (:mod:`posekit.exercises._judge`); the points in the grade book are the fresh check's;
 * **flags for a person**: the submission is flagged in the grade book (the formgrader lists flagged notebooks) and
   the answer cell gets an automatic comment when the fresh check and the kernel disagree, when a read-only cell
   (a lesson's cell, a tests cell) was changed or deleted in what the student handed in (nbgrader restores it before
@@ -16,8 +16,9 @@ So ``posekit course autograde`` does not take the kernel's word for it (:func:`r
   ``setattr`` on posekit, ``sys.setprofile``, frames, ``ctypes``, the instructor's folder).
 
 The checkers themselves refuse an answer that calls the posekit function it is compared against or changes its
-inputs (:mod:`posekit.exercises._check`). No grader that runs a student's code in the same process can stop code
-written to attack that process; such code is in the answer cell, flagged, for the instructor to read.
+inputs (:mod:`posekit.exercises._check`). An answer can still attack its own process (and so what the kernel
+prints); the points the grade book keeps come from the judge, and such code is in the answer cell, flagged, for the
+instructor to read.
 """
 
 from __future__ import annotations
@@ -26,7 +27,6 @@ import ast
 import json
 import os
 import re
-import secrets
 import subprocess
 import sys
 from dataclasses import dataclass
@@ -82,7 +82,12 @@ def suspicious(source: str) -> list[str]:
 
 def fresh_check(lesson: str, checker: str, function: str, source: str, imports: str = "",
                 timeout_s: float = 300) -> Fresh:
-    """Run ``checker`` of lesson ``lesson`` on ``function`` as defined by ``source``, in a new Python process.
+    """Run ``checker`` of lesson ``lesson`` on ``function`` as defined by ``source``, the key out of its reach.
+
+    A judge process (``python -m posekit.exercises._judge --grade``, not dumpable) builds the checker's cases and
+    expected answers and compares; the answer runs in a child of it that holds no expected answer and receives only
+    each case's inputs (:mod:`posekit.exercises._judge`). Reading the judge's frames, patching the checker's module,
+    threads, rebinding names: what the answer does happens in its own process and changes no comparison.
 
     Parameters
     ----------
@@ -95,52 +100,27 @@ def fresh_check(lesson: str, checker: str, function: str, source: str, imports: 
     imports : str
         Statements run before it (the lesson's imports, so that ``np`` means what the lesson says).
     timeout_s : float
-        Seconds before the process is killed (an endless loop fails the check).
+        Seconds before the judge and the answer are killed (an endless loop fails the check).
     """
-    nonce = secrets.token_hex(16)
-    job = {"lesson": lesson, "checker": checker, "function": function, "source": source, "imports": imports,
-           "nonce": nonce}
+    job = {"lesson": lesson, "checker": checker, "function": function, "source": source, "imports": imports}
     env = {k: v for k, v in os.environ.items() if not k.startswith("JPY_")}
     env.setdefault("MPLBACKEND", "Agg")
+    proc = subprocess.Popen([sys.executable, "-m", "posekit.exercises._judge", "--grade"], stdin=subprocess.PIPE,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                            start_new_session=True)
     try:
-        proc = subprocess.run([sys.executable, "-m", "posekit.course.grading"], input=json.dumps(job),
-                              capture_output=True, text=True, timeout=timeout_s, env=env)
+        out, err = proc.communicate(json.dumps(job) + "\n", timeout=timeout_s)
     except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, 9)  # the judge and the answer's process with it
+        proc.communicate()
         return Fresh(False, f"the fresh check ran past {timeout_s:g} s and was stopped")
-    verdicts = [json.loads(line) for line in proc.stdout.splitlines()
-                if line.startswith("{") and f'"{nonce}"' in line]
-    said = "\n".join(line for line in proc.stdout.splitlines() if nonce not in line).strip()
-    if proc.returncode != 0 or len(verdicts) != 1:
-        tail = (proc.stderr.strip().splitlines() or ["no verdict"])[-1]
-        return Fresh(False, f"{said}\n{tail}".strip())
-    return Fresh(verdicts[0].get("passed") is True, said)
-
-
-def _main() -> int:
-    """The fresh process: import the checker first, then let it build its cases, and only then define the
-    student's function (on its first call), so nothing the answer does at definition time reaches the expected
-    answers."""
-    import importlib
-
-    job = json.loads(sys.stdin.read())
-    nonce = job.pop("nonce")
-    write = sys.stdout.write
-    checker = getattr(importlib.import_module(f"posekit.exercises.nb{job['lesson']}"), job["checker"])
-    namespace = {"__name__": "__answer__"}
-    state = {}
-
-    def answer(*args, **kwargs):
-        if "fn" not in state:
-            code = compile(job["imports"] + "\n" + job["source"], "<answer cell>", "exec")
-            exec(code, namespace)  # noqa: S102 - the student's answer, in this throw-away process
-            state["fn"] = namespace[job["function"]]
-        return state["fn"](*args, **kwargs)
-
-    passed = checker(answer) is True
-    sys.stdout.flush()
-    write("\n" + json.dumps({"nonce": nonce, "passed": passed}) + "\n")
-    sys.stdout.flush()
-    return 0
+    lines = out.strip().splitlines()
+    try:
+        verdict = json.loads(lines[-1])
+    except (IndexError, ValueError):
+        tail = (err.strip().splitlines() or ["no verdict"])[-1]
+        return Fresh(False, tail)
+    return Fresh(verdict.get("passed") is True, str(verdict.get("said", "")))
 
 
 def _grading(cell) -> dict:
@@ -256,6 +236,3 @@ def regrade(course_dir, assignment: str, students=None, timeout_s: float = 300) 
             gb.db.commit()
     return findings
 
-
-if __name__ == "__main__":
-    sys.exit(_main())

@@ -7,6 +7,7 @@ import numpy as np
 from ..kinematics import bone_lengths_of, fk
 from ..rotations import matrix_to_sixd, quat_to_matrix, random_rotations, sixd_to_matrix
 from ._check import report
+from ._judge import judged
 
 
 def _skeleton_and_poses(seed=0, n=4):
@@ -26,6 +27,7 @@ def _worst_joint(skeleton):
     return describe
 
 
+@judged
 def check_fk(my_fk) -> bool:
     """Check ``my_fk(skeleton, local_rot_matrices (J,3,3), root_pos (3,)) -> global_pos (J,3)``
     on real poses of the shipped sample and on a random pose."""
@@ -37,6 +39,7 @@ def check_fk(my_fk) -> bool:
     return report("check_fk", my_fk, cases)
 
 
+@judged
 def check_sixd_to_matrix(my_sixd_to_matrix) -> bool:
     """Check ``my_sixd_to_matrix(x (6,)) -> R (3, 3)`` (Gram-Schmidt of Zhou et al. 2019) on exact
     6D vectors and on noisy, unnormalised ones."""
@@ -51,6 +54,7 @@ def check_sixd_to_matrix(my_sixd_to_matrix) -> bool:
     return report("check_sixd_to_matrix", my_sixd_to_matrix, cases, atol=1e-6)
 
 
+@judged
 def check_bone_lengths(my_bone_lengths) -> bool:
     """Check ``my_bone_lengths(parents (J,), global_pos (J,3)) -> lengths (J,)`` (0 for the root)."""
     skel, q, root = _skeleton_and_poses(seed=5, n=3)

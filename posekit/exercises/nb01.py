@@ -13,6 +13,7 @@ import numpy as np
 from ..ik.single_chain import fabrik_chain
 from ..ik.two_bone import two_bone_ik
 from ._check import Either, report
+from ._judge import judged
 
 
 def _chain(rng, n):
@@ -49,6 +50,7 @@ def planted_reference(positions, target, tolerance, max_iter):
     return fabrik_chain(np.asarray(positions)[::-1], target, tolerance, max_iter)[0][::-1]
 
 
+@judged
 def check_fabrik_planted(my_fabrik_planted) -> bool:
     """Check ``my_fabrik_planted(positions (n+1, 3), target (3,), tolerance, max_iter) -> positions (n+1, 3)``:
     the LAST joint stays planted, the FIRST joint reaches for ``target`` (Algorithm 1 of Aristidou & Lasenby 2011
@@ -106,6 +108,7 @@ def swivel_answers(root, mid, end, target, swivel):
     return Either(*(np.stack(two_bone_ik(root, mid, end, target, pole, eps=eps)[:2]) for eps in (1e-6, 0.0)))
 
 
+@judged
 def check_two_bone_swivel(my_two_bone_swivel) -> bool:
     """Check ``my_two_bone_swivel(root, mid, end, target, swivel) -> (new_mid, new_end)``: two-bone IK by the law
     of cosines with the middle joint on its circle at ``swivel`` radians around the root-target axis, measured

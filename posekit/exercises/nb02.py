@@ -7,8 +7,10 @@ import scipy.linalg
 
 from ..invrig.gpr import KERNELS
 from ._check import report
+from ._judge import judged
 
 
+@judged
 def check_gpr_mean(my_gpr_mean) -> bool:
     """Check ``my_gpr_mean(X (N, D), Y (N, O), Xq (M, D), theta0, theta1) -> (M, O)``: the multiquadric
     posterior mean k(Xq, X) (K + theta1 I)^-1 Y of Holden et al. 2017 (Eqs. 2-3), no normalisation."""
@@ -25,6 +27,7 @@ def check_gpr_mean(my_gpr_mean) -> bool:
     return report("check_gpr_mean", my_gpr_mean, cases, atol=1e-6)
 
 
+@judged
 def check_dls_step(my_dls_step) -> bool:
     """Check ``my_dls_step(J (X, C), dx (X,), damping) -> dy (C,)``: (J^T J + lambda^2 I)^-1 J^T dx."""
     rng = np.random.default_rng(6)

@@ -5,8 +5,10 @@ from __future__ import annotations
 import numpy as np
 
 from ._check import report
+from ._judge import judged
 
 
+@judged
 def check_pose_vector(my_pose_vector) -> bool:
     """Check ``my_pose_vector(skeleton, global_pos (J, 3)) -> (3B,)``: the body joints (no helper root)
     in the pose's root frame — pelvis projected on the floor at the origin, facing +Z — flattened
@@ -30,6 +32,7 @@ def check_pose_vector(my_pose_vector) -> bool:
                   arg_names=("skeleton", "global_pos"))
 
 
+@judged
 def check_tied_decoder(my_decode) -> bool:
     """Check ``my_decode(z (N, d), W1 (H, F), W2 (H, H), W3 (d, H)) -> x (N, F)``: the tied decoder of the
     authors' code, ``W1^T relu(W2^T relu(W3^T z))`` with no biases (weights in torch's (out, in) layout)."""
@@ -53,6 +56,7 @@ def check_tied_decoder(my_decode) -> bool:
     return report("check_tied_decoder", my_decode, cases, atol=1e-5)
 
 
+@judged
 def check_solver_loss(my_loss) -> bool:
     """Check ``my_loss(decoded (N, F), target (N, F), columns, k) -> float``: Eq. (1), the mean squared
     error on the target joints' feature ``columns`` plus ``k`` times the mean squared error on the

@@ -5,8 +5,10 @@ from __future__ import annotations
 import numpy as np
 
 from ._check import report
+from ._judge import judged
 
 
+@judged
 def check_tree_depths(my_depths) -> bool:
     """Check ``my_depths(parents) -> (J,) int``: each joint's depth in the tree (0 at a root, parent -1),
     the order in which an SPL can predict the joints (:func:`posekit.models.aegan.spl.tree_levels`)."""
@@ -27,6 +29,7 @@ def check_tree_depths(my_depths) -> bool:
     return report("check_tree_depths", my_depths, [((list(p),), expected(p), describe) for p in trees], atol=0)
 
 
+@judged
 def check_latent_loss(my_loss) -> bool:
     """Check ``my_loss(x (F,), target (3K,), columns (3K,), scale (3K,)) -> (loss, grad_x (F,))``: Eq. (6)'s
     sum of squared target distances in metres (``(x[columns] - target) * scale``) and its gradient with
@@ -51,6 +54,7 @@ def check_latent_loss(my_loss) -> bool:
     return report("check_latent_loss", both, cases, atol=1e-9)
 
 
+@judged
 def check_generator_loss(my_loss) -> bool:
     """Check ``my_loss(fake_logits (N,)) -> float``: the non-saturating generator loss, the mean of
     ``-log sigmoid(logit)`` (``BCE(D(G(z)), 1)``; :mod:`posekit.models.aegan.train`)."""

@@ -5,8 +5,10 @@ from __future__ import annotations
 import numpy as np
 
 from ._check import report
+from ._judge import judged
 
 
+@judged
 def check_prototype_step(my_step) -> bool:
     """Check ``my_step(b (N, d), f (N, d), e_prev (N, d), r) -> (e (N, d), p (d,), x_next (N, d))``: one block of
     Eq. 2 after its layers — ``e = e_prev + f``, the prototype ``p = mean_i e_i``, ``x_next = relu(b - p / r)``
@@ -29,6 +31,7 @@ def check_prototype_step(my_step) -> bool:
     return report("check_prototype_step", flat, cases, atol=1e-9)
 
 
+@judged
 def check_tolerance_weight(my_weight) -> bool:
     """Check ``my_weight(lam (K,)) -> (sigma (K,), weight (K,))``: the noise scale ``sigma = sigma_M Lambda^eta``
     (sigma_M = 0.1, eta = 13) and the loss weight ``min(W_M, 1 / sigma)`` (W_M = 1000; an exact effector,
@@ -51,6 +54,7 @@ def check_tolerance_weight(my_weight) -> bool:
     return report("check_tolerance_weight", flat, cases, atol=1e-9)
 
 
+@judged
 def check_centroid(my_centroid) -> bool:
     """Check ``my_centroid(kind (N,), value (N, 6), lam (N,)) -> (3,)``: the mean of the *position* effectors'
     positions weighted by ``1 - Lambda + 1e-3`` (the origin when there is none;

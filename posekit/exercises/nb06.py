@@ -5,8 +5,10 @@ from __future__ import annotations
 import numpy as np
 
 from ._check import report
+from ._judge import judged
 
 
+@judged
 def check_drag_point(my_drag) -> bool:
     """Check ``my_drag(camera (3,), through (3,), plane_point (3,), plane_normal (3,)) -> (3,) or None``: where
     the ray from the camera through ``through`` meets the plane, ``c + t d`` with ``d = through - c`` and
@@ -34,6 +36,7 @@ def check_drag_point(my_drag) -> bool:
     return report("check_drag_point", flat, cases, atol=1e-9)
 
 
+@judged
 def check_slerp(my_slerp) -> bool:
     """Check ``my_slerp(q0 (4,), q1 (4,), s) -> (4,)``: spherical linear interpolation of unit quaternions
     ``(x, y, z, w)`` the shorter way round (flip ``q1`` when ``q0 . q1 < 0``); compared as rotations, so

@@ -1,0 +1,274 @@
+"""The key out of the answer's reach: a checker's expected answers live in one process, the student's code in another.
+
+A checker (``posekit.exercises.check_fk(my_fk)``) used to build its cases, expected answers included, in the
+process that runs the student's function: an answer that walked the call stack to the checker's frame could read
+them, and one that rebound the comparison (``_check._allclose``) or the reference function could pass. Now:
+
+* the **judge** is a process that holds the expected answers and compares; it runs the checker's own body
+  (:func:`judged` keeps it as ``checker.__wrapped__``) with a :class:`Remote` in place of the student's function;
+  it is not dumpable (no process of the same user may trace it or read its memory) and never runs student code;
+* the **executor** runs the student's function, and only that: for each case the judge sends the inputs, the
+  executor calls the function under the checker's watch (:class:`posekit.exercises._check._Watch`: the posekit
+  function it is compared against must not be called) and sends back what it returned, the inputs as they are
+  afterwards (an answer that changes them in place is refused by the judge), what it raised, and what the watch saw.
+
+What crosses is data only (:mod:`posekit.exercises._wire`: JSON with NumPy arrays, never a pickle). In a lesson the
+student's kernel is the executor and :func:`ask` starts a judge (``python -m posekit.exercises._judge``); under
+``posekit course autograde`` the judge is started by the grader and starts the executor itself
+(:func:`grade`: ``python -m posekit.exercises._judge --grade``), so the verdict the grade book keeps comes from a
+process the answer never ran in.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import importlib
+import io
+import json
+import os
+import subprocess
+import sys
+
+from . import _wire
+from ._check import CURRENT, Forbidden, WatchOff, _Watch
+
+__all__ = ["judged", "ask", "grade", "Remote", "run_case"]
+
+
+def _qualified(f) -> str:
+    module = getattr(f, "__module__", None) or "?"
+    return f"{module}:{getattr(f, '__qualname__', getattr(f, '__name__', repr(f)))}"
+
+
+def _resolve(name: str):
+    module, _, path = name.partition(":")
+    obj = importlib.import_module(module)
+    for part in path.split("."):
+        obj = getattr(obj, part)
+    return obj
+
+
+def _same(a, b) -> bool:
+    """``a`` equals ``b`` as inputs go (arrays elementwise, NaN equal to NaN; lists and tuples item by item)."""
+    import numpy as np
+
+    if hasattr(a, "detach") and hasattr(a, "numpy"):
+        a = a.detach().cpu().numpy()
+    if hasattr(b, "detach") and hasattr(b, "numpy"):
+        b = b.detach().cpu().numpy()
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        a, b = np.asarray(a), np.asarray(b)
+        return a.shape == b.shape and a.dtype == b.dtype and np.array_equal(a, b, equal_nan=a.dtype.kind == "f")
+    if isinstance(a, (list, tuple)) and isinstance(b, (list, tuple)):
+        return type(a) is type(b) and len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b))
+    if isinstance(a, dict) and isinstance(b, dict):
+        return a.keys() == b.keys() and all(_same(a[k], b[k]) for k in a)
+    if type(a) is type(b) and hasattr(a, "__dataclass_fields__"):  # a Skeleton: field by field
+        return all(_same(getattr(a, f), getattr(b, f)) for f in a.__dataclass_fields__)
+    return type(a) is type(b) and a == b
+
+
+def _named_error(name: str, message: str) -> Exception:
+    """An exception whose type is called as the answer's was (the judge never has the answer's own class)."""
+    safe = name if name.isidentifier() else "Exception"
+    return type(safe, (Exception,), {})(message)
+
+
+class Remote:
+    """The student's function as the judge calls it: each call is a case sent to the executor (module docstring)."""
+
+    def __init__(self, send, receive):
+        self._send, self._receive = send, receive
+
+    def __call__(self, *args):
+        self._send({"call": True, "args": _wire.encode(args), "forbid": [_qualified(f) for f in CURRENT.forbid]})
+        reply = self._receive()
+        if reply is None:
+            raise _named_error("ProcessEnded", "the process running your function stopped (it called exit?)")
+        after = _wire.decode(reply.get("args_after"))
+        CURRENT.changed = next((k for k, (a, b) in enumerate(zip(args, after or ())) if not _same(a, b)), None)
+        if reply.get("watch_off"):
+            raise WatchOff()
+        if reply.get("forbidden"):
+            raise Forbidden(str(reply["forbidden"]))
+        if reply.get("not_attempted"):
+            raise NotImplementedError
+        if reply.get("raised"):
+            name, message = reply["raised"]
+            raise _named_error(str(name), str(message))
+        return _wire.decode(reply.get("got"))
+
+
+# -- the executor's side --------------------------------------------------------------------------------------------
+
+def run_case(fn, message: dict) -> dict:
+    """Run the student's ``fn`` on the inputs of ``message`` (a judge's call) under the watch; the reply."""
+    args = _wire.decode(message["args"])
+    forbid = []
+    for name in message.get("forbid", []):
+        with contextlib.suppress(Exception):
+            forbid.append(_resolve(name))
+    watch = _Watch(forbid)
+    reply: dict = {}
+    try:
+        with watch:
+            got = fn(*args)
+        reply["got"] = _wire.encode(got)
+    except NotImplementedError:
+        reply["not_attempted"] = True
+    except Exception as e:  # noqa: BLE001 - a student's bug is the judge's to report
+        reply["raised"] = [type(e).__name__, str(e)]
+    reply["args_after"] = _wire.encode(args)
+    reply["forbidden"] = watch.called[0] if watch.called else None
+    reply["watch_off"] = watch.turned_off
+    return reply
+
+
+def ask(module: str, checker: str, fn) -> bool:
+    """A lesson's check: start a judge for ``module.checker``, run each case it sends on ``fn`` here, print its
+    verdict; True when it says every case passed."""
+    env = dict(os.environ)
+    env.setdefault("MPLBACKEND", "Agg")
+    proc = subprocess.Popen([sys.executable, "-m", "posekit.exercises._judge", module, checker],
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=env)
+    try:
+        for line in proc.stdout:
+            message = _wire.loads(line)
+            if "verdict" in message:
+                print(message["verdict"], end="")
+                return message.get("passed") is True
+            proc.stdin.write(_wire.dumps(run_case(fn, message)))
+            proc.stdin.flush()
+        err = proc.stderr.read().strip().splitlines()
+        print(f"✗ {checker}: the checker stopped before its verdict ({err[-1] if err else 'no message'})")
+        return False
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        proc.wait()
+        for f in (proc.stdin, proc.stdout, proc.stderr):
+            with contextlib.suppress(Exception):
+                f.close()
+
+
+def judged(checker):
+    """Make ``checker`` (a ``check_...(fn)`` whose body builds its cases and calls ``report``) run its body in a
+    judge of its own; the body stays reachable as ``checker.__wrapped__`` (the judge calls that)."""
+    @functools.wraps(checker)
+    def check(fn) -> bool:
+        return ask(checker.__module__, checker.__name__, fn)
+    return check
+
+
+# -- the judge --------------------------------------------------------------------------------------------------------
+
+def _not_dumpable() -> None:
+    """No process of this user may trace the judge or read its memory (Linux; elsewhere nothing is done)."""
+    with contextlib.suppress(Exception):
+        import ctypes
+
+        ctypes.CDLL(None).prctl(4, 0, 0, 0, 0)  # PR_SET_DUMPABLE, 0
+
+
+def _judge(module: str, checker: str, send, receive) -> tuple[bool, str]:
+    """Run ``module.checker``'s body on a :class:`Remote`: (passed, what it printed)."""
+    body = getattr(importlib.import_module(module), checker)
+    body = getattr(body, "__wrapped__", body)
+    said = io.StringIO()
+    with contextlib.redirect_stdout(said):
+        try:
+            passed = body(Remote(send, receive)) is True
+        except Exception as e:  # noqa: BLE001 - the verdict says what stopped it
+            print(f"✗ {checker}: {type(e).__name__}: {e}")
+            passed = False
+    return passed, said.getvalue()
+
+
+def _lines(stream):
+    def receive():
+        line = stream.readline()
+        return _wire.loads(line) if line else None
+    return receive
+
+
+def _writer(stream):
+    def send(message):
+        stream.write(_wire.dumps(message))
+        stream.flush()
+    return send
+
+
+def grade(job: dict, timeout_s: float = 300) -> dict:
+    """The fresh check of one exercise (``posekit course autograde``): the judge in this process, the answer in a
+    child (``python -m posekit.exercises._judge --execute``) that defines ``job["function"]`` from
+    ``job["imports"]`` and ``job["source"]`` and runs the cases. Returns ``{"passed", "said"}``."""
+    env = {k: v for k, v in os.environ.items() if not k.startswith("JPY_")}
+    env.setdefault("MPLBACKEND", "Agg")
+    child = subprocess.Popen([sys.executable, "-m", "posekit.exercises._judge", "--execute"], stdin=subprocess.PIPE,
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    send, receive = _writer(child.stdin), _lines(child.stdout)
+    try:
+        send({"define": {k: job[k] for k in ("imports", "source", "function")}})
+        passed, said = _judge(f"posekit.exercises.nb{job['lesson']}", job["checker"], send, receive)
+    finally:
+        with contextlib.suppress(Exception):
+            child.stdin.close()
+        try:
+            child.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            child.kill()
+            child.wait()
+    printed = child.stderr.read()
+    return {"passed": passed, "said": (printed.strip() + "\n" + said).strip()}
+
+
+def _execute() -> int:
+    """The executor of :func:`grade`: define the student's function (from the first line), then run each case.
+
+    The protocol keeps the process's original standard output; the answer's own prints go to standard error."""
+    protocol = os.fdopen(os.dup(1), "w")
+    os.dup2(2, 1)
+    sys.stdout = sys.stderr
+    receive, send = _lines(sys.stdin), _writer(protocol)
+    define = (receive() or {}).get("define")
+    if not define:
+        return 2
+    namespace = {"__name__": "__answer__"}
+    state: dict = {}
+
+    def answer(*args):
+        if "fn" not in state:
+            code = compile(define["imports"] + "\n" + define["source"], "<answer cell>", "exec")
+            exec(code, namespace)  # noqa: S102 - the student's answer, in this throw-away process
+            state["fn"] = namespace[define["function"]]
+        return state["fn"](*args)
+
+    while (message := receive()) is not None:
+        send(run_case(answer, message))
+    return 0
+
+
+def main(argv) -> int:
+    if argv[1:2] == ["--execute"]:
+        return _execute()
+    _not_dumpable()
+    if argv[1:2] == ["--grade"]:
+        job = json.loads(sys.stdin.readline())
+        result = grade(job)
+        sys.stdout.write(json.dumps(result) + "\n")
+        return 0
+    if len(argv) != 3:
+        print("usage: python -m posekit.exercises._judge MODULE CHECKER | --grade | --execute", file=sys.stderr)
+        return 2
+    receive = _lines(sys.stdin)
+    protocol_out = sys.stdout
+    sys.stdout = sys.stderr  # nothing but the protocol on the real standard output
+    passed, said = _judge(argv[1], argv[2], _writer(protocol_out), receive)
+    _writer(protocol_out)({"verdict": said, "passed": passed})
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))
