@@ -254,3 +254,164 @@ def test_the_fresh_check_passes_the_reference_solution():
     fresh = fresh_check("01", "check_fabrik_planted", "exercise_fabrik_planted", inspect.getsource(PLANTED),
                         imports="import numpy as np")
     assert fresh.passed, fresh.said
+
+
+# -- the wrong answers the issue found passing, each refused with its reason; the right variants accepted ----------
+
+def _solutions(number):
+    import importlib.util
+
+    from posekit.course.solutions import _module
+
+    return _module(find_lesson(number))
+
+
+def _no_out_of_reach_branch(p, t, tol, it):
+    """Planted FABRIK without the out-of-reach branch: only many iterations get it near a stretched chain."""
+    p = np.array(p, float)[::-1].copy()
+    d = np.linalg.norm(np.diff(p, axis=0), axis=1)
+    base = p[0].copy()
+    for _ in range(it):
+        if np.linalg.norm(p[-1] - t) <= tol:
+            break
+        p[-1] = t
+        for i in range(len(d) - 1, -1, -1):
+            p[i] = p[i + 1] + d[i] * (p[i] - p[i + 1]) / np.linalg.norm(p[i] - p[i + 1])
+        p[0] = base
+        for i in range(len(d)):
+            p[i + 1] = p[i] + d[i] * (p[i + 1] - p[i]) / np.linalg.norm(p[i + 1] - p[i])
+    return p[::-1].copy()
+
+
+def _tolerance_after_the_pass(p, t, tol, it):
+    out = PLANTED(p, t, 0.0, 1)  # one pass first, the tolerance only tested afterwards
+    return PLANTED(out, t, tol, it - 1) if it > 1 else out
+
+
+def _sorts(parents):
+    depths = _solutions("04").exercise_depths(list(parents))
+    parents.sort() if isinstance(parents, list) else None
+    return depths
+
+
+def _empties(parents):
+    depths = _solutions("04").exercise_depths(list(parents))
+    while isinstance(parents, list) and parents:
+        parents.pop()
+    return depths
+
+
+def _naive_generator_loss(logits):
+    with np.errstate(over="ignore", divide="ignore"):
+        return np.mean(-np.log(1.0 / (1.0 + np.exp(-np.asarray(logits, float)))))
+
+
+def _drag_ignoring_n(c, q, p0, n):
+    d = q - c
+    t = ((p0 - c) @ (c - p0)) / (d @ (c - p0))
+    return c + t * d if t > 0 else None
+
+
+def _drag_without_parallel_test(c, q, p0, n):
+    d = q - c
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = ((p0 - c) @ n) / (d @ n)
+    return c + t * d if t > 0 else None
+
+
+def _drag_t_at_zero(c, q, p0, n):
+    d = q - c
+    if abs(d @ n) < 1e-12:
+        return None
+    t = ((p0 - c) @ n) / (d @ n)
+    return c + t * d if t >= 0 else None
+
+
+def _slerp_without_guard(q0, q1, s):
+    q0, q1 = np.asarray(q0, float), np.asarray(q1, float)
+    if q0 @ q1 < 0:
+        q1 = -q1
+    with np.errstate(invalid="ignore", divide="ignore"):
+        theta = np.arccos(np.clip(q0 @ q1, -1, 1))
+        return (np.sin((1 - s) * theta) * q0 + np.sin(s * theta) * q1) / np.sin(theta)
+
+
+WRONG = {
+    "01 planted FABRIK without the out-of-reach branch": ("check_fabrik_planted", _no_out_of_reach_branch,
+                                                           "case 7 differs"),
+    "01 planted FABRIK testing the tolerance after a pass": ("check_fabrik_planted", _tolerance_after_the_pass,
+                                                              "case 8 differs"),
+    "04 tree depths that sort the caller's list": ("check_tree_depths", _sorts, "changed its input `parents`"),
+    "04 tree depths that empty the caller's list": ("check_tree_depths", _empties, "changed its input `parents`"),
+    "04 the generator loss written naively": ("check_generator_loss", _naive_generator_loss, "overflows"),
+    "06 a drag point that ignores n": ("check_drag_point", _drag_ignoring_n, "differs"),
+    "06 a drag point with no parallel test": ("check_drag_point", _drag_without_parallel_test, "parallel"),
+    "06 a drag point that accepts t = 0": ("check_drag_point", _drag_t_at_zero, "t <= 0"),
+    "06 slerp with no guard for nearly equal quaternions": ("check_slerp", _slerp_without_guard, "lerp"),
+}
+
+
+@pytest.mark.parametrize("slip", WRONG)
+def test_each_checker_refuses_the_wrong_answers_that_used_to_pass(slip, capsys):
+    import posekit.exercises
+
+    checker, answer, said = WRONG[slip]
+    assert getattr(posekit.exercises, checker)(answer) is False
+    out = capsys.readouterr().out
+    assert said in out, out
+
+
+CALLS_POSEKIT = {
+    "04 spl.tree_levels": ("check_tree_depths", "posekit.models.aegan.numpy_nets.tree_levels"),
+    "04 latent_opt.Problem.loss": ("check_latent_loss", "posekit.models.aegan.latent_opt.Problem.loss"),
+    "04 aegan.train._bce": ("check_generator_loss", "posekit.models.aegan.train._bce"),
+    "06 viz.drag.drag_point": ("check_drag_point", "posekit.viz.drag.drag_point"),
+    "06 ik.keyframes.slerp": ("check_slerp", "posekit.ik.keyframes.slerp"),
+}
+
+
+@pytest.mark.parametrize("which", CALLS_POSEKIT)
+def test_each_checker_forbids_the_posekit_function_that_computes_its_answer(which, capsys):
+    """An answer that calls the function is refused, whatever it returns (here: the right answer, from the
+    reference solution, after the call)."""
+    import importlib
+
+    import posekit.exercises
+
+    checker, qualified = CALLS_POSEKIT[which]
+    module, _, name = qualified.rpartition(".")
+    owner = name
+    if module.endswith(".Problem"):
+        module, owner = module.rpartition(".")[0], "Problem"
+    target = getattr(importlib.import_module(module), owner)
+    solutions = _solutions(checker and {"check_drag_point": "06", "check_slerp": "06"}.get(checker, "04"))
+    right = {"check_tree_depths": solutions.exercise_depths if hasattr(solutions, "exercise_depths") else None,
+             "check_latent_loss": getattr(solutions, "exercise_latent_loss", None),
+             "check_generator_loss": getattr(solutions, "exercise_generator_loss", None),
+             "check_drag_point": getattr(solutions, "exercise_drag", None),
+             "check_slerp": getattr(solutions, "exercise_slerp", None)}[checker]
+
+    def calls(*args):
+        try:
+            if owner == "Problem":
+                target.loss(None)
+            else:
+                target(*args)
+        except Exception:  # noqa: BLE001 - the call is what is watched, not what it returns
+            pass
+        return right(*args)
+
+    assert getattr(posekit.exercises, checker)(calls) is False
+    out = capsys.readouterr().out
+    assert f"calls {qualified}" in out, out
+
+
+def test_float32_answers_and_tuples_of_rows_are_accepted(capsys):
+    def in_float32(root, mid, end, target, swivel):
+        m, e = SWIVEL(*(np.asarray(a, np.float32) for a in (root, mid, end, target)), np.float32(swivel))
+        return np.asarray(m, np.float32), np.asarray(e, np.float32)
+
+    assert check_two_bone_swivel(in_float32)
+    assert check_fabrik_planted(lambda *a: tuple(PLANTED(*a)))  # the joints as a tuple of rows
+    out = capsys.readouterr().out
+    assert out.count("✓") == 2, out

@@ -25,7 +25,9 @@ def planted_cases(seed: int = 0):
     """The cases of :func:`check_fabrik_planted`: ``(positions, target, tolerance, max_iter)`` tuples.
 
     Generic reachable targets first (3, 4 and 6 bones), then one the chain must stretch towards, then budgets a
-    careless answer ignores: one iteration only, and a loose tolerance that stops early.
+    careless answer ignores: one iteration only, and a loose tolerance that stops early; a target out of reach with
+    one iteration (an answer without the out-of-reach branch gets there only with many iterations); a reaching joint
+    already within tolerance (an answer that tests the tolerance after a pass moves it).
     """
     rng = np.random.default_rng(seed)
     out = []
@@ -41,6 +43,10 @@ def planted_cases(seed: int = 0):
     far = p[-1] + np.array([0.0, 0.0, 0.93 * reach])  # near full reach: many iterations needed
     out.append((p, far, 1e-5, 1))  # only one iteration allowed
     out.append((p, far, 5e-2, 50))  # stops as soon as the hip is within 5 cm
+    p = _chain(rng, 3)
+    out.append((p, p[-1] + np.array([0.0, 4.0, 1.0]), 1e-4, 1))  # out of reach with one iteration: stretched at once
+    p = _chain(rng, 4)
+    out.append((p, p[0] + np.array([0.003, -0.004, 0.0]), 1e-2, 50))  # already within tolerance: nothing moves
     return out
 
 
@@ -62,10 +68,17 @@ def check_fabrik_planted(my_fabrik_planted) -> bool:
             hints.append("the last joint must stay planted")
         if j == 0:
             hints.append("the first joint reaches for the target")
+        bones = np.diff(expected, axis=0)
+        bones = bones / np.linalg.norm(bones, axis=1, keepdims=True)
+        if np.allclose(bones, bones[0], atol=1e-9):
+            hints.append("the target is out of reach: the chain stretched straight towards it, at once")
+        elif np.allclose(expected, positions_of.get(id(expected), expected * np.nan)):
+            hints.append("already within tolerance: nothing moves")
         hints.append("max_iter and tolerance kept? bone lengths kept?")
         return f"joint {j} is {np.linalg.norm(got[j] - expected[j]) * 1000:.3f} mm off ({'; '.join(hints)})"
     cases = [((p.copy(), t.copy(), tol, it), planted_reference(p, t, tol, it), describe)
              for p, t, tol, it in planted_cases()]
+    positions_of = {id(expected): args[0] for args, expected, _ in cases}  # a case's start, by its expected answer
     return report("check_fabrik_planted", my_fabrik_planted, cases, atol=1e-6, forbid=(fabrik_chain,),
                   arg_names=("positions", "target", "tolerance", "max_iter"))
 
