@@ -60,7 +60,7 @@ from pathlib import Path
 import pytest
 
 from posekit.docs import prose
-from posekit.docs.prose import Outputs, agrees, check_text, figures
+from posekit.docs.prose import Outputs, agrees, cell_bindings, check_cell, check_text, figures
 
 ROOT = Path(__file__).resolve().parent.parent
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
@@ -81,18 +81,22 @@ def _rel(p):
     return str(p.relative_to(ROOT))
 
 
-def lesson_problems(path):
-    """``["cell N line L: message"]`` for one lesson's markdown cells."""
-    nb = json.loads(path.read_text(encoding="utf-8"))
+def notebook_problems(nb, allowed=(), results_dir=RESULTS_DIR):
+    """``["cell N line L: message"]`` for a notebook's markdown cells, whose bindings are in their metadata."""
     outputs = Outputs(nb)
     bad = []
     for i, c in enumerate(nb["cells"]):
         if c["cell_type"] != "markdown":
             continue
-        for line, msg in check_text("".join(c["source"]), results_dir=RESULTS_DIR, outputs=outputs,
-                                    allowed=_allowed(path.name[:2])):
+        for line, msg in check_cell("".join(c["source"]), cell_bindings(c), results_dir=results_dir,
+                                    outputs=outputs, allowed=allowed):
             bad.append(f"cell {i} line {line}: {msg}")
     return bad
+
+
+def lesson_problems(path):
+    """``["cell N line L: message"]`` for one lesson's markdown cells."""
+    return notebook_problems(json.loads(path.read_text(encoding="utf-8")), allowed=_allowed(path.name[:2]))
 
 
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.name)
