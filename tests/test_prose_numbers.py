@@ -1,13 +1,19 @@
 """Every measured figure in prose names its source, and is that source's value.
 
 Prose never states a figure that no output shows (it drifts), and a figure is checked against *the same
-quantity*, not against any output of its unit: a figure in a lesson's markdown (``notebooks/0*_*.ipynb``), in
-``README.md``, ``data_samples/README.md`` or ``docs/*.md`` carries, right after it, a source marker — an HTML
-comment, which JupyterLab and GitHub do not render and the raw text shows. This test reads the marker, fetches the
-value it names, converts it to the prose's unit, rounds it to the prose's decimals and compares.
+quantity*, not against any output of its unit. A figure in ``README.md``, ``data_samples/README.md`` or
+``docs/*.md`` carries, right after it, a source marker — an HTML comment, which GitHub does not render and the raw
+text shows. A lesson's markdown (``notebooks/0*_*.ipynb``) holds words, maths and links only: each markdown cell
+keeps its figures' bindings in its metadata, ``cell.metadata["posekit"]["sources"]``, a list of
+``{"figure": "28–29 mm", "occurrence": 1, "sources": ["out: ...", "out: ..."]}`` (the figure as written, which of
+the cell's places writing it, one source per number in the syntax of a marker's body below); a binding whose figure
+the cell no longer writes is stale and fails, and so does a marker left in a lesson's text
+(``python tools/mark_prose_sources.py --migrate NOTEBOOK`` moves markers into the metadata). This test reads the
+marker or binding, fetches the value it names, converts it to the prose's unit, rounds it to the prose's decimals
+and compares.
 
-The markers
------------
+The markers (a binding's sources are their bodies)
+--------------------------------------------------
 ``<!-- out: "TEXT" -->``
     A notebook's output (lesson markdown only): the first number after ``TEXT`` in the text outputs of the
     notebook's code cells. ``TEXT`` must occur once in all of them (white space matches any white space); more

@@ -1,15 +1,20 @@
-"""Figures in prose and the sources they are bound to: the source markers of the lessons, the README and ``docs/``.
+"""Figures in prose and the sources they are bound to: the lessons' cell bindings, the README's and ``docs/``'s markers.
 
-A measured figure in prose carries, right after it, an HTML comment naming where it comes from — an output of a
-code cell of the same notebook, or a key of a results file under ``data_samples/results`` — or why it needs no
-source (a goal, a paper's figure, a definition, a setting). HTML comments are not rendered, in JupyterLab or on
-GitHub, and stay readable in the raw text. ``tests/test_prose_numbers.py`` reads every page with this module and
-compares each figure with the value its marker names; the syntax is written down once, in ``docs/testing.md``
-(*Figures in prose*) and in that test's docstring. ``posekit docs build`` (:mod:`posekit.docs.bench_page`) writes
-the markers of the pages it renders with :func:`data_marker`.
+A measured figure in prose is bound to where it comes from — an output of a code cell of the same notebook, or a
+key of a results file under ``data_samples/results`` — or to why it needs no source (a goal, a paper's figure, a
+definition, a setting). On a page (the README, ``docs/``) the binding is an HTML comment right after the figure, a
+*source marker*: not rendered on GitHub, readable in the raw text. A lesson's markdown holds words, maths and links
+only, so each markdown cell keeps its bindings in its metadata (:func:`cell_bindings`), each naming its figure by
+its text and its place among the cell's places that write it; :func:`move_markers` moves markers there, and
+:func:`inline_bindings` puts them back in the text for the marking tool. ``tests/test_prose_numbers.py`` reads every
+page and lesson with this module and compares each figure with the value its source names; the syntax is written
+down once, in ``docs/testing.md`` (*Figures in prose*) and in that test's docstring. ``posekit docs build``
+(:mod:`posekit.docs.bench_page`) writes the markers of the pages it renders with :func:`data_marker`.
 
-This module finds the figures (:func:`figures`), reads the markers (:func:`parse_markers`), resolves a source
-(:class:`Outputs`, :func:`resolve_data`) and compares (:func:`agrees`); it imports nothing of posekit.
+This module finds the figures (:func:`figures`), reads the markers (:func:`parse_markers`) and a cell's bindings
+(:func:`binding_markers`), resolves a source (:class:`Outputs`, :func:`resolve_data`) and compares
+(:func:`agrees`): :func:`check_text` for a page, :func:`check_cell` for a lesson's cell. It imports nothing of
+posekit.
 """
 
 from __future__ import annotations
