@@ -502,3 +502,21 @@ def test_a_bare_decimal_before_a_full_stop_is_a_figure():
     assert [f.num for f in figures(prose.blank_non_prose("weighted 1 10.10. But release 1.2.3 and 3e-4."))] == \
         ["10.10", "3"]
     assert _problems("with every joint weighted 1 10.10. But") != []
+
+
+def test_a_merge_with_a_re_execution_keeps_its_outputs_and_this_branchs_markdown():
+    """The other side re-executed the lesson (new outputs, markers still inline in its markdown): its notebook with
+    this side's markdown cells, matched by id, is migrated and bound, and its outputs stay."""
+    tool = _tool()
+    ours = nbformat.v4.new_notebook(cells=[nbformat.v4.new_markdown_cell(INLINE), nbformat.v4.new_code_cell("run()")])
+    theirs = copy.deepcopy(ours)
+    tool.migrate(ours)
+    theirs["cells"][0]["source"] = INLINE.replace("from it", "from its target")   # their older words, inline
+    theirs["cells"][1]["outputs"] = [nbformat.v4.new_output("stream", text=PRINTED[0] + PRINTED[1])]
+    assert tool.take_markdown(theirs, ours) == []
+    assert tool.migrate(theirs) == {}
+    assert theirs["cells"][0] == ours["cells"][0] and theirs["cells"][1]["outputs"][0]["text"].startswith("training")
+    assert notebook_problems(theirs) == []
+    # a markdown cell the other side added (an id this side lacks) is kept, and named
+    theirs["cells"].append(nbformat.v4.new_markdown_cell("new words"))
+    assert tool.take_markdown(theirs, ours) == [theirs["cells"][-1]["id"]]

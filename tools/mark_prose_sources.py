@@ -8,6 +8,12 @@ is idempotent, so it can be run again after a merge brings markers back:
 
     python tools/mark_prose_sources.py --migrate notebooks/0*.ipynb
 
+After a merge with a branch that re-executed the notebooks (outputs only), keep its notebook and take this branch's
+markdown cells (matched by cell id), then migrate what it may bring back inline:
+
+    git checkout --theirs notebooks/05_protores.ipynb
+    python tools/mark_prose_sources.py --markdown-from issue-64-markers --migrate notebooks/05_protores.ipynb
+
 An author may also write a marker inline, as in a page of ``docs/``, and run ``--migrate``: it is the easiest way to
 add a binding.
 
@@ -669,6 +675,23 @@ def migrate_file(path: Path, write: bool = True) -> dict[int, int]:
     return moved
 
 
+def take_markdown(nb: dict, other: dict) -> list[str]:
+    """Give ``nb``'s markdown cells the text and metadata of ``other``'s cells of the same id (in memory), keeping
+    ``nb``'s code cells and outputs: a merge of a branch that changed the lessons' words (and bindings) with one that
+    re-executed them. Returns the ids of ``nb``'s markdown cells that ``other`` lacks (left as they are)."""
+    theirs = {c.get("id"): c for c in other["cells"] if c["cell_type"] == "markdown" and c.get("id")}
+    missing = []
+    for c in nb["cells"]:
+        if c["cell_type"] != "markdown":
+            continue
+        o = theirs.get(c.get("id"))
+        if o is None:
+            missing.append(str(c.get("id")))
+            continue
+        c["source"], c["metadata"] = o["source"], o["metadata"]
+    return missing
+
+
 def propose(path: Path, exempt: dict, write: bool) -> tuple[int, list]:
     nb = json.loads(path.read_text(encoding="utf-8"))
     for line in inline_all(nb):
@@ -782,11 +805,29 @@ def main(argv=None):
     ap.add_argument("--migrate", action="store_true",
                     help="only move the markdown's inline source markers into the cells' metadata (idempotent)")
     ap.add_argument("--exempt", default=None)
+    ap.add_argument("--markdown-from", default=None, metavar="REV",
+                    help="first give the notebooks' markdown cells (text and metadata) those of git revision REV, "
+                         "matched by cell id, keeping code cells and outputs (a merge with a re-execution)")
     ap.add_argument("--carry-from", default=None, metavar="REV",
                     help="first carry the markers of each notebook at git revision REV (after a merge took the "
                          "other side's notebook)")
     args = ap.parse_args(argv)
     exempt = json.loads(Path(args.exempt).read_text()) if args.exempt else {}
+    if args.markdown_from:
+        import subprocess
+
+        for nbp in args.notebooks:
+            rel = Path(nbp).resolve().relative_to(ROOT)
+            other = json.loads(subprocess.run(["git", "show", f"{args.markdown_from}:{rel}"], cwd=ROOT, check=True,
+                                              capture_output=True, text=True).stdout)
+            nb = json.loads(Path(nbp).read_text(encoding="utf-8"))
+            missing = take_markdown(nb, other)
+            print(f"{nbp}: markdown cells of {args.markdown_from}"
+                  + (f"; not there, left as they are: {', '.join(missing)}" if missing else ""))
+            if not args.dry_run:
+                write_notebook(Path(nbp), nb)
+        if not args.migrate:
+            return 0
     if args.migrate:
         for nbp in args.notebooks:
             moved = migrate_file(Path(nbp), write=not args.dry_run)
