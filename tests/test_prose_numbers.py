@@ -1,13 +1,19 @@
 """Every measured figure in prose names its source, and is that source's value.
 
 Prose never states a figure that no output shows (it drifts), and a figure is checked against *the same
-quantity*, not against any output of its unit: a figure in a lesson's markdown (``notebooks/0*_*.ipynb``), in
-``README.md``, ``data_samples/README.md`` or ``docs/*.md`` carries, right after it, a source marker — an HTML
-comment, which JupyterLab and GitHub do not render and the raw text shows. This test reads the marker, fetches the
-value it names, converts it to the prose's unit, rounds it to the prose's decimals and compares.
+quantity*, not against any output of its unit. A figure in ``README.md``, ``data_samples/README.md`` or
+``docs/*.md`` carries, right after it, a source marker — an HTML comment, which GitHub does not render and the raw
+text shows. A lesson's markdown (``notebooks/0*_*.ipynb``) holds words, maths and links only: each markdown cell
+keeps its figures' bindings in its metadata, ``cell.metadata["posekit"]["sources"]``, a list of
+``{"figure": "28–29 mm", "occurrence": 1, "sources": ["out: ...", "out: ..."]}`` (the figure as written, which of
+the cell's places writing it, one source per number in the syntax of a marker's body below); a binding whose figure
+the cell no longer writes is stale and fails, and so does a marker left in a lesson's text
+(``python tools/mark_prose_sources.py --migrate NOTEBOOK`` moves markers into the metadata). This test reads the
+marker or binding, fetches the value it names, converts it to the prose's unit, rounds it to the prose's decimals
+and compares.
 
-The markers
------------
+The markers (a binding's sources are their bodies)
+--------------------------------------------------
 ``<!-- out: "TEXT" -->``
     A notebook's output (lesson markdown only): the first number after ``TEXT`` in the text outputs of the
     notebook's code cells. ``TEXT`` must occur once in all of them (white space matches any white space); more
@@ -53,14 +59,17 @@ new one. The reading is :mod:`posekit.docs.prose`; ``posekit docs build`` writes
 generates.
 """
 
+import copy
+import importlib.util
 import json
 import re
 from pathlib import Path
 
+import nbformat
 import pytest
 
 from posekit.docs import prose
-from posekit.docs.prose import Outputs, agrees, check_text, figures
+from posekit.docs.prose import Outputs, agrees, cell_bindings, check_cell, check_text, figures
 
 ROOT = Path(__file__).resolve().parent.parent
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
@@ -81,18 +90,22 @@ def _rel(p):
     return str(p.relative_to(ROOT))
 
 
-def lesson_problems(path):
-    """``["cell N line L: message"]`` for one lesson's markdown cells."""
-    nb = json.loads(path.read_text(encoding="utf-8"))
+def notebook_problems(nb, allowed=(), results_dir=RESULTS_DIR):
+    """``["cell N line L: message"]`` for a notebook's markdown cells, whose bindings are in their metadata."""
     outputs = Outputs(nb)
     bad = []
     for i, c in enumerate(nb["cells"]):
         if c["cell_type"] != "markdown":
             continue
-        for line, msg in check_text("".join(c["source"]), results_dir=RESULTS_DIR, outputs=outputs,
-                                    allowed=_allowed(path.name[:2])):
+        for line, msg in check_cell("".join(c["source"]), cell_bindings(c), results_dir=results_dir,
+                                    outputs=outputs, allowed=allowed):
             bad.append(f"cell {i} line {line}: {msg}")
     return bad
+
+
+def lesson_problems(path):
+    """``["cell N line L: message"]`` for one lesson's markdown cells."""
+    return notebook_problems(json.loads(path.read_text(encoding="utf-8")), allowed=_allowed(path.name[:2]))
 
 
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.name)
@@ -303,3 +316,207 @@ def test_the_cli_page_states_settings_not_measurements():
     page = (ROOT / "docs" / "cli.md").read_text(encoding="utf-8")
     measured = re.findall(r"(?i)\b(?:about|takes?|took|typically|roughly)\s+[\d.,]+\s?[^\s<]*<!-- setting", page)
     assert measured == [], measured
+
+
+# --- a lesson's bindings live in its cells' metadata -----------------------------------------------------------------
+SOURCE_MARKER = re.compile(r"<!--\s*[a-z-]+\s*:")
+
+
+@pytest.mark.parametrize("path", sorted((ROOT / "notebooks").glob("0*.ipynb")), ids=lambda p: p.name)
+def test_the_lessons_markdown_holds_no_source_marker(path):
+    """A lesson's markdown holds words, maths and links only (docs/testing.md): its figures' bindings are in the
+    cells' metadata, not comments between a number and its unit."""
+    nb = json.loads(path.read_text(encoding="utf-8"))
+    marked = [i for i, c in enumerate(nb["cells"])
+              if c["cell_type"] == "markdown" and SOURCE_MARKER.search("".join(c["source"]))]
+    assert marked == [], (f"{_rel(path)}: source markers in the markdown of cells {marked}; move them into the "
+                          f"metadata: python tools/mark_prose_sources.py --migrate {_rel(path)}")
+
+
+PRINTED = ("training: 35.3 s\nFABRIK median MPJPE 28.9 mm\nDLS median MPJPE 20.5 mm\n",
+           "method          L_ikd-L2  world joint mm  converged\n"
+           "protores            1.52              54         0%\n"
+           "fabrik              3.49              76        34%\n")
+
+
+def _lesson(text, bindings=None, outputs=PRINTED):
+    """A notebook of one markdown cell (``text``, its metadata's ``bindings``) and code cells printing ``outputs``."""
+    md = {"cell_type": "markdown", "source": text, "metadata": {}}
+    if bindings is not None:
+        md["metadata"]["posekit"] = {"sources": bindings}
+    nb = _nb(*outputs)
+    nb["cells"][0] = md
+    return nb
+
+
+def _bound(figure, *sources, occurrence=1):
+    return {"figure": figure, "occurrence": occurrence, "sources": list(sources)}
+
+
+def _cell_problems(text, bindings, outputs=PRINTED, results=RESULTS_DIR):
+    return [b.split(": ", 1)[1] for b in notebook_problems(_lesson(text, bindings, outputs), results_dir=results)]
+
+
+GOOD = "FABRIK lands 29 mm from it and DLS 20.5 mm, in 35 s; ProtoRes's 54 against 76 mm. Goal: 3 cm."
+GOOD_BINDINGS = [_bound("29 mm", 'out: "FABRIK median MPJPE"'), _bound("20.5 mm", 'out: "DLS median"'),
+                 _bound("35 s", 'out: "training:"'),
+                 _bound("54 against 76 mm", 'out: "protores" col "world joint mm"',
+                        'out: "fabrik" col "world joint mm"'),
+                 _bound("3 cm", "goal: a goal of this test")]
+
+
+def test_a_cell_whose_figures_are_bound_in_its_metadata_passes():
+    assert _cell_problems(GOOD, GOOD_BINDINGS) == []
+    # white space inside a figure is any white space (a line may break inside it)
+    assert _cell_problems(GOOD.replace("54 against", "54\nagainst"), GOOD_BINDINGS) == []
+    # the order of the bindings in the metadata does not matter
+    assert _cell_problems(GOOD, GOOD_BINDINGS[::-1]) == []
+
+
+def test_a_figure_without_a_binding_fails():
+    bad = _cell_problems(GOOD, GOOD_BINDINGS[1:])
+    assert bad == ["'29 mm' (29): a measured figure without a source marker"], bad
+    bad = _cell_problems(GOOD, None)
+    assert len(bad) == 6 and all("without a source" in b for b in bad), bad
+    # a figure an author adds to a bound cell is unbound, even where the same text is bound once already
+    bad = _cell_problems(GOOD + " Again 29 mm.", GOOD_BINDINGS)
+    assert bad == ["'29 mm' (29): a measured figure without a source marker"], bad
+
+
+def test_a_binding_whose_source_is_missing_fails(tmp_path):
+    for source, says in (('out: "CCD median MPJPE"', 'no output shows "CCD median MPJPE"'),
+                         ('out: "fabrik" col "met"', 'no column "met"'),
+                         ("data: gone.json rows[0].mpjpe_mm_median", "no results file gone.json")):
+        bad = _cell_problems(GOOD, [_bound("29 mm", source)] + GOOD_BINDINGS[1:], results=tmp_path)
+        assert len(bad) == 1 and says in bad[0], (source, bad)
+
+
+def test_a_binding_whose_source_gives_another_value_fails():
+    bad = _cell_problems(GOOD.replace("29 mm", "30 mm"), [_bound("30 mm", 'out: "FABRIK median MPJPE"')]
+                         + GOOD_BINDINGS[1:])
+    assert len(bad) == 1 and "'30 mm' (30) is not its source" in bad[0] and "28.9" in bad[0], bad
+    # the sources of a list are bound in the figure's order: swapped, both fail
+    swapped = GOOD_BINDINGS[:3] + [_bound("54 against 76 mm", 'out: "fabrik" col "world joint mm"',
+                                          'out: "protores" col "world joint mm"')] + GOOD_BINDINGS[4:]
+    bad = _cell_problems(GOOD, swapped)
+    assert len(bad) == 2 and all("is not its source" in b for b in bad), bad
+
+
+def test_a_binding_whose_figure_is_no_longer_in_the_cell_is_stale():
+    # the student edits the figure: the binding is stale, and the new figure is unbound
+    bad = _cell_problems(GOOD.replace("29 mm", "31 mm"), GOOD_BINDINGS)
+    assert any("binding of '29 mm' is stale" in b and "0 times" in b for b in bad), bad
+    assert any("'31 mm' (31): a measured figure without a source" in b for b in bad), bad
+    # a binding of a second place the text no longer has
+    bad = _cell_problems(GOOD, GOOD_BINDINGS + [_bound("29 mm", 'out: "FABRIK median MPJPE"', occurrence=2)])
+    assert len(bad) == 1 and "(2nd place) is stale" in bad[0] and "1 time," in bad[0], bad
+    # a figure's text inside a longer number is not the figure ("29 mm" is not the end of "1.29 mm")
+    bad = _cell_problems("It lands 1.29 mm away.", [_bound("29 mm", 'out: "FABRIK median MPJPE"')])
+    assert any("is stale" in b for b in bad) and any("'1.29 mm'" in b for b in bad), bad
+
+
+def test_a_binding_names_its_place_by_the_figure_and_its_occurrence():
+    text = "FABRIK: 29 mm, then 29 mm again."
+    first = [_bound("29 mm", 'out: "FABRIK median MPJPE"'), _bound("29 mm", "goal: the second", occurrence=2)]
+    assert _cell_problems(text, first) == []
+    bad = _cell_problems(text, first[:1] + [_bound("29 mm", "goal: the same place")])
+    assert bad == ["binding of '29 mm' binds the same place as binding of '29 mm': keep one",
+                   "'29 mm' (29): a measured figure without a source marker"], bad
+
+
+def test_a_malformed_binding_or_an_inline_marker_fails():
+    for binding, says in (({"figure": "29 mm", "sources": []}, "sources must be a list"),
+                          ({"figure": "29 mm", "sources": ["goal:"]}, "needs its reason"),
+                          ({"figure": "29 mm", "sources": ["mm: 29"]}, "does not start with out:"),
+                          ({"figure": "29 mm", "occurrence": 0, "sources": ["goal: x"]}, "occurrence must be"),
+                          ({"sources": ["goal: x"]}, "needs its figure")):
+        bad = _cell_problems(GOOD, [binding] + GOOD_BINDINGS[1:])
+        assert any(says in b for b in bad), (binding, bad)
+    # a marker left in a lesson's text fails even where it names the right source
+    bad = _cell_problems(GOOD.replace("29 mm", '29 mm<!-- out: "FABRIK median MPJPE" -->'), GOOD_BINDINGS)
+    assert len(bad) == 1 and "inline source marker" in bad[0] and "--migrate" in bad[0], bad
+
+
+def _tool():
+    spec = importlib.util.spec_from_file_location("mark_prose_sources", ROOT / "tools" / "mark_prose_sources.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+INLINE = ('FABRIK lands 29 mm<!-- out: "FABRIK median MPJPE" --> from it and DLS 20.5 mm<!-- out: "DLS median" -->, '
+          'in 35 s<!-- out: "training:" -->; ProtoRes\'s 54 against 76 mm<!-- out: "protores" col "world joint mm"; '
+          'out: "fabrik" col "world joint mm" -->. Goal: 3 cm<!-- goal: a goal of this test -->.')
+
+
+def test_the_migration_moves_the_markers_into_the_metadata_and_keeps_the_check():
+    plain, entries = prose.move_markers(INLINE)
+    assert plain == GOOD and entries == GOOD_BINDINGS
+    assert prose.inline_bindings(plain, entries) == (INLINE, [])
+    # the guard finds what it found with the markers inline: nothing, or the same wrong value
+    assert _problems(INLINE, nb=_nb(*PRINTED)) == [] and _cell_problems(plain, entries) == []
+    wrong = INLINE.replace("29 mm<", "30 mm<")
+    plain_wrong, entries_wrong = prose.move_markers(wrong)
+    assert _problems(wrong, nb=_nb(*PRINTED)) == _cell_problems(plain_wrong, entries_wrong) != []
+
+
+def test_the_migration_is_idempotent_and_merges_what_a_merge_brings_back():
+    tool = _tool()
+    code = {"cell_type": "code", "source": "print('<!-- out: x -->')", "metadata": {}, "execution_count": 1,
+            "outputs": [{"output_type": "stream", "name": "stdout", "text": "<!-- out: \"x\" --> 1.5 mm\n"}]}
+    nb = _lesson(INLINE)
+    nb["cells"].append(copy.deepcopy(code))
+    assert tool.migrate(nb) == {0: 5}
+    once = copy.deepcopy(nb)
+    assert "".join(nb["cells"][0]["source"]) == GOOD and prose.cell_bindings(nb["cells"][0]) == GOOD_BINDINGS
+    assert nb["cells"][-1] == code                          # code cells and outputs are never touched
+    assert tool.migrate(nb) == {} and nb == once             # run again: nothing moves, nothing changes
+    # a merge brings back a marker in a migrated cell (a new figure): it joins the metadata's bindings in order
+    nb["cells"][0]["source"] = GOOD.replace("from it", 'from it (2.89 cm<!-- out: "FABRIK median" -->)')
+    assert tool.migrate(nb) == {0: 1}
+    entries = prose.cell_bindings(nb["cells"][0])
+    assert [e["figure"] for e in entries] == ["29 mm", "2.89 cm", "20.5 mm", "35 s", "54 against 76 mm", "3 cm"]
+    assert notebook_problems(nb) == []
+    # a cell without bindings keeps its metadata as it was
+    assert "posekit" not in _lesson("no figures here")["cells"][0]["metadata"]
+    plain_nb = _lesson("no figures here<!-- an ordinary comment -->")
+    tool.migrate(plain_nb)
+    assert plain_nb["cells"][0]["metadata"] == {} and "ordinary comment" in plain_nb["cells"][0]["source"]
+
+
+def test_the_migration_writes_the_notebook_as_nbformat_does(tmp_path):
+    tool = _tool()
+    path = tmp_path / "lesson.ipynb"
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_markdown_cell(INLINE),
+                                         nbformat.v4.new_code_cell("print(1)")])
+    path.write_text(nbformat.writes(nb) + "\n", encoding="utf-8")
+    assert tool.migrate_file(path) == {0: 5}
+    after = path.read_text(encoding="utf-8")
+    assert after == nbformat.writes(nbformat.reads(after, as_version=4)) + "\n"
+    assert tool.migrate_file(path) == {} and path.read_text(encoding="utf-8") == after
+
+
+def test_a_bare_decimal_before_a_full_stop_is_a_figure():
+    """With the markers out of the text, "... weighted 1 10.10. But" ends its sentence at the figure: it is read
+    (the old guard saw the marker's ``<`` there, and missed the same figure without one); a version is not."""
+    assert [f.num for f in figures(prose.blank_non_prose("weighted 1 10.10. But release 1.2.3 and 3e-4."))] == \
+        ["10.10", "3"]
+    assert _problems("with every joint weighted 1 10.10. But") != []
+
+
+def test_a_merge_with_a_re_execution_keeps_its_outputs_and_this_branchs_markdown():
+    """The other side re-executed the lesson (new outputs, markers still inline in its markdown): its notebook with
+    this side's markdown cells, matched by id, is migrated and bound, and its outputs stay."""
+    tool = _tool()
+    ours = nbformat.v4.new_notebook(cells=[nbformat.v4.new_markdown_cell(INLINE), nbformat.v4.new_code_cell("run()")])
+    theirs = copy.deepcopy(ours)
+    tool.migrate(ours)
+    theirs["cells"][0]["source"] = INLINE.replace("from it", "from its target")   # their older words, inline
+    theirs["cells"][1]["outputs"] = [nbformat.v4.new_output("stream", text=PRINTED[0] + PRINTED[1])]
+    assert tool.take_markdown(theirs, ours) == []
+    assert tool.migrate(theirs) == {}
+    assert theirs["cells"][0] == ours["cells"][0] and theirs["cells"][1]["outputs"][0]["text"].startswith("training")
+    assert notebook_problems(theirs) == []
+    # a markdown cell the other side added (an id this side lacks) is kept, and named
+    theirs["cells"].append(nbformat.v4.new_markdown_cell("new words"))
+    assert tool.take_markdown(theirs, ours) == [theirs["cells"][-1]["id"]]

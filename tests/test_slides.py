@@ -210,8 +210,9 @@ def test_a_summary_keeps_its_key_points_on_the_slide_and_its_detail_in_the_notes
 
 
 def test_the_figures_source_markers_stay_out_of_the_deck_and_do_not_fill_its_slides():
-    """A source marker (``<!-- out: ... -->``, tests/test_prose_numbers.py) is for the tests: the deck and the page
-    drop it, and a paragraph with long markers takes the slides it takes without them."""
+    """A lesson binds its figures in the cells' metadata (tests/test_prose_numbers.py); should a source marker
+    (``<!-- out: ... -->``) be left in its text, the deck and the page drop it, and a paragraph with long markers
+    takes the slides it takes without them. The bindings themselves stay out of what a reader gets."""
     marker = '<!-- out: "a long anchor text of some printed table" "a row" col "a column header" -->'
     prose = "\n".join(f"- Figure {k}: 12.{k} mm{marker} against 3{k} mm{marker}, " + "words " * 12 for k in range(9))
     marked = _lesson(*BASE, ("md", f"## 2. Discussion\n\n{prose}"))
@@ -222,6 +223,13 @@ def test_the_figures_source_markers_stay_out_of_the_deck_and_do_not_fill_its_sli
     assert "<!-- out:" not in rules.export(marked, "page")
     assert rules.strip_source_markers("1 mm<!-- data: f.json a.b --> and 2<!-- setting: x -->; <!-- other -->") \
         == "1 mm and 2; <!-- other -->"
+    bound = _lesson(*BASE, ("md", "## 2. Discussion\n\nFigure: 12.8 mm."))
+    md = [c for c in bound["cells"] if c["cell_type"] == "markdown"][-1]
+    md.setdefault("metadata", {})["posekit"] = {"sources": [{"figure": "12.8 mm", "occurrence": 1,
+                                                             "sources": ["goal: an anchor of the bindings"]}]}
+    assert "anchor of the bindings" not in rules.export(bound, "page")
+    assert all("sources" not in c["metadata"].get("posekit", {}) for c in rules._for_readers(bound)["cells"])
+    assert "sources" in md["metadata"]["posekit"]            # the lesson itself keeps them
 
 
 @pytest.mark.parametrize("number", [le.number for le in lessons()])

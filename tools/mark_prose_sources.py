@@ -1,11 +1,32 @@
-"""Propose source markers for the unmarked figures of the lessons' markdown (``tests/test_prose_numbers.py``).
+"""Bind the figures of the lessons' markdown to their sources (``tests/test_prose_numbers.py``), and move markers.
+
+A lesson's markdown holds words, maths and links only: each markdown cell keeps its figures' bindings in its
+metadata (``cell.metadata["posekit"]["sources"]``, :func:`posekit.docs.prose.cell_bindings`). ``--migrate`` moves
+the inline source markers (``28–29 mm<!-- out: ... -->``) of the named notebooks' markdown cells there, merged with
+the bindings the metadata holds already; it touches only markdown cells' sources and metadata, never outputs, and
+is idempotent, so it can be run again after a merge brings markers back:
+
+    python tools/mark_prose_sources.py --migrate notebooks/0*.ipynb
+
+After a merge with a branch that re-executed the notebooks (outputs only), keep its notebook and take this branch's
+markdown cells (matched by cell id), then migrate what it may bring back inline:
+
+    git checkout --theirs notebooks/05_protores.ipynb
+    python tools/mark_prose_sources.py --markdown-from issue-64-markers --migrate notebooks/05_protores.ipynb
+
+An author may also write a marker inline, as in a page of ``docs/``, and run ``--migrate``: it is the easiest way to
+add a binding.
+
+Without ``--migrate``, the tool proposes bindings for the unbound figures:
 
 For each measured figure of a lesson's markdown that has no marker, it looks for the outputs of the notebook's code
 cells (and the results files its code names) that show the same value in the same unit, nearest cell first, and
 writes the marker that names it — ``<!-- out: "LABEL" -->``, ``<!-- out: "ROW" col "HEADER" -->`` or
 ``<!-- data: FILE PATH -->`` — after checking that the marker resolves to that very number. Only markdown cells are
 edited; outputs are never touched. What it binds is a proposal to read: it prints every binding (figure, the
-sentence, the output line it names) and every figure it could not bind, and ``--dry-run`` writes nothing.
+sentence, the output line it names) and every figure it could not bind, and ``--dry-run`` writes nothing. It works
+on the markers inline (the metadata's bindings are put back in the text first) and moves them all into the
+metadata when it writes.
 
     python tools/mark_prose_sources.py notebooks/05_protores.ipynb [--dry-run] [--exempt exempt.json]
 
@@ -28,7 +49,8 @@ sys.path.insert(0, str(ROOT))
 
 from posekit.docs import prose  # noqa: E402
 from posekit.docs.prose import (_OUT_NUM, _UNIT_AFTER, Outputs, Source, SourceError, agrees,  # noqa: E402
-                                blank_non_prose, family, figures, parse_markers, bind, resolve_data, _unit_of_header)
+                                blank_non_prose, family, figures, parse_markers, bind, resolve_data, _unit_of_header,
+                                cell_bindings, inline_bindings, move_markers, set_cell_bindings)
 
 RESULTS = ROOT / "data_samples" / "results"
 
@@ -140,7 +162,7 @@ DECIDED = [
     ('05', '**at least 50%',
      "goal: the lesson's Aim"),
     ('05', 'took 42,000 steps',
-     'out: "final validation world joint error 60 mm" "masked-fcr"'),
+     'out: "steps, 2 processes," "masked-fcr"'),
     ('05', 'and trained for 2,000 steps',
      "setting: the studies' step count (posekit train protores-studies)"),
     ('05', 'The width runs take 2,000 steps',
@@ -193,18 +215,6 @@ DECIDED = [
      'out: "5point benchmark, 1000 held-out cases" "L_gpd-L2" "protores" col "world joint mm"; out: "5point benchmark, 1000 held-out cases" "L_gpd-L2" "fabrik" col "world joint mm"'),
     ('05', 'world joint error 54 mm',
      'out: "5point benchmark, 1000 held-out cases" "L_gpd-L2" "protores" col "world joint mm"'),
-    ('05', 'L2}$ 2.91',
-     'out: "random benchmark, 1000 held-out cases" "L_gpd-L2" "protores" col "L_ikd-L2"'),
-    ('05', '2.91 against 4.49',
-     'out: "random benchmark, 1000 held-out cases" "L_gpd-L2" "masked-fcr" col "L_ikd-L2"'),
-    ('05', '(Masked-FCR) and 2.98',
-     'out: "random benchmark, 1000 held-out cases" "L_gpd-L2" "transformer" col "L_ikd-L2"'),
-    ('05', 'geo}$ 0.280',
-     'out: "random benchmark, 1000 held-out cases" "L_gpd-L2" "protores" col "L_loc-geo"'),
-    ('05', 'against 0.323',
-     'out: "random benchmark, 1000 held-out cases" "L_gpd-L2" "masked-fcr" col "L_loc-geo"'),
-    ('05', '0.323 and 0.284',
-     'out: "random benchmark, 1000 held-out cases" "L_gpd-L2" "transformer" col "L_loc-geo"'),
     ('05', '(25.3 against 27.5 mm',
      'out: "random benchmark, 1000 held-out cases" "L_gpd-L2" "transformer" col "pos mm"; out: "random benchmark, 1000 held-out cases" "L_gpd-L2" "protores" col "pos mm"'),
     ('05', 'ahead of ProtoRes (1.23',
@@ -227,18 +237,6 @@ DECIDED = [
      "setting: the studies' step count"),
     ('05', '(17.50 and 10.7',
      'out: "core-min" "64 2000" col "5-pt L_ikd"'),
-    ('05', '13.81 / 9.42',
-     'out: "128 719,415" col "random L_ikd"'),
-    ('05', 'in the first, 9.4',
-     'out: "64 2000" col "random L_ikd"'),
-    ('05', 'in the first, 9.4 / 11.7',
-     'out: "128 2000" col "random L_ikd"'),
-    ('05', 'swing more: 17.50 / 17.73',
-     'out: "128 719,415" col "5-pt L_ikd"'),
-    ('05', '9.79 and 10.7',
-     'out: "64 2000" col "5-pt L_ikd"'),
-    ('05', '9.79 and 10.7 / 18.0',
-     'out: "128 2000" col "5-pt L_ikd"'),
     ('05', 'At 2,000 steps',
      "setting: the studies' step count"),
     ('05', 'single pose fit the 1 ms',
@@ -628,8 +626,76 @@ def _row_score(src: Source, window: str) -> int:
     return score
 
 
+def inline_all(nb: dict) -> list[str]:
+    """Put every markdown cell's bindings back in its text as inline markers (in memory), for the proposing and
+    carrying code, which reads markers inline; returns the bindings it could not place (stale)."""
+    lost = []
+    for i, c in enumerate(nb["cells"]):
+        if c["cell_type"] != "markdown" or not cell_bindings(c):
+            continue
+        text, left = inline_bindings("".join(c["source"]), cell_bindings(c))
+        c["source"] = text
+        set_cell_bindings(c, left)
+        lost += [f"cell {i}: stale binding {e!r}" for e in left]
+    return lost
+
+
+def migrate(nb: dict) -> dict[int, int]:
+    """Move the inline source markers of every markdown cell of ``nb`` into its metadata (in memory), merged with the
+    bindings there; only cells with a marker change. Returns ``{cell index: markers moved}``."""
+    moved = {}
+    for i, c in enumerate(nb["cells"]):
+        if c["cell_type"] != "markdown":
+            continue
+        text = "".join(c["source"])
+        n = len(parse_markers(text))
+        if not n:
+            continue
+        try:
+            plain, entries = move_markers(text, cell_bindings(c))
+        except SourceError as e:
+            raise SourceError(f"cell {i}: {e}") from None
+        c["source"] = plain
+        set_cell_bindings(c, entries)
+        moved[i] = n
+    return moved
+
+
+def write_notebook(path: Path, nb: dict) -> None:
+    """Write ``nb`` as nbformat does (indent 1, a final newline), as the lessons are committed."""
+    path.write_text(nbformat.writes(nbformat.from_dict(nb)) + "\n", encoding="utf-8")
+
+
+def migrate_file(path: Path, write: bool = True) -> dict[int, int]:
+    """:func:`migrate` one notebook file; writes it only when a marker moved."""
+    nb = json.loads(path.read_text(encoding="utf-8"))
+    moved = migrate(nb)
+    if moved and write:
+        write_notebook(path, nb)
+    return moved
+
+
+def take_markdown(nb: dict, other: dict) -> list[str]:
+    """Give ``nb``'s markdown cells the text and metadata of ``other``'s cells of the same id (in memory), keeping
+    ``nb``'s code cells and outputs: a merge of a branch that changed the lessons' words (and bindings) with one that
+    re-executed them. Returns the ids of ``nb``'s markdown cells that ``other`` lacks (left as they are)."""
+    theirs = {c.get("id"): c for c in other["cells"] if c["cell_type"] == "markdown" and c.get("id")}
+    missing = []
+    for c in nb["cells"]:
+        if c["cell_type"] != "markdown":
+            continue
+        o = theirs.get(c.get("id"))
+        if o is None:
+            missing.append(str(c.get("id")))
+            continue
+        c["source"], c["metadata"] = o["source"], o["metadata"]
+    return missing
+
+
 def propose(path: Path, exempt: dict, write: bool) -> tuple[int, list]:
     nb = json.loads(path.read_text(encoding="utf-8"))
+    for line in inline_all(nb):
+        print(f"{path.name}: {line}")
     lesson = path.name[:2]
     for les, snippet, body in DECIDED:
         if les == lesson:
@@ -722,7 +788,8 @@ def propose(path: Path, exempt: dict, write: bool) -> tuple[int, list]:
                 text = text[:pos] + "<!-- " + "; ".join(inserts[pos]) + " -->" + text[pos:]
             c["source"] = text
     if write:
-        path.write_text(nbformat.writes(nbformat.from_dict(nb)) + "\n", encoding="utf-8")
+        migrate(nb)
+        write_notebook(path, nb)
     return bound, unbound
 
 
@@ -735,12 +802,38 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("notebooks", nargs="+")
     ap.add_argument("--dry-run", action="store_true")
+    ap.add_argument("--migrate", action="store_true",
+                    help="only move the markdown's inline source markers into the cells' metadata (idempotent)")
     ap.add_argument("--exempt", default=None)
+    ap.add_argument("--markdown-from", default=None, metavar="REV",
+                    help="first give the notebooks' markdown cells (text and metadata) those of git revision REV, "
+                         "matched by cell id, keeping code cells and outputs (a merge with a re-execution)")
     ap.add_argument("--carry-from", default=None, metavar="REV",
                     help="first carry the markers of each notebook at git revision REV (after a merge took the "
                          "other side's notebook)")
     args = ap.parse_args(argv)
     exempt = json.loads(Path(args.exempt).read_text()) if args.exempt else {}
+    if args.markdown_from:
+        import subprocess
+
+        for nbp in args.notebooks:
+            rel = Path(nbp).resolve().relative_to(ROOT)
+            other = json.loads(subprocess.run(["git", "show", f"{args.markdown_from}:{rel}"], cwd=ROOT, check=True,
+                                              capture_output=True, text=True).stdout)
+            nb = json.loads(Path(nbp).read_text(encoding="utf-8"))
+            missing = take_markdown(nb, other)
+            print(f"{nbp}: markdown cells of {args.markdown_from}"
+                  + (f"; not there, left as they are: {', '.join(missing)}" if missing else ""))
+            if not args.dry_run:
+                write_notebook(Path(nbp), nb)
+        if not args.migrate:
+            return 0
+    if args.migrate:
+        for nbp in args.notebooks:
+            moved = migrate_file(Path(nbp), write=not args.dry_run)
+            print(f"{nbp}: {sum(moved.values())} markers moved into the metadata of {len(moved)} cells"
+                  + (f" ({', '.join(f'cell {i}: {n}' for i, n in moved.items())})" if moved else ""))
+        return 0
     if args.carry_from:
         import subprocess
 
@@ -749,11 +842,14 @@ def main(argv=None):
             old = json.loads(subprocess.run(["git", "show", f"{args.carry_from}:{rel}"], cwd=ROOT, check=True,
                                             capture_output=True, text=True).stdout)
             new = json.loads(Path(nbp).read_text(encoding="utf-8"))
+            inline_all(old)
+            inline_all(new)
             lost = carry(old, new)
             for line in lost:
                 print(f"{nbp}: NOT CARRIED {line}")
             if not args.dry_run:
-                Path(nbp).write_text(nbformat.writes(nbformat.from_dict(new)) + "\n", encoding="utf-8")
+                migrate(new)
+                write_notebook(Path(nbp), new)
     for nbp in args.notebooks:
         bound, unbound = propose(Path(nbp), exempt, not args.dry_run)
         print(f"== {nbp}: {bound} bound, {len(unbound)} without a source")

@@ -37,7 +37,7 @@ import re
 from .layout import (BUDGET, CHARS, CONT_PX, KEY_PRE_PX, MIN_FIGURE, MONO, PRE_PX, WIDTH, Block, Page, _BLOCK_GAP,  # noqa: F401
                      _heading, _png_size, _used, md_height, pack, pre_font, pre_height, size_figures, split_chunks,
                      split_tall_png)
-from .slides import KEY_FIGURE, PAPER_BESIDE, WIDGET_VIEW, _PROGRESS, _source, strip_source_markers, strip_test_markers
+from .slides import KEY_FIGURE, PAPER_BESIDE, WIDGET_VIEW, _PROGRESS, _source, strip_test_markers
 from .stills import load as load_still, render_png
 
 __all__ = ["SLIDE_CODE", "POINT_CELLS", "KEY_POINTS", "MIN_FIGURE", "lecture_notebook", "section_plan", "summary_slide",
@@ -458,9 +458,6 @@ def lecture_notebook(nb, lesson=None, instructor: bool = False) -> dict:
     import nbformat
 
     nb = copy.deepcopy(nb)
-    for cell in nb["cells"]:
-        if cell["cell_type"] == "markdown":  # the figures' source markers are for the tests
-            cell["source"] = strip_source_markers(_source(cell))
     first = _source(nb["cells"][0]).splitlines()[0] if nb["cells"] else "# lesson"
     number = (lesson.number if lesson else nb.get("metadata", {}).get("posekit", {}).get("lesson")) or "00"
     title = lesson.title if lesson else first.lstrip("# ").split("—", 1)[-1].strip()

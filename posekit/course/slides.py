@@ -161,10 +161,24 @@ _SOURCE_MARKER = re.compile(r"<!--\s*(?:out|data|goal|paper|definition|setting):
 
 
 def strip_source_markers(source: str) -> str:
-    """Drop the source markers after the figures of a markdown cell (``<!-- out: ... -->``, read by
-    ``tests/test_prose_numbers.py``): they are for the tests, not for the lecture, and would count as text when a
-    slide is fitted."""
+    """Drop any source marker left after a figure of a markdown cell (``<!-- out: ... -->``): a lesson keeps its
+    figures' bindings in the cells' metadata (``tests/test_prose_numbers.py`` refuses a marker in its text), so this
+    is a guard: a marker is for the tests, not for the lecture, and would count as text when a slide is fitted."""
     return _SOURCE_MARKER.sub("", source)
+
+
+def _for_readers(nb: dict) -> dict:
+    """A copy of ``nb`` whose markdown cells hold what a reader sees: no source marker, no figure bindings."""
+    nb = copy.deepcopy(nb)
+    for cell in nb["cells"]:
+        if cell["cell_type"] == "markdown":
+            cell["source"] = strip_source_markers(_source(cell))
+            own = cell.get("metadata", {}).get("posekit")
+            if isinstance(own, dict):
+                own.pop("sources", None)
+                if not own:
+                    cell["metadata"].pop("posekit")
+    return nb
 
 
 def strip_test_markers(source: str) -> str:
@@ -207,8 +221,6 @@ def _presentable(nb: dict) -> dict:
         if cell["cell_type"] == "code":
             cell["source"] = strip_test_markers(_source(cell))
             cell["outputs"] = static_outputs(cell.get("outputs", []))
-        elif cell["cell_type"] == "markdown":
-            cell["source"] = strip_source_markers(_source(cell))
     return nb
 
 
@@ -245,6 +257,7 @@ def export(nb: dict, kind: str, static: str = "../_static", back: str | None = N
         exp = HTMLExporter(template_name="posekit_lab", extra_template_basedirs=[templates], extra_template_paths=[templates])
     else:
         raise ValueError(f"kind must be 'slides' or 'page', not {kind!r}")
+    nb = _for_readers(nb)
     if kind == "slides":
         from .lecture import lecture_notebook
 

@@ -1,15 +1,20 @@
-"""Figures in prose and the sources they are bound to: the source markers of the lessons, the README and ``docs/``.
+"""Figures in prose and the sources they are bound to: the lessons' cell bindings, the README's and ``docs/``'s markers.
 
-A measured figure in prose carries, right after it, an HTML comment naming where it comes from — an output of a
-code cell of the same notebook, or a key of a results file under ``data_samples/results`` — or why it needs no
-source (a goal, a paper's figure, a definition, a setting). HTML comments are not rendered, in JupyterLab or on
-GitHub, and stay readable in the raw text. ``tests/test_prose_numbers.py`` reads every page with this module and
-compares each figure with the value its marker names; the syntax is written down once, in ``docs/testing.md``
-(*Figures in prose*) and in that test's docstring. ``posekit docs build`` (:mod:`posekit.docs.bench_page`) writes
-the markers of the pages it renders with :func:`data_marker`.
+A measured figure in prose is bound to where it comes from — an output of a code cell of the same notebook, or a
+key of a results file under ``data_samples/results`` — or to why it needs no source (a goal, a paper's figure, a
+definition, a setting). On a page (the README, ``docs/``) the binding is an HTML comment right after the figure, a
+*source marker*: not rendered on GitHub, readable in the raw text. A lesson's markdown holds words, maths and links
+only, so each markdown cell keeps its bindings in its metadata (:func:`cell_bindings`), each naming its figure by
+its text and its place among the cell's places that write it; :func:`move_markers` moves markers there, and
+:func:`inline_bindings` puts them back in the text for the marking tool. ``tests/test_prose_numbers.py`` reads every
+page and lesson with this module and compares each figure with the value its source names; the syntax is written
+down once, in ``docs/testing.md`` (*Figures in prose*) and in that test's docstring. ``posekit docs build``
+(:mod:`posekit.docs.bench_page`) writes the markers of the pages it renders with :func:`data_marker`.
 
-This module finds the figures (:func:`figures`), reads the markers (:func:`parse_markers`), resolves a source
-(:class:`Outputs`, :func:`resolve_data`) and compares (:func:`agrees`); it imports nothing of posekit.
+This module finds the figures (:func:`figures`), reads the markers (:func:`parse_markers`) and a cell's bindings
+(:func:`binding_markers`), resolves a source (:class:`Outputs`, :func:`resolve_data`) and compares
+(:func:`agrees`): :func:`check_text` for a page, :func:`check_cell` for a lesson's cell. It imports nothing of
+posekit.
 """
 
 from __future__ import annotations
@@ -22,7 +27,9 @@ from pathlib import Path
 
 __all__ = ["UNITS", "EXEMPT_KINDS", "Figure", "Marker", "Source", "SourceError", "blank_non_prose", "figures",
            "mark_figures",
-           "parse_markers", "bind", "Outputs", "resolve_data", "agrees", "data_marker", "check_text", "in_words"]
+           "parse_markers", "bind", "Outputs", "resolve_data", "agrees", "data_marker", "check_text", "in_words",
+           "BINDINGS_KEY", "BINDINGS_FIELD", "cell_bindings", "set_cell_bindings", "figure_pattern",
+           "binding_markers", "check_cell", "inline_bindings", "move_markers"]
 
 # --------------------------------------------------------------------------------------------------- units
 # unit as written -> (family, factor to the family's base unit)
@@ -76,13 +83,14 @@ _SUPER = str.maketrans("⁰¹²³⁴⁵⁶⁷⁸⁹⁻⁺", "0123456789-+")
 # scientific notation: "3 × 10⁻⁴", "3e-4", "1.2E5", "10⁻³"
 _SCI = re.compile(r"(?<![\w.$^{/-])(?:(?P<mant>\d+(?:\.\d+)?)\s?[×x·]\s?10(?P<sup>[⁻⁺]?[⁰¹²³⁴⁵⁶⁷⁸⁹]+)"
                   r"|(?P<emant>\d+(?:\.\d+)?)[eE](?P<eexp>[-+]?\d+)"
-                  r"|10(?P<only>[⁻⁺]?[⁰¹²³⁴⁵⁶⁷⁸⁹]+))(?![\w.])")
+                  r"|10(?P<only>[⁻⁺]?[⁰¹²³⁴⁵⁶⁷⁸⁹]+))(?!\w|\.\w)")
 # what a bare decimal after these is: a section or algorithm number, an arXiv id, a version, a DOI
 _NOT_A_FIGURE = re.compile(r"(?:Secs?\.|Sections?|sections?|Alg\.|Algorithm|Eqs?\.|Table|Fig\.|arXiv:|doi:\S*|"
                            r"versions?|v|ikpy|pyfabrik|numpy|torch|Python|nbval|nbgrader|SQLAlchemy|ipywidgets|"
                            r"pythreejs|JupyterLab|Voila|BY(?:-NC)?(?:-SA)?|lessons?|Lessons?)"
                            r"\s*(?:\d+(?:\.\d+)*\s*[–-]\s*)?[(]?$")
-_BARE_DECIMAL = re.compile(r"(?<![\w.$^{/-])(?P<num>\d+\.\d+)(?![\w.%°×/-])")
+# a sentence's full stop may follow ("... is 0.92."), a version's next part may not ("1.2.3")
+_BARE_DECIMAL = re.compile(r"(?<![\w.$^{/-])(?P<num>\d+\.\d+)(?![\w%°×/-]|\.\w)")
 # a bare integer of a list that ends in a figure: "FABRIK 71, DLS 56 and CCD 80 mm" -> 71 and 56
 _LIST_ITEM = re.compile(rf"(?<![\w.$^{{/–-])(?P<num>{NUM})(?P<gap>\s*(?:,|\band\b|\bor\b|/)\s*(?:(?:and|or)\s+)?"
                         r"(?:[^\W\d][\w'’+-]*\s+){0,3})$")
@@ -679,14 +687,8 @@ def _line_of(text: str, pos: int) -> int:
     return text.count("\n", 0, pos) + 1
 
 
-def check_text(text: str, *, results_dir, outputs: Outputs | None = None, allowed=(), where=""):
-    """The problems of one Markdown text: ``[(line, message)]`` — a measured figure without a source, a source
-    that does not exist, a value that is not the figure, a marker that binds nothing or starts a line (CommonMark
-    reads a line that starts with a comment as an HTML block, and the rest of the line is not rendered as
-    Markdown), a number in words. ``allowed``: figures as written this text may state without a source (the
-    reviewed allow-list); ``outputs``: the notebook's outputs (None: a page, only ``data:`` sources)."""
-    prose = blank_non_prose(text)
-    markers = parse_markers(text)
+def _check(text: str, prose: str, markers: list[Marker], *, results_dir, outputs, allowed):
+    """The problems of ``text`` once its markers are read: binding, resolving and comparing every figure."""
     pairs, errors = bind(prose, figures(prose), markers)
     problems = [(_line_of(text, mk.start), f"marker {mk.raw!r}: {msg}") for mk, msg in errors]
     problems += [(_line_of(text, mk.start), f"marker {mk.raw!r} starts a line: put it right after its figure, on "
@@ -719,3 +721,212 @@ def check_text(text: str, *, results_dir, outputs: Outputs | None = None, allowe
     problems += [(_line_of(text, text.find(w)), f"in words: '{w}' (write the digits an output shows)")
                  for w in in_words(prose)]
     return problems
+
+
+def check_text(text: str, *, results_dir, outputs: Outputs | None = None, allowed=(), where=""):
+    """The problems of one Markdown text whose figures carry inline markers (a page of ``docs/``, a README):
+    ``[(line, message)]`` — a measured figure without a source, a source that does not exist, a value that is not
+    the figure, a marker that binds nothing or starts a line (CommonMark reads a line that starts with a comment as
+    an HTML block, and the rest of the line is not rendered as Markdown), a number in words. ``allowed``: figures
+    as written this text may state without a source (the reviewed allow-list); ``outputs``: the notebook's outputs
+    (None: a page, only ``data:`` sources)."""
+    prose = blank_non_prose(text)
+    return _check(text, prose, parse_markers(text), results_dir=results_dir, outputs=outputs, allowed=allowed)
+
+
+# --------------------------------------------------------------------------------------------------- a lesson's cell
+BINDINGS_KEY, BINDINGS_FIELD = "posekit", "sources"
+"""Where a markdown cell keeps its figures' bindings: ``cell.metadata[BINDINGS_KEY][BINDINGS_FIELD]``."""
+
+
+def cell_bindings(cell: dict) -> list:
+    """The bindings a markdown cell's metadata holds (``cell.metadata["posekit"]["sources"]``), or ``[]``.
+
+    A lesson's markdown holds words, maths and links only: what binds its figures to their sources is kept in the
+    cell's metadata, one entry per bound figure, in the order of the text::
+
+        {"figure": "28–29 mm", "occurrence": 1,
+         "sources": ["out: \"Lambda pos mm\" \"0.7\" col \"pos mm\"", "out: ..."]}
+
+    ``figure`` is the figure as the text writes it (white space aside), ``occurrence`` which of the cell's places
+    writing it (1: the first), ``sources`` one source per number of the figure, each in the syntax of an inline
+    marker's body (``out: ...``, ``data: FILE PATH``, ``goal: REASON`` ...; see :func:`parse_markers`)."""
+    return list(cell.get("metadata", {}).get(BINDINGS_KEY, {}).get(BINDINGS_FIELD, []))
+
+
+def set_cell_bindings(cell: dict, entries: list) -> None:
+    """Write ``entries`` (see :func:`cell_bindings`) into the cell's metadata; none removes the key."""
+    meta = cell.setdefault("metadata", {})
+    if entries:
+        meta.setdefault(BINDINGS_KEY, {})[BINDINGS_FIELD] = entries
+        return
+    own = meta.get(BINDINGS_KEY)
+    if isinstance(own, dict):
+        own.pop(BINDINGS_FIELD, None)
+        if not own:
+            meta.pop(BINDINGS_KEY)
+
+
+def figure_pattern(figure: str) -> re.Pattern:
+    """A figure as written, as a pattern over prose: any run of white space matches any other, and a match neither
+    starts inside a number or a word nor runs on into one ("29" is not the end of "1.29" nor the start of
+    "290")."""
+    body = r"\s+".join(re.escape(w) for w in figure.split())
+    return re.compile(r"(?<![\w.,])" + body + r"(?!\w|[.,]\d)")
+
+
+def _ordinal(k: int) -> str:
+    return {1: "1st", 2: "2nd", 3: "3rd"}.get(k, f"{k}th")
+
+
+def _binding_sources(entry) -> tuple[list, str | None]:
+    """The parsed sources of one binding, and what is wrong with it (None: nothing)."""
+    if not isinstance(entry, dict) or not isinstance(entry.get("figure"), str) or not entry["figure"].strip():
+        return [], "a binding needs its figure as written ({\"figure\": \"28 mm\", \"occurrence\": 1, \"sources\": [...]})"
+    occ = entry.get("occurrence", 1)
+    if not isinstance(occ, int) or isinstance(occ, bool) or occ < 1:
+        return [], f"occurrence must be a whole number from 1, not {occ!r}"
+    srcs = entry.get("sources")
+    if not isinstance(srcs, list) or not srcs or not all(isinstance(s, str) for s in srcs):
+        return [], "sources must be a list of one or more texts ('out: ...', 'data: FILE PATH', 'goal: REASON')"
+    out = []
+    try:
+        for s in srcs:
+            m = re.match(r"\s*(out|data|goal|paper|definition|setting)\s*:(.*)$", s, re.S)
+            if not m:
+                raise SourceError(f"'{s.strip()}' does not start with out:, data:, goal:, paper:, definition: or "
+                                  "setting:")
+            out.append(_parse_source(m.group(1), m.group(2)))
+    except SourceError as e:
+        return [], str(e)
+    return out, None
+
+
+def binding_markers(prose: str, entries: list) -> tuple[list[Marker], list[tuple[int, str]]]:
+    """The bindings of a cell (see :func:`cell_bindings`) as markers placed right after their figures in ``prose``
+    (already :func:`blank_non_prose`'d), so that :func:`bind` reads them as it reads inline markers.
+
+    Returns ``(markers, stale)``: ``stale`` lists ``(position, message)`` for bindings whose figure the text no
+    longer writes (or writes fewer times than their occurrence) and for two bindings of one place."""
+    markers, stale, seen = [], [], {}
+    for entry in entries:
+        fig = entry.get("figure") if isinstance(entry, dict) else None
+        occ = entry.get("occurrence", 1) if isinstance(entry, dict) else 1
+        raw = f"binding of {fig!r}" + (f" ({_ordinal(occ)} place)" if occ != 1 else "")
+        sources, err = _binding_sources(entry)
+        if err:
+            markers.append(Marker(0, 0, raw, [], False, err))
+            continue
+        hits = list(figure_pattern(fig).finditer(prose))
+        if len(hits) < occ:
+            stale.append((0, f"{raw} is stale: the cell writes {fig!r} {len(hits)} time"
+                             f"{'' if len(hits) == 1 else 's'}, the binding names its {_ordinal(occ)} place "
+                             "(edit the figure or the binding in the cell's metadata, or remove the binding)"))
+            continue
+        q = hits[occ - 1].end()
+        if q in seen:
+            stale.append((q, f"{raw} binds the same place as {seen[q]}: keep one"))
+            continue
+        seen[q] = raw
+        markers.append(Marker(q, q, raw, sources, False))
+    return sorted(markers, key=lambda mk: mk.start), stale
+
+
+def check_cell(text: str, entries: list, *, results_dir, outputs: Outputs | None = None, allowed=()):
+    """The problems of one markdown cell of a lesson whose figures are bound in its metadata (``entries``, see
+    :func:`cell_bindings`): ``[(line, message)]`` — those of :func:`check_text`, a stale binding (its figure is no
+    longer in the text), and any inline source marker (a lesson's markdown holds none: they live in the metadata,
+    ``tools/mark_prose_sources.py --migrate`` moves them there)."""
+    prose = blank_non_prose(text)
+    problems = [(_line_of(text, mk.start), f"inline source marker {mk.raw!r}: a lesson keeps its bindings in the "
+                 "cell's metadata (python tools/mark_prose_sources.py --migrate NOTEBOOK moves it there)")
+                for mk in parse_markers(text)]
+    markers, stale = binding_markers(prose, entries)
+    problems += [(_line_of(text, at), msg) for at, msg in stale]
+    problems += _check(text, prose, markers, results_dir=results_dir, outputs=outputs, allowed=allowed)
+    return problems
+
+
+def inline_bindings(text: str, entries: list) -> tuple[str, list]:
+    """``text`` with each binding of ``entries`` written back as an inline marker after its figure (the form the
+    marking tool and :func:`move_markers` read); returns ``(text, the bindings it could not place)``."""
+    prose = blank_non_prose(text)
+    placed, left = [], []
+    for entry in entries:
+        _, err = _binding_sources(entry)
+        hits = [] if err else list(figure_pattern(entry["figure"]).finditer(prose))
+        occ = entry.get("occurrence", 1) if not err else 1
+        if err or len(hits) < occ:
+            left.append(entry)
+            continue
+        placed.append((hits[occ - 1].end(), "<!-- " + "; ".join(s.strip() for s in entry["sources"]) + " -->"))
+    for at, marker in sorted(placed, key=lambda t: t[0], reverse=True):
+        text = text[:at] + marker + text[at:]
+    return text, left
+
+
+def move_markers(text: str, entries: list = ()) -> tuple[str, list]:
+    """Move the inline source markers of a markdown cell into bindings (see :func:`cell_bindings`).
+
+    Parameters
+    ----------
+    text : str
+        The cell's source, with inline markers (``28–29 mm<!-- out: ...; out: ... -->``).
+    entries : list
+        The bindings the cell's metadata holds already; they are merged with the markers.
+
+    Returns
+    -------
+    text, entries : str, list
+        The source without its markers, and every binding in the order of the text. Idempotent: a text without
+        markers comes back unchanged, with ``entries`` unchanged.
+
+    Raises
+    ------
+    SourceError
+        When a marker's figure could not be told apart by its text and place (nothing is moved then).
+    """
+    entries = list(entries)
+    if not parse_markers(text):
+        return text, entries
+    text, stale = inline_bindings(text, entries)
+    markers = parse_markers(text)
+    plain, pos, shift = [], [], 0
+    last = 0
+    for mk in markers:
+        plain.append(text[last:mk.start])
+        shift += mk.start - last
+        pos.append(shift)             # the marker's place in the text without markers
+        last = mk.end
+    plain.append(text[last:])
+    plain = "".join(plain)
+    prose = blank_non_prose(plain)
+    figs = figures(prose)
+    placed = []
+    for mk, at in zip(markers, pos):
+        q = at
+        while q > 0 and prose[q - 1] in " \u00a0":
+            q -= 1
+        placed.append(Marker(q, q, mk.raw, mk.sources, False, mk.error))
+    pairs, _ = bind(prose, figs, placed)
+    first = {}
+    for fig, _, mk in pairs:
+        if mk is not None:
+            first[id(mk)] = min(first.get(id(mk), fig.start), fig.start)
+    out = []
+    for mk, orig in zip(placed, markers):
+        start = first.get(id(mk))
+        if start is None:             # binds no figure: keep its last word, for the guard to report
+            m = re.search(r"\S+$", prose[:mk.start])
+            start = m.start() if m else mk.start
+        figure = " ".join(prose[start:mk.start].split())
+        try:
+            sources = [f"{k}: {b.strip()}" for k, b in _split_sources(orig.raw[4:-3])]
+        except SourceError:
+            sources = [orig.raw[4:-3].strip()]
+        ends = [h.end() for h in figure_pattern(figure).finditer(prose)] if figure else []
+        if mk.start not in ends:
+            raise SourceError(f"the marker {orig.raw!r} follows {figure!r}, which its text cannot place")
+        out.append((mk.start, {"figure": figure, "occurrence": ends.index(mk.start) + 1, "sources": sources}))
+    out.sort(key=lambda t: t[0])
+    return plain, [e for _, e in out] + stale
