@@ -316,7 +316,7 @@ def _drag_without_parallel_test(c, q, p0, n):
     d = q - c
     with np.errstate(divide="ignore", invalid="ignore"):
         t = ((p0 - c) @ n) / (d @ n)
-    return c + t * d if t > 0 else None
+        return c + t * d if t > 0 else None
 
 
 def _drag_t_at_zero(c, q, p0, n):
