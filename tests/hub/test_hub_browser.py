@@ -192,7 +192,8 @@ def test_a_students_kernel_sees_no_other_student_nor_the_hub_nor_the_solutions(h
     page.wait_for_selector("#jp-main-statusbar :text('Idle')", timeout=120_000)
     out = page.locator(".jp-OutputArea-output", has_text="PROBE ")
     for _ in range(8):  # a key press can arrive before the kernel is connected: press again until it runs
-        page.locator(".jp-Notebook:visible .jp-Cell .jp-InputArea-editor").first.click()
+        # the probe's own cell (lesson 01's tab, restored behind it, holds editors too)
+        page.locator(".jp-Cell .jp-InputArea-editor", has_text="PROBE ").first.click()
         page.keyboard.press("Control+Enter")
         try:
             out.first.wait_for(timeout=15_000)
