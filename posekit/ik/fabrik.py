@@ -7,16 +7,18 @@ Units and axes: :mod:`posekit.conventions` (metres, Y up, facing +Z).
   :mod:`posekit.ik.single_chain` (:func:`~posekit.ik.single_chain.fabrik_chain`,
   :func:`~posekit.ik.single_chain.straighten_chain`);
 * :class:`FabrikSolver` — the whole body with several end effectors (Sec. 4.2 of the paper): the
-  backward pass runs from every effector towards the base; a *sub-base* (a joint where chains
-  meet, e.g. the chest) goes to the centroid of the positions its chains propose; the forward pass
-  then runs from the fixed base (the pelvis) outwards. Between the two passes, chains whose target
+  forward-reaching stage runs from every effector towards the base; a *sub-base* (a joint where chains
+  meet, e.g. the chest) goes to the centroid of the positions its chains propose; the
+  backward-reaching stage then runs from the fixed base (the pelvis) outwards (the stages named as in Algorithm 1:
+  *forward* reaching starts at the end effectors). Between the two stages, chains whose target
   is close to their full reach — FABRIK's slow regime, a head on a straight spine — are
   straightened just enough to reach it (:func:`~posekit.ik.single_chain.straighten_chain`, the paper's unreachable-target
   case generalised). Optional joint constraints (Sec. 5): cone limits on a bone's angle to its
   parent bone (shoulders, hips, elbows, knees) and a hinge rule that knees do not bend forward. The
   kernel (:mod:`posekit.ik.fabrik_kernel`) is compiled with numba.
-* the backward pass alone, which restores bone lengths of predicted positions (the post-processing
-  of Victor et al. 2021, Sec. 3.4): :func:`posekit.ik.fix_bones.fix_bone_lengths`.
+* forward reaching from the leaves, then backward reaching, which restore bone lengths of predicted positions
+  (posekit's reading of the post-processing of Victor et al. 2021, Sec. 3.4; the authors' code walks from the root
+  only, ``keep="root"``): :func:`posekit.ik.fix_bones.fix_bone_lengths`.
 
 FABRIK moves positions only: it honours position effectors (``kinds = ("position",)``) and returns a
 :class:`~posekit.records.Pose` without rotations. Zero-length bones (CMU's ``LHipJoint``, ``LowerBack``,
@@ -84,15 +86,15 @@ class FabrikSolver(SolverBase):
 
     One iteration (kernel: :func:`posekit.ik.fabrik_kernel._fabrik_tree`):
 
-    1. **backward** (Sec. 4.2 of Aristidou & Lasenby 2011): every effector goes onto its target,
+    1. **forward reaching** (Sec. 4.2 of Aristidou & Lasenby 2011): every effector goes onto its target,
        every other joint on an effector's path to the line towards its moved child, at its bone
        length; a sub-base where several chains meet goes to the plain centroid of their proposals;
     2. **near-extended chains** (posekit's addition, :func:`straighten_chain`): each effector's chain
-       (from the nearest fixed joint or effector above it) is placed as the forward pass would place
+       (from the nearest fixed joint or effector above it) is placed as backward reaching would place
        it; where its target lies at >= 90 % of its reach it is straightened just enough and turned
        onto the target — Algorithm 1's unreachable-target case, generalised;
-    3. **forward**: from the fixed base outwards every joint goes to the line towards its backward
-       position, at its bone length, within the joint limits of Sec. 5 if any; joints on no
+    3. **backward reaching**: from the fixed base outwards every joint goes to the line towards its
+       forward-reaching position, at its bone length, within the joint limits of Sec. 5 if any; joints on no
        effector's path follow their parent.
 
     Why step 2: a spine is nearly straight, so a head target sits at 97–99.5 % of the pelvis->head

@@ -1,8 +1,8 @@
 """Batched full-body FABRIK: many independent problems at once, for benchmarks and data generation.
 
 Introduced in ``notebooks/01_fabrik.ipynb``. Same algorithm and numbers as
-:class:`posekit.ik.fabrik.FabrikSolver` without joint constraints — backward pass, near-extended
-chains straightened (:func:`posekit.ik.single_chain.straighten_chain`), forward pass — laid out joint x
+:class:`posekit.ik.fabrik.FabrikSolver` without joint constraints — forward reaching, near-extended
+chains straightened (:func:`posekit.ik.single_chain.straighten_chain`), backward reaching — laid out joint x
 xyz x batch ``(J, 3, B)`` so every step is one vectorised numpy operation over the problems still
 unsolved; converged problems leave the working set after each iteration. The arithmetic follows the
 compiled kernel (:mod:`posekit.ik.fabrik_kernel`) operation by operation, so both agree to rounding.
@@ -225,7 +225,7 @@ def _solve(parents, fixed, eff, start_pos, targets, lengths, tol, max_iter):
             if not keep.any():
                 break
             pos, tgt, lengths, tol, work = pos[:, :, keep], tgt[:, :, keep], lengths[:, keep], tol[:, keep], work[keep]
-        # backward: effectors on their targets, sub-bases at the centroid of their proposals
+        # forward reaching: effectors on their targets, sub-bases at the centroid of their proposals
         back = pos.copy()
         for j in range(J - 1, -1, -1):
             if fixed[j] or not active[j]:

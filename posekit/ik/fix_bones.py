@@ -70,10 +70,11 @@ def fix_bone_lengths(skeleton: Skeleton, global_pos, lengths=None, keep: str = "
     lengths : ndarray, shape (J,), optional
         Wanted bone lengths; default ``skeleton.bone_lengths()``.
     keep : {"leaves", "root"}
-        ``"leaves"``: the backward pass of FABRIK — leaves stay where they are and every parent is
+        ``"leaves"``: FABRIK's forward reaching — leaves stay where they are and every parent is
         placed at the right distance from its children (at the centroid where several children
-        meet), so the hands and feet keep their positions; then one forward pass from the root
-        (now moved) makes every bone exact. ``"root"``: only the forward pass from the root.
+        meet), so the hands and feet keep their positions; then one backward-reaching stage from the
+        root (now moved) makes every bone exact (posekit's choice). ``"root"``: only the walk from the
+        root outwards, as the authors' code of Victor et al. 2021 (``fix_lengths``) does.
 
     Returns
     -------

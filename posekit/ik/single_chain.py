@@ -4,8 +4,8 @@ step that posekit adds.
 Introduced in ``notebooks/01_fabrik.ipynb`` (section 2), where the chain is derived step by step and
 the step's effect is measured. Units and axes: :mod:`posekit.conventions` (metres).
 
-* :func:`fabrik_chain` — the backward pass puts the end on the target and walks to the base keeping
-  bone lengths, the forward pass puts the base back and walks out again. An unreachable target
+* :func:`fabrik_chain` — forward reaching (stage 1 of Algorithm 1) puts the end on the target and walks
+  to the base keeping bone lengths, backward reaching (stage 2) puts the base back and walks out again. An unreachable target
   stretches the chain straight at it.
 * :func:`straighten_chain` — targets *near* full reach, FABRIK's slow regime, in one step (the
   paper's unreachable-target case generalised); the full-body solver
@@ -69,11 +69,11 @@ def fabrik_chain(positions, target, tolerance: float = 1e-3, max_iter: int = 20,
         return out + (history,) if return_history else out
     it = 0
     while np.linalg.norm(p[-1] - t) > tolerance and it < max_iter:
-        p[-1] = t  # backward: end on the target, walk to the base
+        p[-1] = t  # forward reaching: end on the target, walk to the base
         for i in range(len(d) - 1, -1, -1):
             u = p[i] - p[i + 1]
             p[i] = p[i + 1] + d[i] * u / np.linalg.norm(u)
-        p[0] = base  # forward: base back in place, walk to the end
+        p[0] = base  # backward reaching: base back in place, walk to the end
         for i in range(len(d)):
             u = p[i + 1] - p[i]
             p[i + 1] = p[i] + d[i] * u / np.linalg.norm(u)

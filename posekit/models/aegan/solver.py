@@ -10,7 +10,7 @@ Introduced in ``notebooks/04_aegan_latent_space.ipynb``; registered as ``"latent
 3. Eq. (6) from ``z_0`` (:mod:`posekit.models.aegan.latent_opt`, Adam or L-BFGS, the stopping rule there);
 4. ``x' = G(z*)`` back to the world;
 5. ``post="bones"`` (default): the effectors set on their targets and every bone given its length
-   back by the FABRIK backward-forward pass (:func:`posekit.ik.fix_bone_lengths`, as in lesson 03);
+   back by FABRIK's forward- and backward-reaching stages (:func:`posekit.ik.fix_bone_lengths`, as in lesson 03);
    ``post="none"``: the generator's pose as it is.
 
 Registered names: ``latent-opt`` (L-BFGS, bones), ``latent-opt-raw`` (L-BFGS, no post-processing),

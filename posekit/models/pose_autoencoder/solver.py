@@ -14,8 +14,8 @@ One solve
 3. ``z' = S_t(z, p_t)`` for the solver trained on exactly these joints (``"all"`` for hands, feet and
    head), or the chain of Sec. 3.5 (``chain=True``: hands -> feet -> head, the chaining-aware copies);
 4. ``x' = D(z')`` back to the world;
-5. post-processing (Sec. 3.4) ``post="bones"``: the FABRIK backward pass — effectors set on their
-   targets, every parent re-placed at bone length from its children, then one forward pass
+5. post-processing (Sec. 3.4) ``post="bones"``: FABRIK's forward reaching — effectors set on their
+   targets, every parent re-placed at bone length from its children, then one backward-reaching stage
    (:func:`posekit.ik.fix_bone_lengths`), so every bone has its length again. ``post="none"`` returns
    the network's pose; ``post="fabrik"`` continues with full FABRIK iterations from that pose (the
    learned pose as FABRIK's start: effectors met to FABRIK's tolerance).
