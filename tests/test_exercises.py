@@ -267,20 +267,9 @@ def _solutions(number):
 
 
 def _no_out_of_reach_branch(p, t, tol, it):
-    """Planted FABRIK without the out-of-reach branch: only many iterations get it near a stretched chain."""
-    p = np.array(p, float)[::-1].copy()
-    d = np.linalg.norm(np.diff(p, axis=0), axis=1)
-    base = p[0].copy()
-    for _ in range(it):
-        if np.linalg.norm(p[-1] - t) <= tol:
-            break
-        p[-1] = t
-        for i in range(len(d) - 1, -1, -1):
-            p[i] = p[i + 1] + d[i] * (p[i] - p[i + 1]) / np.linalg.norm(p[i] - p[i + 1])
-        p[0] = base
-        for i in range(len(d)):
-            p[i + 1] = p[i] + d[i] * (p[i + 1] - p[i]) / np.linalg.norm(p[i + 1] - p[i])
-    return p[::-1].copy()
+    """Planted FABRIK without the out-of-reach branch (section 2's loop, read from the planted end): only many
+    iterations get it near a stretched chain."""
+    return _fabrik_by_hand(np.asarray(p)[::-1], t, tol, it)[::-1]
 
 
 def _tolerance_after_the_pass(p, t, tol, it):

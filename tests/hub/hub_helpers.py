@@ -183,3 +183,17 @@ def run_code(hub: Hub, user: str, code: str, timeout_s: float = 120.0, kernel: s
                 return "".join(out)
 
     return kernel, asyncio.run(go())
+
+
+def release(exchange: Path, course_folder: Path, course_id: str, assignment: str) -> None:
+    """The instructor's side, as docs/nbgrader.md has it: a course folder with one lesson (``assignment``),
+    generated and released to ``exchange``."""
+    from posekit.course.nbgrader import scripts_on_path
+
+    scripts_on_path()  # nbgrader's grade book runs alembic by name
+    subprocess.run([sys.executable, "-m", "posekit", "course", "nbgrader", "--out", str(course_folder), "--lesson",
+                    assignment[:2]], check=True, capture_output=True, text=True, cwd=ROOT)
+    for step in (["generate_assignment", assignment], ["release_assignment", assignment]):
+        subprocess.run([sys.executable, "-m", "nbgrader", *step, f"--Exchange.root={exchange}",
+                        f"--CourseDirectory.course_id={course_id}"], cwd=course_folder, check=True,
+                       capture_output=True, text=True)

@@ -15,11 +15,12 @@ import subprocess
 import sys
 import textwrap
 import time
+import uuid
 from pathlib import Path
 
 import pytest
 
-from tests.hub.hub_helpers import ROOT, run_code, running_hub, start_server
+from tests.hub.hub_helpers import ROOT, release, run_code, running_hub, start_server
 
 pytestmark = pytest.mark.skipif(os.geteuid() != 0, reason="keeping students apart needs the hub to run as root")
 
@@ -100,23 +101,24 @@ def test_a_student_cannot_read_another_students_kernel_output(hub):
 
 
 def test_shared_places_and_abstract_sockets_are_private(hub):
+    planted = f"alice-planted-{uuid.uuid4().hex[:8]}"  # this run's own name: nothing an earlier run left counts
     _in(hub, "alice", """
         import os, socket, threading
         for place in ("/dev/shm", "/var/tmp", "/tmp"):
-            with open(os.path.join(place, "alice-planted"), "w") as f:
+            with open(os.path.join(place, "PLANTED"), "w") as f:
                 f.write("alice")
-            os.chmod(os.path.join(place, "alice-planted"), 0o666)
+            os.chmod(os.path.join(place, "PLANTED"), 0o666)
         srv = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
         srv.bind("\\0posekit-alice-demo")
         srv.listen()
         threading.Thread(target=lambda: srv.accept()[0].sendall(b"alice's socket"), daemon=True).start()
         print("planted")
-        """)
+        """.replace("PLANTED", planted))
     out = _in(hub, "bob", """
         import os, socket
         seen = {}
         for place in ("/dev/shm", "/var/tmp", "/tmp"):
-            seen[place] = os.path.exists(os.path.join(place, "alice-planted"))
+            seen[place] = os.path.exists(os.path.join(place, "PLANTED"))
         s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
         try:
             s.connect("\\0posekit-alice-demo")
@@ -124,11 +126,11 @@ def test_shared_places_and_abstract_sockets_are_private(hub):
         except OSError as e:
             seen["abstract"] = "refused"
         print("SEEN", seen)
-        """)
+        """.replace("PLANTED", planted))
     assert "SEEN" in out, out
     assert "True" not in out and "'abstract': 'refused'" in out, out
     for place in ("/dev/shm", "/var/tmp"):
-        assert not Path(place, "alice-planted").exists(), f"alice's file reached the machine's {place}"
+        assert not Path(place, planted).exists(), f"alice's file reached the machine's {place}"
 
 
 def test_a_student_runs_with_limits_and_no_privilege(hub):
@@ -173,24 +175,22 @@ def test_the_hubs_state_is_the_hubs_alone(hub):
     assert "READ" not in out and out.count("refused") == 2, out
 
 
-def _instructor_releases(hub, course):
-    from posekit.course.nbgrader import scripts_on_path
-
-    scripts_on_path()
-    run = dict(cwd=course, check=True, capture_output=True, text=True)
-    subprocess.run([sys.executable, "-m", "posekit", "course", "nbgrader", "--out", str(course), "--lesson", "00"],
-                   check=True, capture_output=True, text=True, cwd=ROOT)
-    for step in (["generate_assignment", ASSIGNMENT], ["release_assignment", ASSIGNMENT]):
-        subprocess.run([sys.executable, "-m", "nbgrader", *step, f"--Exchange.root={hub.exchange}",
-                        f"--CourseDirectory.course_id={COURSE}"], **run)
-
-
-NBGRADER = f"""
-import subprocess, sys
+def _fetch_edit_submit(mark: str, *submits) -> str:
+    """A student's cell: fetch the assignment, put ``mark`` in its first answer, submit it once per ``submits``
+    (each a tuple of extra arguments to ``nbgrader submit``)."""
+    return f"""
+import os, subprocess, sys
 def nbgrader(*args):
     done = subprocess.run([sys.executable, "-m", "nbgrader", *args], capture_output=True, text=True)
     print(done.returncode, done.stdout[-1500:], done.stderr[-1500:])
-"""
+os.chdir(os.path.expanduser("~"))
+nbgrader("fetch_assignment", {ASSIGNMENT!r})
+path = os.path.join({ASSIGNMENT!r}, {ASSIGNMENT!r} + ".ipynb")
+with open(path) as f:
+    text = f.read()
+with open(path, "w") as f:
+    f.write(text.replace("YOUR CODE HERE", {mark!r}, 1))
+""" + "".join(f"nbgrader('submit', {ASSIGNMENT!r}, *{list(extra)!r})\n" for extra in submits)
 
 
 def test_a_student_cannot_take_over_the_exchange_nor_submit_as_another(hub, tmp_path):
@@ -214,36 +214,15 @@ def test_a_student_cannot_take_over_the_exchange_nor_submit_as_another(hub, tmp_
     assert "DID" not in out, out
     assert course_folder.stat().st_uid == os.geteuid() and (course_folder / "outbound").is_dir()
     # 2. the instructor releases; bob fetches the real assignment and submits it
-    _instructor_releases(hub, tmp_path / "course")
-    out = _in(hub, "bob", NBGRADER + f"""
-import os
-os.chdir(os.path.expanduser("~"))
-nbgrader("fetch_assignment", {ASSIGNMENT!r})
-path = os.path.join({ASSIGNMENT!r}, {ASSIGNMENT!r} + ".ipynb")
-with open(path) as f:
-    text = f.read()
-with open(path, "w") as f:
-    f.write(text.replace("YOUR CODE HERE", "bob's own work", 1))
-nbgrader("submit", {ASSIGNMENT!r})
-""", timeout_s=300)
+    release(hub.exchange, tmp_path / "course", COURSE, ASSIGNMENT)
+    out = _in(hub, "bob", _fetch_edit_submit("bob's own work", ()), timeout_s=300)
     assert "bob's own work" in (hub.home("bob") / ASSIGNMENT / f"{ASSIGNMENT}.ipynb").read_text(), out
     released = (tmp_path / "course" / "release" / ASSIGNMENT / f"{ASSIGNMENT}.ipynb").read_text()
     assert released.replace("YOUR CODE HERE", "bob's own work", 1) == \
         (hub.home("bob") / ASSIGNMENT / f"{ASSIGNMENT}.ipynb").read_text()
     time.sleep(1.1)  # a later timestamp for the forgery: nbgrader's collect would take it
     # 3. alice submits a forged notebook in bob's name
-    out = _in(hub, "alice", NBGRADER + f"""
-import os
-os.chdir(os.path.expanduser("~"))
-nbgrader("fetch_assignment", {ASSIGNMENT!r})
-path = os.path.join({ASSIGNMENT!r}, {ASSIGNMENT!r} + ".ipynb")
-with open(path) as f:
-    text = f.read()
-with open(path, "w") as f:
-    f.write(text.replace("YOUR CODE HERE", "FORGED by alice", 1))
-nbgrader("submit", {ASSIGNMENT!r}, "--student=bob")
-nbgrader("submit", {ASSIGNMENT!r})
-""", timeout_s=300)
+    out = _in(hub, "alice", _fetch_edit_submit("FORGED by alice", ("--student=bob",), ()), timeout_s=300)
     inbound = sorted(p.name for p in (course_folder / "inbound").iterdir())
     assert [n.split("+")[0] for n in inbound].count("bob") == 2, inbound  # bob's and the forgery
     assert any(n.startswith("alice+") for n in inbound), inbound  # her own, under her hub name

@@ -24,7 +24,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.hub.hub_helpers import PASSWORD, ROOT, running_hub
+from tests.hub.hub_helpers import PASSWORD, ROOT, release, running_hub
 from tests.viz.browser_helpers import wait_for
 from tests.viz.test_browser import (_RUNNING, CHROMIUM, FLAGS, PANEL_CELLS, PANEL_NOTEBOOK, _drag, _lab_page,
                                     _trimmed, _wait_visible)
@@ -215,17 +215,7 @@ def test_a_students_kernel_sees_no_other_student_nor_the_hub_nor_the_solutions(h
 
 
 def test_the_assignments_panel_lists_what_the_instructor_released(hub, tmp_path):
-    from posekit.course.nbgrader import scripts_on_path
-
-    scripts_on_path()  # nbgrader's grade book runs alembic by name
-    # the instructor's side, as docs/nbgrader.md has it: a course folder, one assignment generated and released
-    course = tmp_path / "course"
-    run = dict(cwd=course, check=True, capture_output=True, text=True)
-    subprocess.run([sys.executable, "-m", "posekit", "course", "nbgrader", "--out", str(course), "--lesson", "00"],
-                   check=True, capture_output=True, text=True, cwd=ROOT)
-    for step in (["generate_assignment", ASSIGNMENT], ["release_assignment", ASSIGNMENT]):
-        subprocess.run([sys.executable, "-m", "nbgrader", *step, f"--Exchange.root={hub.exchange}",
-                        f"--CourseDirectory.course_id={COURSE}"], **run)
+    release(hub.exchange, tmp_path / "course", COURSE, ASSIGNMENT)
     page = hub.pages["alice"]
     listed = page.request.get(f"{hub.url}/user/alice/assignments?course_id={COURSE}")
     assert listed.status == 200, listed.text()[:500]
