@@ -373,11 +373,16 @@ def plot_strip(skeleton: Skeleton, poses, titles=None, elev: float = 12, azim: f
     else:
         half = max(h for _, h in frames)
         frames = [(c, half) for c, _ in frames]
-    fig = plt.figure(figsize=(size * len(poses), size + 0.4))
+    # room above the panels for titles of several lines, so that the key above the figure covers none of them
+    lines = max((str(t).count("\n") + 1 for t in titles), default=0) if titles is not None else 0
+    line_in = 0.18  # one line of a 9-point title, inches
+    height = size + 0.4 + line_in * lines
+    fig = plt.figure(figsize=(size * len(poses), height))
     for k, p in enumerate(poses):
         ax = fig.add_subplot(1, len(poses), k + 1, projection="3d")
-        plot_pose(skeleton, p, ax=ax, title=None if titles is None else titles[k], elev=elev, azim=azim,
-                  frame=frames[k])
+        plot_pose(skeleton, p, ax=ax, elev=elev, azim=azim, frame=frames[k])
+        if titles is not None:
+            ax.set_title(titles[k], fontsize=9)
         ax.set_xticklabels([])  # a strip shows shapes: numbers and axis names on every small panel only crowd it
         ax.set_yticklabels([])
         ax.set_zticklabels([])
@@ -386,7 +391,7 @@ def plot_strip(skeleton: Skeleton, poses, titles=None, elev: float = 12, azim: f
         ax.set_zlabel("")
         _scale_bar(ax, scale_m)
     # tight_layout cannot measure 3D axes; fixed margins keep every panel whole
-    fig.subplots_adjust(left=0.0, right=1.0, bottom=0.08, top=0.92, wspace=0.02)
+    fig.subplots_adjust(left=0.0, right=1.0, bottom=0.08, top=1.0 - (line_in * lines + 0.05) / height, wspace=0.02)
     framing = "one frame for every panel" if frame == "shared" else "one scale in every panel, each centred on its pose"
     fig.text(0.5, 0.01, f"seen from the {view_side(azim)} of a character facing +z; {framing} (y up); "
              f"black bar: {scale_m:g} m", ha="center", fontsize=8, color="0.35")
