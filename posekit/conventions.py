@@ -27,6 +27,10 @@ Axes and units
 * Right-handed world, **Y up**, the character **faces +Z** in its root frame, so its left
   is +X and its right is -X. The floor is the plane y = 0.
 * Mirroring reflects across the YZ plane (x -> -x) and swaps left and right joints.
+* Figures keep this handedness: matplotlib's 3D axes are Z up, so :mod:`posekit.viz.plot` draws world
+  ``(x, y, z)`` at matplotlib's ``(z, x, y)``, a rotation (never an axis swap, which would mirror every figure).
+  A camera's azimuth there is its angle from the character's front (+Z) towards its left (+X): 0 front, 90 left,
+  180 behind. Seen from the front, a character's left hand is on the image's right.
 
 Rotations
 ---------

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Skeleton", "ROLES", "roles_hint", "joint_set_difference"]
+__all__ = ["Skeleton", "ROLES", "roles_hint", "joint_set_difference", "joint_sides"]
 
 ROLES = (
     "pelvis", "chest", "neck", "head",
@@ -39,6 +39,31 @@ def roles_hint(missing) -> str:
     more = ", ..." if len(missing) > 3 else ""
     return (f"pass roles={{{example}{more}}} to read_bvh / load_bvh_files / open_dataset, or use "
             "skeleton.with_roles({...})")
+
+
+def joint_sides(names) -> np.ndarray:
+    """Which side of the body each named joint is on: +1 left, -1 right, 0 central, shape (J,).
+
+    The side markers are the ones mirroring swaps (:meth:`Skeleton.mirror_indices`): ``"left_hip"``,
+    ``"Hand_L"``, ``"LeftArm"`` are left; a name without one is central. A character's left is +X in its
+    root frame (:mod:`posekit.conventions`).
+
+    Parameters
+    ----------
+    names : sequence of str, length J
+        Joint names (a recorded still carries them without the rest of its skeleton).
+
+    Returns
+    -------
+    ndarray of int, shape (J,)
+    """
+    out = np.zeros(len(names), dtype=int)
+    for j, n in enumerate(names):
+        for pattern, other in _SIDE_SWAPS:
+            if pattern.search(str(n)):
+                out[j] = 1 if other.strip("_").upper().startswith("R") else -1
+                break
+    return out
 
 
 def _swap_side(name: str) -> str:
@@ -204,14 +229,9 @@ class Skeleton:
 
     def sides(self) -> np.ndarray:
         """Which side of the body each joint is on, from its name: +1 left, -1 right, 0 central, shape (J,)
-        (``"left_hip"``, ``"Hand_L"``, ``"LeftArm"`` are left; a name without a side marker is central)."""
-        out = np.zeros(self.n_joints, dtype=int)
-        for j, n in enumerate(self.names):
-            for pattern, other in _SIDE_SWAPS:
-                if pattern.search(n):
-                    out[j] = 1 if other.strip("_").upper().startswith("R") else -1
-                    break
-        return out
+        (``"left_hip"``, ``"Hand_L"``, ``"LeftArm"`` are left; a name without a side marker is central).
+        :func:`joint_sides` of :attr:`names`."""
+        return joint_sides(self.names)
 
     def is_symmetric(self, atol: float = 1e-4) -> bool:
         """True when mirrored rest offsets (x -> -x, sides swapped) equal the offsets within ``atol`` metres."""

@@ -176,7 +176,8 @@ def load(number: str, nb, view: int) -> tuple[dict | None, str]:
 
 
 def render_png(still: dict, height_in: float = 4.2) -> str:
-    """Draw a still's views side by side (one 3D axes each, targets as red crosses); base64 PNG."""
+    """Draw a still's views side by side (one 3D axes each, bones coloured by side, targets as red crosses, from
+    :func:`posekit.viz.plot.plot_pose`'s front-left camera); base64 PNG."""
     import matplotlib
 
     matplotlib.use("Agg", force=False)
@@ -186,7 +187,9 @@ def render_png(still: dict, height_in: float = 4.2) -> str:
 
     views = still["views"][:4]
     parents = np.asarray(still["parents"])
-    skeleton = SimpleNamespace(parents=parents, n_joints=len(parents))
+    names = still.get("names")  # the side colours read them (posekit.viz.plot); a still without them: one colour
+    skeleton = SimpleNamespace(parents=parents, n_joints=len(parents),
+                               names=names if names is not None and len(names) == len(parents) else None)
     fig = Figure(figsize=(height_in * len(views), height_in), dpi=100)
     for k, v in enumerate(views):
         ax = fig.add_subplot(1, len(views), k + 1, projection="3d")
@@ -195,7 +198,7 @@ def render_png(still: dict, height_in: float = 4.2) -> str:
                   body=still.get("body") or None)  # a helper root is no bone (stills recorded before: every joint)
     fig.tight_layout()
     buf = io.BytesIO()
-    fig.savefig(buf, format="png")
+    fig.savefig(buf, format="png", bbox_inches="tight")  # the side key stands above the panels
     return base64.b64encode(buf.getvalue()).decode()
 
 
