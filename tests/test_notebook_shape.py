@@ -7,6 +7,17 @@ from pathlib import Path
 import pytest
 
 NOTEBOOKS = sorted(p for p in (Path(__file__).resolve().parent.parent / "notebooks").glob("[0-9][0-9]_*.ipynb"))
+FURTHER = sorted(p for p in (Path(__file__).resolve().parent.parent / "notebooks").glob("[0-9][0-9]x_*.ipynb"))
+"""Going-further notebooks: a lesson's studies, beside it (``05x_protores_studies.ipynb`` beside lesson 05)."""
+CORE_WORDS, CORE_CODE_CELLS = 3000, 25
+"""A core lesson is one sitting or two: at most this many words of markdown and code cells."""
+
+
+def _words(nb) -> int:
+    import re
+
+    text = " ".join("".join(c["source"]) for c in nb["cells"] if c["cell_type"] == "markdown")
+    return len(re.sub(r"<!--.*?-->", "", text, flags=re.S).split())
 
 
 def test_lessons_exist():
@@ -26,7 +37,39 @@ def test_lesson_shape(path):
     assert "widgets" not in nb.get("metadata", {}), f"{path.name} stores widget state (tools/strip_widget_state.py)"
 
 
-@pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.name)
+NOT_YET_SPLIT = {"04_aegan_latent_space.ipynb", "06_posing_studio.ipynb"}
+"""Lessons whose studies still sit in the core path (issue 64, item 2, open for them): expected over budget, and
+strictly so -- once one fits, this set must lose it."""
+
+
+@pytest.mark.parametrize("path", [pytest.param(p, marks=pytest.mark.xfail(
+    strict=True, reason="its studies are not yet moved to a going-further notebook")) if p.name in NOT_YET_SPLIT
+    else p for p in NOTEBOOKS], ids=lambda p: p.name)
+def test_a_core_lesson_fits_one_sitting_or_two(path):
+    nb = json.loads(path.read_text())
+    code = sum(c["cell_type"] == "code" for c in nb["cells"])
+    assert _words(nb) <= CORE_WORDS and code <= CORE_CODE_CELLS, (
+        f"{path.name}: {_words(nb)} words of markdown, {code} code cells (a core lesson: at most {CORE_WORDS:,} "
+        f"and {CORE_CODE_CELLS}); move its studies to a going-further notebook beside it")
+
+
+@pytest.mark.parametrize("path", FURTHER, ids=lambda p: p.name)
+def test_a_going_further_notebook_has_the_lessons_shape_and_is_linked(path):
+    nb = json.loads(path.read_text())
+    text = "\n".join("".join(c["source"]) for c in nb["cells"] if c["cell_type"] == "markdown")
+    for heading in ("**Aim.**", "**Contents**", "**Reference", "Exercises", "Summary"):
+        assert heading in text, f"{path.name} lacks {heading!r}"
+    cells = [c for c in nb["cells"] if c["cell_type"] == "code" and "".join(c["source"]).strip()]
+    assert all(c.get("execution_count") for c in cells), f"{path.name} is not stored executed"
+    assert "widgets" not in nb.get("metadata", {})
+    core = next(p for p in NOTEBOOKS if p.name[:2] == path.name[:2])
+    core_text = "".join("".join(c["source"]) for c in json.loads(core.read_text())["cells"])
+    assert path.name in core_text, f"{core.name} does not link {path.name}"
+    readme = (path.parent.parent / "README.md").read_text()
+    assert f"(notebooks/{path.name})" in readme, f"the README's lesson table does not list {path.name}"
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS + FURTHER, ids=lambda p: p.name)
 def test_outputs_left_uncompared_are_tagged(path):
     """nbval's comment marker would show in the lesson's code; a cell tag does the same out of sight."""
     nb = json.loads(path.read_text())

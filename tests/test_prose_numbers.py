@@ -72,7 +72,7 @@ from posekit.docs import prose
 from posekit.docs.prose import Outputs, agrees, cell_bindings, check_cell, check_text, figures
 
 ROOT = Path(__file__).resolve().parent.parent
-NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
+NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb")) + sorted((ROOT / "notebooks").glob("[0-9][0-9]x_*.ipynb"))
 RESULTS_DIR = ROOT / "data_samples" / "results"
 PAGES = [p for p in [ROOT / "README.md", ROOT / "data_samples" / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
          if p.exists()]
