@@ -37,14 +37,7 @@ def test_lesson_shape(path):
     assert "widgets" not in nb.get("metadata", {}), f"{path.name} stores widget state (tools/strip_widget_state.py)"
 
 
-NOT_YET_SPLIT = {"04_aegan_latent_space.ipynb", "06_posing_studio.ipynb"}
-"""Lessons whose studies still sit in the core path (issue 64, item 2, open for them): expected over budget, and
-strictly so -- once one fits, this set must lose it."""
-
-
-@pytest.mark.parametrize("path", [pytest.param(p, marks=pytest.mark.xfail(
-    strict=True, reason="its studies are not yet moved to a going-further notebook")) if p.name in NOT_YET_SPLIT
-    else p for p in NOTEBOOKS], ids=lambda p: p.name)
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.name)
 def test_a_core_lesson_fits_one_sitting_or_two(path):
     nb = json.loads(path.read_text())
     code = sum(c["cell_type"] == "code" for c in nb["cells"])
