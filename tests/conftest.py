@@ -42,6 +42,27 @@ def rng():
     return np.random.default_rng(0)
 
 
+@pytest.fixture(scope="module")
+def chromium():
+    """Debian's Chromium driven by Playwright, headless, with the project's flags (:func:`posekit.bench.browser.
+    launch_chromium`; Playwright cannot download a browser of its own here): one browser per test module. A module
+    whose tests start Playwright themselves (``posekit bench studio``'s own runs) does not use it: two sync
+    Playwright instances cannot run in one thread at once."""
+    from playwright.sync_api import sync_playwright
+
+    from posekit.bench.browser import chromium_missing, launch_chromium
+
+    missing = chromium_missing()
+    if missing:
+        pytest.fail(missing)
+    with sync_playwright() as p:
+        browser = launch_chromium(p)
+        try:
+            yield browser
+        finally:
+            browser.close()
+
+
 # ---- running on both cores (pytest-xdist: `make test` passes -n 2 --dist loadfile) ------------------------
 # A notebook's cells share one kernel and must run in order on one worker; the tests that serve
 # notebooks (JupyterLab, Voila) to Chromium share one worker too, so two servers and two browsers never
