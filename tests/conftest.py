@@ -1,11 +1,17 @@
 
 import os
+import shutil
+import tempfile
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from posekit.paths import shared_data_dir
 from tests import browser_artifacts
+
+EXPORTS_VAR = "POSEKIT_EXPORTS_DIR"
+"""Where the studio writes when no folder is given (:func:`posekit.paths.exports_dir`): a temporary folder here."""
 
 
 @pytest.fixture(scope="session")
@@ -94,8 +100,28 @@ def pytest_terminal_summary(terminalreporter):
     browser_artifacts.terminal_summary(terminalreporter)
 
 
+def _exports_in_a_temporary_folder(config) -> None:
+    """Every studio the tests make writes under a temporary ``studio_exports/`` (``$POSEKIT_EXPORTS_DIR``,
+    :func:`posekit.paths.exports_dir`), not in a student's ``notebooks/studio_exports/``: the tests' own studios, the
+    notebooks nbval runs and the servers the browser tests start all inherit it (their kernels start after this).
+    The folder goes when the run ends."""
+    root = Path(tempfile.mkdtemp(prefix="posekit-test-exports-"))
+    before = os.environ.get(EXPORTS_VAR)
+    os.environ[EXPORTS_VAR] = str(root / "studio_exports")
+
+    def restore():
+        if before is None:
+            os.environ.pop(EXPORTS_VAR, None)
+        else:
+            os.environ[EXPORTS_VAR] = before
+        shutil.rmtree(root, ignore_errors=True)
+
+    config.add_cleanup(restore)
+
+
 def pytest_configure(config):
     browser_artifacts.install()
+    _exports_in_a_temporary_folder(config)
     # two workers on two cores: one torch thread each, not two each fighting for the same cores
     if os.environ.get("PYTEST_XDIST_WORKER"):
         import torch

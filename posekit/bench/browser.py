@@ -72,7 +72,8 @@ def chromium_missing() -> str | None:
     it), or None when it is there."""
     if Path(CHROMIUM).exists():
         return None
-    return f"{CHROMIUM} not found: install Debian's chromium and chromium-driver (make test does), or set POSEKIT_CHROMIUM"
+    return (f"{CHROMIUM} not found: install Debian's chromium and chromium-driver (make test does), "
+            "or set POSEKIT_CHROMIUM")
 
 
 def launch_chromium(playwright, headless: bool = True):
