@@ -321,7 +321,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_commands(sub)
     from .docs import add_commands as add_docs_commands
 
-    add_docs_commands(sub)
+    add_docs_commands(sub, parser)
     return parser
 
 

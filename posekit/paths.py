@@ -8,6 +8,9 @@
 * :func:`shared_data_dir` — larger real mocap read by path, never copied: ``$POSEKIT_DATA_DIR``
   (the Makefile points it at ``../shared/data`` when that folder exists).
 * :func:`notebooks_dir` — the lessons, ``notebooks/`` of the checkout.
+* :func:`exports_dir` — where the posing studio writes its files (setups, BVH, PNG) when no folder is given:
+  ``studio_exports/`` in the working folder, beside the notebook (override with ``$POSEKIT_EXPORTS_DIR``; the
+  tests point it at a temporary folder, so a test run never writes into a student's ``notebooks/studio_exports/``).
 * :func:`course_assets_dir` — reveal.js and MathJax for the slides and the course page, installed by
   ``make course-assets`` (npm) into ``tools/course/node_modules`` (override with ``$POSEKIT_COURSE_ASSETS``).
 """
@@ -21,7 +24,7 @@ from pathlib import Path
 __all__ = ["samples_dir", "weights_path", "find_checkpoint", "checkpoint_identity", "weights_note",
            "held_checkpoints", "use_skeleton", "user_weights_dir",
            "use_weights", "shared_data_dir", "require_shared_data",
-           "notebooks_dir", "course_assets_dir"]
+           "notebooks_dir", "EXPORTS", "exports_dir", "course_assets_dir"]
 
 _USER_WEIGHTS: list[Path] = []
 _USER_SKELETON: list[tuple] = []
@@ -238,6 +241,23 @@ def require_shared_data(data_dir=None) -> Path:
 def notebooks_dir() -> Path:
     """Folder holding the lessons (``notebooks/`` of the posekit checkout)."""
     return _CHECKOUT / "notebooks"
+
+
+EXPORTS = "studio_exports"
+"""The studio's export folder's name, relative to the working folder (the notebook's): :func:`exports_dir`."""
+
+
+def exports_dir() -> Path:
+    """Where the posing studio writes its files when no folder is given (:class:`posekit.viz.studio.PosingStudio`,
+    the app's pages: :func:`posekit.viz.studio_app.session_folder`): ``$POSEKIT_EXPORTS_DIR`` when it is set, else
+    :data:`EXPORTS` relative to the working folder (beside the notebook that runs the studio).
+
+    ``tests/conftest.py`` sets ``$POSEKIT_EXPORTS_DIR`` to a temporary folder for every test and every notebook the
+    tests run (their kernels inherit it), so ``make test`` leaves a student's ``notebooks/studio_exports/`` as it was.
+    Nothing is created here: the studio makes the folder when it first writes a file.
+    """
+    env = os.environ.get("POSEKIT_EXPORTS_DIR")
+    return Path(env) if env else Path(EXPORTS)
 
 
 def course_assets_dir() -> Path:

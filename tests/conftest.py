@@ -1,11 +1,17 @@
 
 import os
+import shutil
+import tempfile
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from posekit.paths import shared_data_dir
 from tests import browser_artifacts
+
+EXPORTS_VAR = "POSEKIT_EXPORTS_DIR"
+"""Where the studio writes when no folder is given (:func:`posekit.paths.exports_dir`): a temporary folder here."""
 
 
 @pytest.fixture(scope="session")
@@ -42,6 +48,27 @@ def rng():
     return np.random.default_rng(0)
 
 
+@pytest.fixture(scope="module")
+def chromium():
+    """Debian's Chromium driven by Playwright, headless, with the project's flags (:func:`posekit.bench.browser.
+    launch_chromium`; Playwright cannot download a browser of its own here): one browser per test module. A module
+    whose tests start Playwright themselves (``posekit bench studio``'s own runs) does not use it: two sync
+    Playwright instances cannot run in one thread at once."""
+    from playwright.sync_api import sync_playwright
+
+    from posekit.bench.browser import chromium_missing, launch_chromium
+
+    missing = chromium_missing()
+    if missing:
+        pytest.fail(missing)
+    with sync_playwright() as p:
+        browser = launch_chromium(p)
+        try:
+            yield browser
+        finally:
+            browser.close()
+
+
 # ---- running on both cores (pytest-xdist: `make test` passes -n 2 --dist loadfile) ------------------------
 # A notebook's cells share one kernel and must run in order on one worker; the tests that serve
 # notebooks (JupyterLab, Voila) to Chromium share one worker too, so two servers and two browsers never
@@ -73,8 +100,28 @@ def pytest_terminal_summary(terminalreporter):
     browser_artifacts.terminal_summary(terminalreporter)
 
 
+def _exports_in_a_temporary_folder(config) -> None:
+    """Every studio the tests make writes under a temporary ``studio_exports/`` (``$POSEKIT_EXPORTS_DIR``,
+    :func:`posekit.paths.exports_dir`), not in a student's ``notebooks/studio_exports/``: the tests' own studios, the
+    notebooks nbval runs and the servers the browser tests start all inherit it (their kernels start after this).
+    The folder goes when the run ends."""
+    root = Path(tempfile.mkdtemp(prefix="posekit-test-exports-"))
+    before = os.environ.get(EXPORTS_VAR)
+    os.environ[EXPORTS_VAR] = str(root / "studio_exports")
+
+    def restore():
+        if before is None:
+            os.environ.pop(EXPORTS_VAR, None)
+        else:
+            os.environ[EXPORTS_VAR] = before
+        shutil.rmtree(root, ignore_errors=True)
+
+    config.add_cleanup(restore)
+
+
 def pytest_configure(config):
     browser_artifacts.install()
+    _exports_in_a_temporary_folder(config)
     # two workers on two cores: one torch thread each, not two each fighting for the same cores
     if os.environ.get("PYTEST_XDIST_WORKER"):
         import torch

@@ -8,15 +8,16 @@ from pathlib import Path
 
 import pytest
 
-from posekit.bench.studio import CHROMIUM, CHROMIUM_FLAGS
+from posekit.bench.browser import chromium_missing
 
 pytestmark = pytest.mark.browser
 ROOT = Path(__file__).resolve().parent.parent
 
 
 def test_a_failed_browser_test_leaves_its_screenshot_console_and_logs(tmp_path):
-    if not Path(CHROMIUM).exists():
-        pytest.fail(f"{CHROMIUM} not found: install Debian's chromium (make test does)")
+    missing = chromium_missing()
+    if missing:
+        pytest.fail(missing)
     work = tmp_path / "suite"
     work.mkdir()
     (work / "conftest.py").write_text(textwrap.dedent(f"""
@@ -38,8 +39,9 @@ def test_a_failed_browser_test_leaves_its_screenshot_console_and_logs(tmp_path):
 
         def test_a_page_that_fails(lab):
             from playwright.sync_api import sync_playwright
+            from posekit.bench.browser import launch_chromium
             with sync_playwright() as p:
-                browser = p.chromium.launch(executable_path={CHROMIUM!r}, args={CHROMIUM_FLAGS!r}, headless=True)
+                browser = launch_chromium(p)
                 try:
                     page = browser.new_page()
                     page.set_content("<h1 style='font-size:80px'>posekit</h1>"

@@ -159,37 +159,31 @@ def test_each_lesson_yields_sane_slides_with_its_key_figure(course, number):
 
 
 @pytest.mark.browser
-def test_course_opens_from_disk_in_chromium(course):
-    from playwright.sync_api import sync_playwright
-
-    from posekit.bench.studio import launch_chromium
-
-    with sync_playwright() as p:
-        browser = launch_chromium(p)
-        try:
-            page = browser.new_page(viewport={"width": 1280, "height": 800})
-            requests, errors = [], []
-            page.on("request", lambda r: requests.append(r.url))
-            page.on("pageerror", lambda e: errors.append(str(e)))
-            page.goto((course / "index.html").as_uri())
-            assert page.locator("table.posekit-lessons tbody tr").count() == len(LESSONS)
-            page.locator("a", has_text="slides").nth(3).click()  # lesson 03's slides, by the index's link
-            page.wait_for_function("() => window.Reveal && Reveal.isReady()", timeout=30_000)
-            html = (course / "slides" / f"{find_lesson('03').stem}.html").read_text(encoding="utf-8")
-            assert page.evaluate("Reveal.getTotalSlides()") == rules.count_slides(html)
-            page.wait_for_function("() => document.querySelectorAll('mjx-container svg').length > 5", timeout=30_000)
-            page.keyboard.press("ArrowRight")
-            assert page.evaluate("Reveal.getIndices().h") == 1
-            page.screenshot(path=str(course / "slides-03.png"))
-            page.goto((course / "lessons" / f"{find_lesson('06').stem}.html").as_uri())
-            img = page.locator("img").last  # the report's scatter, stored in the notebook
-            assert img.evaluate("i => i.complete && i.naturalWidth") > 400
-            assert page.locator(".posekit-widget-note").count() >= 1  # the studio's place, explained
-            page.goto((course / "report" / "bench_all.html").as_uri())
-            assert page.locator("table tbody tr").count() >= 16
-            assert page.evaluate("document.querySelector('img').naturalWidth") > 400
-        finally:
-            browser.close()
+def test_course_opens_from_disk_in_chromium(course, chromium):
+    page = chromium.new_page(viewport={"width": 1280, "height": 800})
+    try:
+        requests, errors = [], []
+        page.on("request", lambda r: requests.append(r.url))
+        page.on("pageerror", lambda e: errors.append(str(e)))
+        page.goto((course / "index.html").as_uri())
+        assert page.locator("table.posekit-lessons tbody tr").count() == len(LESSONS)
+        page.locator("a", has_text="slides").nth(3).click()  # lesson 03's slides, by the index's link
+        page.wait_for_function("() => window.Reveal && Reveal.isReady()", timeout=30_000)
+        html = (course / "slides" / f"{find_lesson('03').stem}.html").read_text(encoding="utf-8")
+        assert page.evaluate("Reveal.getTotalSlides()") == rules.count_slides(html)
+        page.wait_for_function("() => document.querySelectorAll('mjx-container svg').length > 5", timeout=30_000)
+        page.keyboard.press("ArrowRight")
+        assert page.evaluate("Reveal.getIndices().h") == 1
+        page.screenshot(path=str(course / "slides-03.png"))
+        page.goto((course / "lessons" / f"{find_lesson('06').stem}.html").as_uri())
+        img = page.locator("img").last  # the report's scatter, stored in the notebook
+        assert img.evaluate("i => i.complete && i.naturalWidth") > 400
+        assert page.locator(".posekit-widget-note").count() >= 1  # the studio's place, explained
+        page.goto((course / "report" / "bench_all.html").as_uri())
+        assert page.locator("table tbody tr").count() >= 16
+        assert page.evaluate("document.querySelector('img').naturalWidth") > 400
+    finally:
+        page.close()
     assert [u for u in requests if not u.startswith(("file:", "data:"))] == []
     assert errors == []
 

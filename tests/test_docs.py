@@ -63,7 +63,7 @@ def test_docs_build_check_reports_a_stale_page_and_build_fixes_it(tmp_path, caps
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(docs.GENERATED)
     assert main(["docs", "build", "--check", "--out", str(tmp_path)]) == 0
     (tmp_path / "benchmarks.md").write_text("edited by hand\n")
-    assert docs.stale(tmp_path) == ["benchmarks.md"]
+    assert docs.stale(build_parser(), tmp_path) == ["benchmarks.md"]
 
 
 # --------------------------------------------------------------------------------------------- results files

@@ -83,17 +83,8 @@ def decks(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def page():
-    from playwright.sync_api import sync_playwright
-
-    from posekit.bench.studio import launch_chromium
-
-    with sync_playwright() as p:
-        browser = launch_chromium(p)
-        try:
-            yield browser.new_page(viewport={"width": SLIDE_WIDTH, "height": SLIDE_HEIGHT})
-        finally:
-            browser.close()
+def page(chromium):
+    yield chromium.new_page(viewport={"width": SLIDE_WIDTH, "height": SLIDE_HEIGHT})
 
 
 @pytest.mark.parametrize("number", [le.number for le in LESSONS])

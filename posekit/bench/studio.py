@@ -8,7 +8,8 @@ Introduced in ``notebooks/06_posing_studio.ipynb``. One run:
    (Debian's ``/usr/bin/chromium``, or ``$POSEKIT_CHROMIUM``; Playwright cannot download a browser here), which
    draws WebGL in software: the views are served without antialiasing unless ``--antialias``
    (:func:`posekit.viz.viewer.antialias_default`), and each page silences ``console.debug``
-   (:data:`QUIET_CONSOLE`);
+   (:data:`~posekit.bench.browser.QUIET_CONSOLE`). The servers and the browser are :mod:`posekit.bench.browser`'s,
+   which the browser tests share;
 2. for each configuration (``--configs``, e.g. ``fabrik,dls`` and ``protores,neural``) chooses those solvers
    with the studio's own list and *compare* button;
 3. moves the first view's *target x* slider by one 1 mm step per key press, ``--updates`` times, each press
@@ -45,174 +46,27 @@ asserts only that 1,000 rapid updates all arrive, the kernel survives and its me
 
 from __future__ import annotations
 
-import contextlib
-import os
 import shutil
-import socket
-import subprocess
-import sys
 import tempfile
 import time
-import urllib.error
-import urllib.request
 from pathlib import Path
 
 import numpy as np
 
 from ..ik.registry import solver_info
-from ..paths import notebooks_dir
-from ..viz.studio_app import VOILA_PATH, VOILA_TEMPLATE
-from ..viz.websocket import server_flags
 from ..warm import warm
+from .browser import STUDIO_NOTEBOOK as NOTEBOOK, blank_tab, kernel_processes, launch_chromium, new_tab, serve_voila
 from .plugin import arg, register_benchmark
 
-__all__ = ["serve_voila", "launch_chromium", "update_number", "new_tab", "QUIET_CONSOLE", "blank_tab", "open_studio",
-           "choose_solvers", "rapid_updates", "kernel_processes", "run", "GOALS", "RSS_GOALS", "CHROMIUM", "CHROMIUM_FLAGS",
-           "NOTEBOOK"]
+__all__ = ["update_number", "open_studio", "open_floor", "floor_notebook", "choose_solvers", "rapid_updates",
+           "class_sessions", "preheated_first_views", "run", "GOALS", "RSS_GOALS", "FIRST_VIEW_GOALS", "NOTEBOOK"]
 
-NOTEBOOK = notebooks_dir() / "studio.ipynb"
-"""What ``make studio`` serves: the studio alone (:mod:`posekit.viz.studio_app`; lesson 06 builds the same)."""
-CHROMIUM = os.environ.get("POSEKIT_CHROMIUM", "/usr/bin/chromium")
-CHROMIUM_FLAGS = ["--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader", "--disable-background-networking",
-                  "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-quic"]
 GOALS = {"fabrik": 100.0, "learned": 150.0}
 """p95 goals, milliseconds: a configuration with a learned solver gets the learned goal."""
 
 RSS_GOALS = {"fabrik": 300.0, "learned": 450.0}
 """Kernel memory goals at the end of the updates, MB (resident): a configuration with a learned solver gets the
 learned goal (its networks and torch are loaded)."""
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def kernel_processes(server_pid: int) -> list:
-    """The kernel processes (psutil.Process) a Voila server started."""
-    import psutil
-
-    try:
-        kids = psutil.Process(server_pid).children(recursive=True)
-    except psutil.NoSuchProcess:
-        return []
-    out = []
-    for p in kids:
-        try:
-            if "ipykernel" in " ".join(p.cmdline()):
-                out.append(p)
-        except psutil.Error:
-            pass
-    return out
-
-
-class VoilaServer:
-    """A running Voila server: ``url``, ``process``, ``folder`` (its working copy), ``log`` (path) and
-    :meth:`stop`, which shuts it down and returns the kernel processes still alive afterwards (none, when
-    Voila shut its kernels down)."""
-
-    def __init__(self, process, url, folder, log):
-        self.process, self.url, self.folder, self.log = process, url, Path(folder), Path(log)
-        self.kernels_seen = []
-
-    def url_of(self, name: str) -> str:
-        """The page of another notebook the server was given (``serve_voila(extra=...)``)."""
-        return f"{self.base}voila/render/{name}"
-
-    def note_kernels(self):
-        """Remember the kernels now running (call while a page is open)."""
-        for p in kernel_processes(self.process.pid):
-            if p.pid not in {k.pid for k in self.kernels_seen}:
-                self.kernels_seen.append(p)
-        return self.kernels_seen
-
-    def stop(self, timeout: float = 30.0) -> list:
-        import psutil
-
-        self.note_kernels()
-        if self.process.poll() is None:
-            self.process.terminate()  # Voila shuts its kernels down on SIGTERM
-            try:
-                self.process.wait(timeout=timeout)
-            except subprocess.TimeoutExpired:
-                self.process.kill()
-                self.process.wait(timeout=10)
-        deadline = time.time() + timeout
-        alive = [k for k in self.kernels_seen if k.is_running()]
-        while alive and time.time() < deadline:
-            time.sleep(0.5)
-            alive = [k for k in alive if k.is_running() and k.status() != psutil.STATUS_ZOMBIE]
-        for k in alive:  # never leave a kernel behind, even when Voila did
-            with contextlib.suppress(psutil.Error):
-                k.kill()
-        return alive
-
-    def log_tail(self, n: int = 2000) -> str:
-        return self.log.read_text(errors="replace")[-n:] if self.log.exists() else ""
-
-
-@contextlib.contextmanager
-def serve_voila(notebook=NOTEBOOK, folder=None, cull_idle_s: int = 600, startup_s: float = 120.0,
-                preheat: int = 0, cull_interval_s: int = 30, extra=(), env=None):
-    """Serve a copy of ``notebook`` with Voila on a free local port; yields a :class:`VoilaServer`.
-
-    The copy lives in ``folder`` (default a new temporary folder); kernels idle for ``cull_idle_s`` seconds
-    are culled (looked for every ``cull_interval_s``), and leaving the block stops the server and its kernels.
-    ``extra``: more notebooks served by the same server (``server.url_of(name)``; e.g. :func:`floor_notebook`).
-    ``preheat``: that many kernels kept with the notebook already run (Voila's kernel pool, what ``make studio``
-    does), 0 none. ``env``: environment variables for the server and its kernels over this process's (e.g.
-    ``{"POSEKIT_ANTIALIAS": "0"}``).
-    """
-    own = folder is None
-    folder = Path(tempfile.mkdtemp(prefix="posekit-studio-") if own else folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    shutil.copy(notebook, folder / Path(notebook).name)
-    for nb in extra:
-        shutil.copy(nb, folder / Path(nb).name)
-    port = _free_port()
-    log_path = folder / "voila.log"
-    served = [] if extra else [Path(notebook).name]  # several notebooks: Voila serves the folder
-    cmd = [sys.executable, "-m", "voila", *served, "--no-browser", f"--port={port}", f"--template={VOILA_TEMPLATE}",
-           "--Voila.ip=127.0.0.1", f"--MappingKernelManager.cull_idle_timeout={cull_idle_s}",
-           f"--MappingKernelManager.cull_interval={cull_interval_s}", "--VoilaConfiguration.show_tracebacks=True"]
-    cmd += server_flags("voila")  # each message to the page leaves at once (posekit.viz.websocket), as make studio
-    if preheat > 0:
-        cmd += ["--preheat_kernel=True", f"--pool_size={int(preheat)}"]
-    log = open(log_path, "w")
-    paths = os.pathsep.join(filter(None, [str(VOILA_PATH), os.environ.get("JUPYTER_PATH")]))
-    proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, cwd=folder,
-                            env={**os.environ, "JUPYTER_PATH": paths, **(env or {})})
-    base = f"http://127.0.0.1:{port}/"
-    server = VoilaServer(proc, base + (f"voila/render/{Path(notebook).name}" if extra else ""), folder, log_path)
-    server.base = base
-    try:
-        t0 = time.time()
-        while True:
-            try:  # any answer means the server is up (a GET of the notebook itself would start a kernel)
-                urllib.request.urlopen(f"http://127.0.0.1:{port}/static/", timeout=2)
-                break
-            except urllib.error.HTTPError:
-                break
-            except OSError:
-                if proc.poll() is not None:
-                    raise RuntimeError(f"voila exited: {server.log_tail()}") from None
-                if time.time() - t0 > startup_s:
-                    raise RuntimeError(f"voila did not answer within {startup_s:.0f} s: {server.log_tail()}") from None
-                time.sleep(0.5)
-        yield server
-    finally:
-        server.stop()
-        log.close()
-        if own:
-            shutil.rmtree(folder, ignore_errors=True)
-
-
-def launch_chromium(playwright):
-    """Debian's Chromium, headless, with the flags WebGL needs here (SwiftShader)."""
-    if not Path(CHROMIUM).exists():
-        raise RuntimeError(f"{CHROMIUM} not found: install Debian's chromium (make test does), or set POSEKIT_CHROMIUM")
-    return playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_FLAGS, headless=True)
-
-
 SUMMARY = ".posekit-summary"
 """The studio's summary table (its text starts with ``update N``)."""
 
@@ -249,21 +103,6 @@ def floor_notebook(folder) -> Path:
     return path
 
 
-QUIET_CONSOLE = "console.debug = () => {};"
-"""Run in every page the bench opens, before the page's own scripts: pythreejs logs each change of a scene's objects
-with ``console.debug`` (several calls per studio update), and with Playwright attached every console call is
-serialised and sent to the driving process — about 20 ms of the browser's time per update here (150 updates of
-FABRIK + DLS with the renderer's profiler running: key press to update p50 90 ms with the calls, 61 ms without), a
-cost a student's browser without a debugger attached does not pay. Other console levels stay as they are."""
-
-
-def new_tab(browser, viewport=(1400, 1600)):
-    """A new page of ``viewport`` (width, height) pixels with :data:`QUIET_CONSOLE` installed."""
-    page = browser.new_page(viewport={"width": viewport[0], "height": viewport[1]})
-    page.add_init_script(QUIET_CONSOLE)
-    return page
-
-
 def open_floor(browser, url: str, timeout_s: float = 120.0, page=None):
     """Open :func:`floor_notebook`'s page (in ``page``, a tab from :func:`blank_tab`, when given); returns it once
     its label is drawn."""
@@ -271,14 +110,6 @@ def open_floor(browser, url: str, timeout_s: float = 120.0, page=None):
     page.goto(url, timeout=timeout_s * 1000, wait_until="commit")
     page.wait_for_selector(f"{SUMMARY}:has-text('update')", timeout=timeout_s * 1000)
     page.wait_for_selector(".posekit-target-x .noUi-handle", timeout=timeout_s * 1000)
-    return page
-
-
-def blank_tab(browser, viewport=(1400, 1600)):
-    """A new tab showing nothing yet (``about:blank``): the browser's own start of a tab (its renderer process, the
-    software GL context) done, as in the browser a person already has open when they ask for the studio."""
-    page = new_tab(browser, viewport)
-    page.goto("about:blank")
     return page
 
 

@@ -14,7 +14,7 @@ import re
 import struct
 from dataclasses import dataclass, field
 
-from .slides import SLIDE_HEIGHT, SLIDE_WIDTH
+from .cells import SLIDE_HEIGHT, SLIDE_WIDTH
 
 __all__ = ["Block", "Page", "WIDTH", "BUDGET", "PRE_PX", "KEY_PRE_PX", "MONO", "MIN_FIGURE", "CONT_PX", "md_height",
            "pre_font", "pre_height", "split_chunks", "split_tall_png", "pack", "size_figures"]

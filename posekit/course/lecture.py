@@ -37,7 +37,7 @@ import re
 from .layout import (BUDGET, CHARS, CONT_PX, KEY_PRE_PX, MIN_FIGURE, MONO, PRE_PX, WIDTH, Block, Page, _BLOCK_GAP,  # noqa: F401
                      _heading, _png_size, _used, md_height, pack, pre_font, pre_height, size_figures, split_chunks,
                      split_tall_png)
-from .slides import KEY_FIGURE, PAPER_BESIDE, WIDGET_VIEW, _PROGRESS, _source, strip_test_markers
+from .cells import KEY_FIGURE, PAPER_BESIDE, WIDGET_VIEW, _PROGRESS, _source, strip_test_markers
 from .stills import load as load_still, render_png
 
 __all__ = ["SLIDE_CODE", "POINT_CELLS", "KEY_POINTS", "MIN_FIGURE", "lecture_notebook", "section_plan", "summary_slide",

@@ -31,20 +31,11 @@ import hashlib
 import re
 from pathlib import Path
 
-KEY_FIGURE = "key-figure"
-PAPER_BESIDE = "paper-beside"
-"""Cell tag: the cell shows the paper's figures beside the lesson's own (columns of one table); its slide follows the
-key figure's (:mod:`posekit.course.lecture`)."""
-SLIDE_WIDTH, SLIDE_HEIGHT = 1280, 720
-"""The slide size reveal.js lays every slide out at (CSS pixels; it scales the whole slide to the screen): a
-1280x720 projector shows it one to one."""
+from .cells import (KEY_FIGURE, PAPER_BESIDE, SLIDE_HEIGHT, SLIDE_WIDTH, WIDGET_VIEW, _PROGRESS,  # noqa: F401
+                    _source, strip_source_markers, strip_test_markers)
+
 OVERRIDES = {"slide-skip": "skip", "slide-notes": "notes"}
 _SPLIT = re.compile(r"^(?=## |\*\*Exercise \d)", re.MULTILINE)
-
-
-def _source(cell) -> str:
-    src = cell["source"]
-    return src if isinstance(src, str) else "".join(src)
 
 
 def split_markdown(cells: list) -> list:
@@ -157,16 +148,6 @@ def key_outputs(cell: dict) -> list[str]:
     return keys
 
 
-_SOURCE_MARKER = re.compile(r"<!--\s*(?:out|data|goal|paper|definition|setting):.*?-->", re.DOTALL)
-
-
-def strip_source_markers(source: str) -> str:
-    """Drop any source marker left after a figure of a markdown cell (``<!-- out: ... -->``): a lesson keeps its
-    figures' bindings in the cells' metadata (``tests/test_prose_numbers.py`` refuses a marker in its text), so this
-    is a guard: a marker is for the tests, not for the lecture, and would count as text when a slide is fitted."""
-    return _SOURCE_MARKER.sub("", source)
-
-
 def _for_readers(nb: dict) -> dict:
     """A copy of ``nb`` whose markdown cells hold what a reader sees: no source marker, no figure bindings."""
     nb = copy.deepcopy(nb)
@@ -181,15 +162,8 @@ def _for_readers(nb: dict) -> dict:
     return nb
 
 
-def strip_test_markers(source: str) -> str:
-    """Drop the ``# NBVAL_...`` lines nbval reads: they are for the tests, not for the lecture."""
-    return "\n".join(ln for ln in source.splitlines() if not ln.strip().startswith("# NBVAL_"))
-
-
-WIDGET_VIEW = "application/vnd.jupyter.widget-view+json"
 WIDGET_NOTE = ('<div class="posekit-widget-note"><p><em>{what} lives in a running kernel: open this lesson in '
                'JupyterLab (<code>make lab</code>) to use it.</em></p></div>')
-_PROGRESS = re.compile(r"\|.*\[\d\d:\d\d<")
 
 
 def static_outputs(outputs: list) -> list:

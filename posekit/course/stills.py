@@ -26,7 +26,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from .slides import WIDGET_VIEW, _PROGRESS, _source
+from .cells import WIDGET_VIEW, _PROGRESS, _source
 
 __all__ = ["STILLS", "view_cells", "needed_cells", "fingerprint", "record", "load", "render_png"]
 

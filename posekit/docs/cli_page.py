@@ -1,4 +1,5 @@
-"""``docs/cli.md``: the command-line reference, written from the argument parser (:func:`posekit.cli.build_parser`).
+"""``docs/cli.md``: the command-line reference, written from the argument parser (:func:`posekit.cli.build_parser`,
+which the CLI hands in: this module never imports the CLI it documents).
 
 Every subcommand, positional argument and option appears with its help text, in the parser's order, so the page
 cannot drift from what ``posekit ... --help`` says. The usage lines are composed here rather than taken from
@@ -91,13 +92,15 @@ def _anchor(words) -> str:
     return "-".join(w.lower() for w in words if w)
 
 
-def markdown(parser: argparse.ArgumentParser | None = None) -> str:
+def markdown(parser: argparse.ArgumentParser) -> str:
     """The page: an introduction, a contents list, then one section per command with its usage line and a table
-    of its arguments."""
-    if parser is None:
-        from ..cli import build_parser
+    of its arguments.
 
-        parser = build_parser()
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The whole ``posekit`` command line (:func:`posekit.cli.build_parser`).
+    """
     cmds = commands(parser)
     toc, body = [], []
     for words, p, help_text in cmds[1:]:

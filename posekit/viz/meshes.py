@@ -8,7 +8,7 @@ its own picking and visibility) indexing **one** position array, so a solved pos
 message to the browser (and one acknowledgement back), not one per part. Bones are flat-shaded (three.js derives
 each face's normal on the graphics card), so a moved pose sends no normals; every other part is coloured by vertex
 colours, so a view compiles three shader programs (bones, spheres, lines) whatever it shows. Every attribute and
-geometry is made as the browser's three.js would make it (:func:`attribute`, :func:`geometry`), so a page that opens
+geometry is made as the browser's three.js would make it (:mod:`posekit.viz.buffers`), so a page that opens
 reports nothing back to the kernel for them. The materials and the buffers nothing changes (triangle indices, normals,
 a ghost's colours) are one model for every view of a page (:mod:`posekit.viz.shared`): the studio's four views open
 with fewer than half the models they had. Units: metres; axes: :mod:`posekit.conventions`.
@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .buffers import attribute, geometry
 from .shared import constant_attribute, material as shared_material, release
 
 __all__ = ["icosphere", "Spheres", "Bones", "Figure", "SIDE_COLOURS", "PICK_BOUND", "attribute", "geometry"]
@@ -60,45 +61,6 @@ def icosphere(subdivisions: int = 1):
             new += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
         faces = new
     return np.array(verts), np.array(faces, dtype=np.uint32)
-
-
-_ATTRIBUTE = None
-
-FIRST_VERSION = 1
-"""The ``version`` the browser's copy of a new pythreejs ``BufferAttribute`` starts at: three.js counts 1 when it
-first takes the array. pythreejs's own default is -1, so the browser reported the 1 back as a page opened, one
-message for every attribute of every view (about 130 for the studio's four views, each handled by the kernel,
-each answered with a busy/idle pair). An attribute made with the browser's number has nothing to report."""
-
-
-def attribute(array):
-    """A pythreejs ``BufferAttribute`` of ``array`` that costs no messages the kernel does not need.
-
-    Every time the kernel sends a new array, the browser's copy of the attribute counts its ``version`` up and
-    reports it to the kernel, and ipywidgets 8 answers each report with an echo of the same number: two
-    messages and a busy/idle pair per array per update, for a number the kernel never reads or sets. This
-    attribute (the same model in the browser) is not echoed, so a live update costs fewer messages; and it
-    starts at :data:`FIRST_VERSION`, so a page that opens sends nothing back for it."""
-    global _ATTRIBUTE
-    if _ATTRIBUTE is None:
-        import pythreejs as three
-        from traitlets import CInt
-
-        class Attribute(three.BufferAttribute):
-            version = CInt(-1, allow_none=False).tag(sync=True, echo_update=False)
-
-        _ATTRIBUTE = Attribute
-    return _ATTRIBUTE(array, normalized=False, version=FIRST_VERSION)
-
-
-def geometry(attributes: dict):
-    """A pythreejs ``BufferGeometry`` of ``attributes`` (name -> :func:`attribute`) with an empty list of morph
-    targets: a three.js mesh made on a geometry without one has no morph weights, where its pythreejs model holds
-    an empty list, so every mesh reported an empty list back to the kernel as a page opened (28 messages for the
-    studio's four views). Nothing is morphed: the list stays empty."""
-    import pythreejs as three
-
-    return three.BufferGeometry(attributes=attributes, morphAttributes={"position": []})
 
 
 TRIAD_STRANDS = ((0.0, 0.0), (0.16, 0.0), (-0.16, 0.0), (0.0, 0.16), (0.0, -0.16))

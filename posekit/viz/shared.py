@@ -18,6 +18,8 @@ import hashlib
 
 import numpy as np
 
+from .buffers import attribute, geometry
+
 __all__ = ["layout", "widget", "model", "material", "constant_attribute", "constant_geometry", "release"]
 
 _MODELS = {}
@@ -86,11 +88,9 @@ def material(cls, **traits):
 
 
 def constant_attribute(array):
-    """The shared :func:`~posekit.viz.meshes.attribute` of ``array``'s values (a buffer no one changes: triangle
+    """The shared :func:`~posekit.viz.buffers.attribute` of ``array``'s values (a buffer no one changes: triangle
     indices, the colours of a ghost), one model for every geometry that holds the same values. Each call counts one
     holder more; a holder that lets the model go calls :func:`release`."""
-    from .meshes import attribute
-
     array = np.ascontiguousarray(array)
     key = ("attribute", array.dtype.str, array.shape, hashlib.sha1(array.tobytes()).hexdigest())
     model = _shared(key, lambda: attribute(array))
@@ -112,9 +112,7 @@ def release(model) -> None:
 
 
 def constant_geometry(attributes: dict):
-    """The shared :func:`~posekit.viz.meshes.geometry` of ``attributes`` (name -> :func:`constant_attribute`): one
+    """The shared :func:`~posekit.viz.buffers.geometry` of ``attributes`` (name -> :func:`constant_attribute`): one
     model for every mesh of a shape no one changes (the invisible sphere that mouse rays meet, in every view)."""
-    from .meshes import geometry
-
     key = ("geometry", tuple(sorted((name, a.model_id) for name, a in attributes.items())))
     return _shared(key, lambda: geometry(attributes))

@@ -18,7 +18,8 @@ dragging in 3D) with what an animator expects around it:
 * **timeline** — key effector setups, in-betweens posed by one solver (:mod:`posekit.ik.keyframes`),
   played back and exported as an animated BVH.
 
-Files are written under ``export_dir`` (default ``studio_exports/`` beside the notebook).
+Files are written under ``export_dir`` (default :func:`posekit.paths.exports_dir`: ``studio_exports/`` beside the
+notebook, or ``$POSEKIT_EXPORTS_DIR``).
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ import numpy as np
 
 from ..ik.api import Effector, Pose
 from ..ik.registry import make_solver, solver_names
+from ..paths import exports_dir
 from .compare import ignored_effectors, reached_mark, status_table, worst_errors
 from .canvas_capture import CanvasCapture
 from .effector_editor import EffectorEditor
@@ -69,7 +71,9 @@ class PosingStudio(StudioExport, StudioTimeline):
         The names offered (default every registered solver).
     tolerance_of : callable, optional
         Passed to :class:`EffectorEditor` (slider value -> tolerance).
-    export_dir : str or Path
+    export_dir : str or Path, optional
+        Where the studio writes its files (default :func:`posekit.paths.exports_dir`: ``studio_exports/`` in the
+        working folder, or ``$POSEKIT_EXPORTS_DIR``).
     own_folder : bool
         The page's files stay in ``export_dir`` (the app a class shares, :func:`~posekit.viz.studio_app.app_studio`):
         the *setup file* box takes a file name there, and a path that leaves the folder is refused with a message, so
@@ -96,7 +100,7 @@ class PosingStudio(StudioExport, StudioTimeline):
     """
 
     def __init__(self, skeleton, start: Pose, solvers=("fabrik", "dls"), effectors=(), available=None,
-                 tolerance_of=None, export_dir="studio_exports", own_folder: bool = False, width: int | None = None,
+                 tolerance_of=None, export_dir=None, own_folder: bool = False, width: int | None = None,
                  height: int = 360):
         import ipywidgets as w
 
@@ -104,7 +108,8 @@ class PosingStudio(StudioExport, StudioTimeline):
             raise ValueError("the studio's start pose needs rotations (Pose.from_rotations)")
         self.skeleton, self.start, self.tolerance_of = skeleton, start, tolerance_of
         self.available = list(available or solver_names())
-        self.export_dir, self.own_folder = Path(export_dir), bool(own_folder)
+        self.export_dir = exports_dir() if export_dir is None else Path(export_dir)
+        self.own_folder = bool(own_folder)
         self.size = (width, height)
         self.keys, self.frames, self.timeline_viewer = [], [], None
         self._restoring, self._last_move = False, (None, -1e9)

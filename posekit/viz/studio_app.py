@@ -30,6 +30,8 @@ import secrets
 import time
 from pathlib import Path
 
+from ..paths import EXPORTS as _EXPORTS, exports_dir
+
 __all__ = ["SOLVERS", "VOILA_PATH", "VOILA_TEMPLATE", "EXPORTS", "studio_case", "usable_solvers", "session_folder",
            "app_studio", "refused_note", "app_page", "data_line", "kept_label"]
 
@@ -45,18 +47,21 @@ pythreejs's debug lines, about 50 per view per update, to the page itself."""
 SOLVERS = ("fabrik", "dls", "protores+dls", "latent-opt+dls")
 """Lesson 06's first four: two classical solvers and the two learned ones with an exact finish."""
 
-EXPORTS = "studio_exports"
-"""Where the app's pages write, relative to the notebook's folder: one folder per page, :func:`session_folder`."""
+EXPORTS = _EXPORTS
+"""Where the app's pages write, relative to the notebook's folder: one folder per page, :func:`session_folder`
+(``$POSEKIT_EXPORTS_DIR`` moves it: :func:`posekit.paths.exports_dir`)."""
 
 
-def session_folder(root=EXPORTS) -> Path:
+def session_folder(root=None) -> Path:
     """The folder one page of the app writes into: ``root/session-<date>-<time>-<6 hex digits>``, named by the
     moment its kernel built the studio and a random part (two pages built in the same second never share one).
+    ``root`` defaults to :func:`posekit.paths.exports_dir` (:data:`EXPORTS` beside the notebook).
 
     Every page Voila serves runs its own kernel in the same working folder. With one folder for all, a student's
     *save* overwrote another's ``setup.json`` and *load* read whoever saved last, and an upload replaced any file
     of the same name, a broken one included. Nothing is created until the page writes a file."""
-    return Path(root) / f"session-{time.strftime('%Y%m%d-%H%M%S')}-{secrets.token_hex(3)}"
+    root = exports_dir() if root is None else Path(root)
+    return root / f"session-{time.strftime('%Y%m%d-%H%M%S')}-{secrets.token_hex(3)}"
 
 
 def studio_case(motions, case: int = 3, cases: int = 20, seed: int = 0):

@@ -11,9 +11,6 @@ from __future__ import annotations
 import json
 import os
 import shutil
-import socket
-import subprocess
-import sys
 import time
 import urllib.request
 import warnings
@@ -22,8 +19,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from posekit.bench.studio import QUIET_CONSOLE
-from posekit.viz.websocket import server_flags
+from posekit.bench.browser import CHROMIUM, CHROMIUM_FLAGS as FLAGS, QUIET_CONSOLE, chromium_missing, serve_lab
 from tests.viz.browser_helpers import (foreground as _foreground, kernel_round_trip, pixels as _pixels,
                                       presses_right_after_selections, wait_for as _wait_for, wait_still)
 
@@ -57,9 +53,6 @@ take minutes)."""
 STUDIO_NOTEBOOK = "06_posing_studio.ipynb"
 STUDIO_CELLS = ("motions = load_bandai_mini()", "studio = PosingStudio(")
 """Lesson 06's cells the browser test runs: set-up and the studio (its benchmark report and timeline are not needed)."""
-CHROMIUM = os.environ.get("POSEKIT_CHROMIUM", "/usr/bin/chromium")
-FLAGS = ["--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader", "--disable-background-networking",
-         "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-quic"]
 SAMPLE_JOINTS = {"root", "chest", "neck", "head"} | {f"{s}_{j}" for s in ("left", "right") for j in (
     "shoulder", "elbow", "wrist", "hip", "knee", "ankle", "toe")}
 
@@ -77,16 +70,13 @@ def _trimmed(src, dst, keep, shim=None):
     Path(dst).write_text(json.dumps(nb))
 
 
-def _free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 @pytest.fixture(scope="module")
 def lab(tmp_path_factory):
-    if not Path(CHROMIUM).exists():
-        pytest.fail(f"{CHROMIUM} not found: install Debian's chromium and chromium-driver (make test does)")
+    """JupyterLab on a folder of copies of the lessons (:func:`posekit.bench.browser.serve_lab`, as make lab):
+    ``(url, token, folder)``. The browser is ``tests/conftest.py``'s ``chromium``."""
+    missing = chromium_missing()
+    if missing:
+        pytest.fail(missing)
     work = tmp_path_factory.mktemp("lab")
     shutil.copy(ROOT / "notebooks" / NOTEBOOK, work / NOTEBOOK)  # copies: autosave never touches the repo's notebooks
     _trimmed(ROOT / "notebooks" / PANEL_NOTEBOOK, work / PANEL_NOTEBOOK, PANEL_CELLS)
@@ -95,48 +85,11 @@ def lab(tmp_path_factory):
     _trimmed(ROOT / "notebooks" / PROTORES_NOTEBOOK, work / PROTORES_NOTEBOOK, PROTORES_CELLS)
     _trimmed(ROOT / "notebooks" / RIG_NOTEBOOK, work / RIG_NOTEBOOK, RIG_CELLS, RIG_SHIM)
     _trimmed(ROOT / "notebooks" / STUDIO_NOTEBOOK, work / STUDIO_NOTEBOOK, STUDIO_CELLS)
-    port, token = _free_port(), "posekit-test"
-    cmd = [sys.executable, "-m", "jupyter", "lab", "--no-browser", f"--port={port}", "--ip=127.0.0.1",
-           f"--ServerApp.token={token}", f"--ServerApp.root_dir={work}", "--ServerApp.open_browser=False",
-           "--LabApp.news_url=", "--LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate",
-           f"--LabApp.workspaces_dir={work / 'workspaces'}", *server_flags("lab")]  # as make lab
-    if hasattr(os, "geteuid") and os.geteuid() == 0:
-        cmd.append("--allow-root")
-    log = open(work / "lab.log", "w")
-    proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, cwd=work)
-    url = f"http://127.0.0.1:{port}"
     try:
-        for _ in range(120):
-            try:
-                urllib.request.urlopen(f"{url}/api/status?token={token}", timeout=2)
-                break
-            except OSError:
-                if proc.poll() is not None:
-                    pytest.fail(f"jupyter lab exited: {(work / 'lab.log').read_text()[-2000:]}")
-                time.sleep(0.5)
-        else:
-            pytest.fail("jupyter lab did not start within 60 s")
-        yield url, token, work
-    finally:
-        proc.terminate()
-        try:
-            proc.wait(timeout=20)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-        log.close()
-
-
-@pytest.fixture(scope="module")
-def chromium():
-    """Debian's Chromium driven by Playwright (it cannot download a browser of its own here)."""
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True)
-        try:
-            yield browser
-        finally:
-            browser.close()
+        with serve_lab(work, token="posekit-test", startup_s=60) as server:
+            yield server.url, server.token, work
+    except RuntimeError as err:  # the server exited, or did not answer within 60 s: its log's tail says why
+        pytest.fail(str(err))
 
 
 # a prompt "[*]:": cells still queued or running

@@ -22,10 +22,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from posekit.bench.studio import CHROMIUM, blank_tab, open_studio, serve_voila
+from posekit.bench.browser import blank_tab, chromium_missing, serve_voila
+from posekit.bench.studio import open_studio
 from tests.viz.screen_fit import MEASURE, SCREEN, off_screen
 from tests.viz.test_browser import (RIG_NOTEBOOK, STUDIO_NOTEBOOK, _lab_page, _open_and_run_all, _wait_visible,
-                                    chromium, lab)  # noqa: F401 - fixtures
+                                    lab)  # noqa: F401 - a fixture (chromium: tests/conftest.py)
 from tests.viz.browser_helpers import wait_for
 
 pytestmark = pytest.mark.browser
@@ -47,8 +48,9 @@ def _check(m, what):
 
 @pytest.fixture(scope="module")
 def voila(tmp_path_factory):
-    if not Path(CHROMIUM).exists():
-        pytest.fail(f"{CHROMIUM} not found: install Debian's chromium (make test does)")
+    missing = chromium_missing()
+    if missing:
+        pytest.fail(missing)
     with serve_voila(folder=tmp_path_factory.mktemp("voila"), cull_idle_s=600) as server:
         yield server
 

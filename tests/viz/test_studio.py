@@ -296,6 +296,7 @@ def test_each_page_of_the_app_writes_into_a_folder_of_its_own(tmp_path, monkeypa
     from posekit.viz.studio_app import EXPORTS, app_studio
 
     monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("POSEKIT_EXPORTS_DIR", raising=False)  # the app's own default: EXPORTS in the working folder
     a, _ = app_studio(solvers="fabrik,dls")
     b, _ = app_studio(solvers="fabrik,dls")
     assert a.export_dir != b.export_dir and a.export_dir.parent == b.export_dir.parent == Path(EXPORTS)

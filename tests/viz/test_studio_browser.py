@@ -20,8 +20,8 @@ import pytest
 from tests.viz.browser_helpers import (BACKGROUND, SENT_LOG, drag_in_3d, kernel_round_trip, pixels as _pixels,
                                       press_in_3d, presses_right_after_selections, selected_joint, wait_for,
                                       wait_still)
-from posekit.bench.studio import (CHROMIUM, blank_tab, choose_solvers, launch_chromium, open_studio, rapid_updates,
-                                  serve_voila, update_number)
+from posekit.bench.browser import blank_tab, chromium_missing, serve_voila
+from posekit.bench.studio import choose_solvers, open_studio, rapid_updates, update_number
 
 pytestmark = pytest.mark.browser
 
@@ -32,28 +32,27 @@ ASKED_OUTSIDE = []
 
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
-    if not __import__("pathlib").Path(CHROMIUM).exists():
-        pytest.fail(f"{CHROMIUM} not found: install Debian's chromium and chromium-driver (make test does)")
+    missing = chromium_missing()
+    if missing:
+        pytest.fail(missing)
     with serve_voila(folder=tmp_path_factory.mktemp("voila"), cull_idle_s=600) as s:
         yield s
 
 
 @pytest.fixture(scope="module")
-def page(server):
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as p:
-        browser = launch_chromium(p)
-        try:
-            tab = blank_tab(browser)
-            tab.add_init_script(SENT_LOG)
-            own = (server.base, "data:", "blob:")
-            tab.on("request", lambda r: r.url.startswith(own) or ASKED_OUTSIDE.append(r.url))
-            pg = open_studio(browser, server.url, page=tab)
-            server.note_kernels()
-            yield pg
-        finally:
-            browser.close()
+def page(server, chromium):
+    """The studio app in a tab of ``tests/conftest.py``'s browser."""
+    tab = blank_tab(chromium)
+    tab.add_init_script(SENT_LOG)
+    own = (server.base, "data:", "blob:")
+    tab.on("request", lambda r: r.url.startswith(own) or ASKED_OUTSIDE.append(r.url))
+    pg = open_studio(chromium, server.url, page=tab)
+    server.note_kernels()
+    try:
+        yield pg
+    finally:
+        if not pg.is_closed():
+            pg.close()
 
 
 def _labels(page):

@@ -28,7 +28,8 @@ def test_the_floor_page_answers_every_key_press(tmp_path):
     its changes answers every key press (the latency every studio update is compared with)."""
     from playwright.sync_api import sync_playwright
 
-    from posekit.bench.studio import floor_notebook, launch_chromium, open_floor, rapid_updates, serve_voila
+    from posekit.bench.browser import launch_chromium, serve_voila
+    from posekit.bench.studio import floor_notebook, open_floor, rapid_updates
     from tests.viz.browser_helpers import wait_for
 
     with serve_voila(extra=[floor_notebook(tmp_path)], cull_idle_s=60) as server, sync_playwright() as p:
@@ -66,7 +67,8 @@ def test_a_page_closed_mid_drag_leaves_no_kernel_and_another_session_goes_on(tmp
     import psutil
     from playwright.sync_api import sync_playwright
 
-    from posekit.bench.studio import launch_chromium, open_studio, rapid_updates, serve_voila, update_number
+    from posekit.bench.browser import launch_chromium, serve_voila
+    from posekit.bench.studio import open_studio, rapid_updates, update_number
     from tests.viz.browser_helpers import pixels, press_in_3d, selected_joint, wait_for
 
     def gone(kernel):
