@@ -30,7 +30,6 @@ import os
 import platform
 import shlex
 import shutil
-import socket
 import subprocess
 import sys
 import tempfile
@@ -39,6 +38,8 @@ import urllib.error
 import urllib.request
 import uuid
 from pathlib import Path
+
+from posekit.bench.browser import free_port
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -58,12 +59,6 @@ TLJH_OVERHEAD_MB = 128
 """The Littlest JupyterHub's sizing rule: memory = concurrent users x per-user peak + 128 MB (the hub and proxy)."""
 SIZES = (10, 20, 30, 50)
 """Class sizes the sizing table gives a machine's memory for."""
-
-
-def _free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def _api(url, method, path, body=None, timeout=30):
@@ -261,9 +256,9 @@ def measure(sizes, lessons, out, note=""):
     folder = Path(tempfile.mkdtemp(prefix="posekit-hub-measure-"))
     overlay = folder / "jupyterhub_measure_config.py"
     overlay.write_text(OVERLAY.format(config=str(HERE / "jupyterhub_config.py"), token=TOKEN))
-    port, api_port = _free_port(), _free_port()
+    port, api_port = free_port(), free_port()
     env = dict(os.environ, POSEKIT_HUB_STATE=str(folder / "state"), POSEKIT_HUB_PORT=str(port),
-               POSEKIT_HUB_API_PORT=str(api_port), POSEKIT_HUB_PROXY_API_PORT=str(_free_port()),
+               POSEKIT_HUB_API_PORT=str(api_port), POSEKIT_HUB_PROXY_API_PORT=str(free_port()),
                PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}")
     url, hub_api = f"http://127.0.0.1:{port}", f"http://127.0.0.1:{api_port}"
     with open(folder / "hub.log", "w") as log:

@@ -8,13 +8,14 @@ import contextlib
 import json
 import os
 import shutil
-import socket
 import subprocess
 import sys
 import time
 import urllib.error
 import urllib.request
 from pathlib import Path
+
+from posekit.bench.browser import free_port
 
 ROOT = Path(__file__).resolve().parents[2]
 CONFIG = ROOT / "deploy" / "jupyterhub" / "jupyterhub_config.py"
@@ -30,12 +31,6 @@ c.JupyterHub.load_roles.append({{"name": "posekit-test", "services": ["posekit-t
                                  "scopes": ["admin:users", "admin:servers", "list:users", "read:users",
                                             "access:servers"]}})
 """
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 class Hub:
