@@ -36,7 +36,7 @@ def check_fk(my_fk) -> bool:
     cases = [((skel, R[i], root[i]), fk(skel, R[i], root[i])[0], _worst_joint(skel)) for i in range(len(R))]
     Rr = quat_to_matrix(random_rotations(skel.n_joints, 7))
     cases.append(((skel, Rr, np.zeros(3)), fk(skel, Rr, np.zeros(3))[0], _worst_joint(skel)))
-    return report("check_fk", my_fk, cases)
+    return report("check_fk", my_fk, cases, forbid=(fk,), arg_names=("skeleton", "local_rot_matrices", "root_pos"))
 
 
 @judged
@@ -51,7 +51,8 @@ def check_sixd_to_matrix(my_sixd_to_matrix) -> bool:
     def describe(got, expected):
         return f"max entry error {np.abs(got - expected).max():.3g}; columns must be b1, b2, b1 x b2"
     cases = [((x.copy(),), sixd_to_matrix(x), describe) for x in inputs]
-    return report("check_sixd_to_matrix", my_sixd_to_matrix, cases, atol=1e-6)
+    return report("check_sixd_to_matrix", my_sixd_to_matrix, cases, atol=1e-6, forbid=(sixd_to_matrix,),
+                  arg_names=("x",))
 
 
 @judged
@@ -64,7 +65,8 @@ def check_bone_lengths(my_bone_lengths) -> bool:
         j = int(np.argmax(np.abs(got - expected)))
         return f"joint {skel.names[j]}: got {got[j]:.4f} m, expected {expected[j]:.4f} m"
     cases = [((np.array(skel.parents), P[i]), bone_lengths_of(skel, P[i]), describe) for i in range(len(P))]
-    return report("check_bone_lengths", my_bone_lengths, cases)
+    return report("check_bone_lengths", my_bone_lengths, cases, forbid=(bone_lengths_of,),
+                  arg_names=("parents", "global_pos"))
 
 
 __all__ = ["check_fk", "check_sixd_to_matrix", "check_bone_lengths"]

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg
 
-from ..invrig.gpr import KERNELS
+from ..invrig.gpr import GPR, KERNELS
 from ._check import report
 from ._judge import judged
 
@@ -24,7 +24,8 @@ def check_gpr_mean(my_gpr_mean) -> bool:
         k = KERNELS["multiquadric"][0]
         expected = k(Xq, X, theta0) @ scipy.linalg.solve(k(X, X, theta0) + theta1 * np.eye(n), Y, assume_a="sym")
         cases.append(((X, Y, Xq, theta0, theta1), expected, describe))
-    return report("check_gpr_mean", my_gpr_mean, cases, atol=1e-6)
+    return report("check_gpr_mean", my_gpr_mean, cases, atol=1e-6, forbid=(GPR.fit, GPR.predict),
+                  arg_names=("X", "Y", "Xq", "theta0", "theta1"))
 
 
 @judged
@@ -39,7 +40,7 @@ def check_dls_step(my_dls_step) -> bool:
         J, dx = rng.normal(size=(X, C)), rng.normal(size=X)
         expected = np.linalg.solve(J.T @ J + lam**2 * np.eye(C), J.T @ dx)
         cases.append(((J, dx, lam), expected, describe))
-    return report("check_dls_step", my_dls_step, cases, atol=1e-8)
+    return report("check_dls_step", my_dls_step, cases, atol=1e-8, arg_names=("J", "dx", "damping"))
 
 
 __all__ = ["check_gpr_mean", "check_dls_step"]

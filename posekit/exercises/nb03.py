@@ -53,7 +53,8 @@ def check_tied_decoder(my_decode) -> bool:
         weights = (m.weight.detach().numpy().astype(float) for m in (ae.enc1, ae.enc2, ae.enc3))
         args = (z.numpy().astype(float), *weights)
         cases.append((args, expected, describe))
-    return report("check_tied_decoder", my_decode, cases, atol=1e-5)
+    return report("check_tied_decoder", my_decode, cases, atol=1e-5, forbid=(PoseAutoencoder.decode,),
+                  arg_names=("z", "W1", "W2", "W3"))
 
 
 @judged
@@ -75,4 +76,5 @@ def check_solver_loss(my_loss) -> bool:
         d, t = rng.normal(size=(N, F)), rng.normal(size=(N, F))
         expected = float(solver_loss(F, cols, k)(torch.as_tensor(d), torch.as_tensor(t)))
         cases.append(((d, t, cols, k), np.float64(expected), describe))
-    return report("check_solver_loss", lambda *a: np.float64(my_loss(*a)), cases, atol=1e-9)
+    return report("check_solver_loss", lambda *a: np.float64(my_loss(*a)), cases, atol=1e-9, forbid=(solver_loss,),
+                  arg_names=("decoded", "target", "columns", "k"))

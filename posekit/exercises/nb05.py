@@ -28,7 +28,10 @@ def check_prototype_step(my_step) -> bool:
     def flat(*a):
         e, p, x = my_step(*a)
         return np.concatenate([np.ravel(e), np.ravel(p), np.ravel(x)])
-    return report("check_prototype_step", flat, cases, atol=1e-9)
+    from ..models.protores.networks import ProtoResEncoder
+
+    return report("check_prototype_step", flat, cases, atol=1e-9, forbid=(ProtoResEncoder.forward,),
+                  arg_names=("b", "f", "e_prev", "r"))
 
 
 @judged
@@ -36,7 +39,7 @@ def check_tolerance_weight(my_weight) -> bool:
     """Check ``my_weight(lam (K,)) -> (sigma (K,), weight (K,))``: the noise scale ``sigma = sigma_M Lambda^eta``
     (sigma_M = 0.1, eta = 13) and the loss weight ``min(W_M, 1 / sigma)`` (W_M = 1000; an exact effector,
     sigma = 0, gets W_M)."""
-    from ..models.protores.networks import ETA, SIGMA_M
+    from ..models.protores.networks import ETA, SIGMA_M, tolerance_to_sigma
 
     def describe(got, exp):
         i = int(np.argmax(np.abs(got - exp) / (np.abs(exp) + 1e-12)))
@@ -51,7 +54,7 @@ def check_tolerance_weight(my_weight) -> bool:
     def flat(lam):
         s, w = my_weight(lam)
         return np.concatenate([np.ravel(s), np.ravel(w)])
-    return report("check_tolerance_weight", flat, cases, atol=1e-9)
+    return report("check_tolerance_weight", flat, cases, atol=1e-9, forbid=(tolerance_to_sigma,), arg_names=("lam",))
 
 
 @judged
@@ -73,4 +76,5 @@ def check_centroid(my_centroid) -> bool:
         lam = rng.uniform(0, 1, len(kind))
         exp = centroid(torch.as_tensor(kind)[None], torch.as_tensor(value)[None], torch.as_tensor(lam)[None])[0].numpy()
         cases.append(((kind, value, lam), exp, describe))
-    return report("check_centroid", lambda *a: np.asarray(my_centroid(*a), dtype=float), cases, atol=1e-9)
+    return report("check_centroid", lambda *a: np.asarray(my_centroid(*a), dtype=float), cases, atol=1e-9,
+                  forbid=(centroid,), arg_names=("kind", "value", "lam"))
