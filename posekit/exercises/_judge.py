@@ -16,7 +16,9 @@ What crosses is data only (:mod:`posekit.exercises._wire`: JSON with NumPy array
 student's kernel is the executor and :func:`ask` starts a judge (``python -m posekit.exercises._judge``); under
 ``posekit course autograde`` the judge is started by the grader and starts the executor itself
 (:func:`grade`: ``python -m posekit.exercises._judge --grade``), so the verdict the grade book keeps comes from a
-process the answer never ran in.
+process the answer never ran in. One such judge checks a whole lesson's submissions: it reads one job (a student's
+answer to one exercise) a line and writes its verdict a line, each job's answer in a fresh executor of its own, so
+that no answer runs where another student's, or another exercise's, does.
 """
 
 from __future__ import annotations
@@ -203,27 +205,55 @@ def _writer(stream):
     return send
 
 
-def grade(job: dict, timeout_s: float = 300) -> dict:
+def grade(job: dict, timeout_s: float | None = None) -> dict:
     """The fresh check of one exercise (``posekit course autograde``): the judge in this process, the answer in a
     child (``python -m posekit.exercises._judge --execute``) that defines ``job["function"]`` from
-    ``job["imports"]`` and ``job["source"]`` and runs the cases. Returns ``{"passed", "said"}``."""
+    ``job["imports"]`` and ``job["source"]`` and runs the cases. Returns ``{"passed", "said"}``.
+
+    The child runs in a session of its own and is stopped with everything it started after ``timeout_s`` seconds
+    (default ``job["timeout_s"]``, else 300): an endless loop fails the check, and the judge goes on to its next job.
+    """
+    import threading
+
+    if timeout_s is None:
+        timeout_s = float(job.get("timeout_s", 300))
     env = {k: v for k, v in os.environ.items() if not k.startswith("JPY_")}
     env.setdefault("MPLBACKEND", "Agg")
     child = subprocess.Popen([sys.executable, "-m", "posekit.exercises._judge", "--execute"], stdin=subprocess.PIPE,
-                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                             start_new_session=True)
+    stopped = threading.Event()
+
+    def stop():
+        stopped.set()
+        with contextlib.suppress(OSError):
+            os.killpg(child.pid, 9)  # the answer's process and whatever it started
+
+    timer = threading.Timer(timeout_s, stop)
+    timer.daemon = True
+    timer.start()
     send, receive = _writer(child.stdin), _lines(child.stdout)
     try:
-        send({"define": {k: job[k] for k in ("imports", "source", "function")}})
+        try:
+            send({"define": {k: job[k] for k in ("imports", "source", "function")}})
+        except OSError:  # the child is gone already; the checker's first case says so
+            pass
         passed, said = _judge(f"posekit.exercises.nb{job['lesson']}", job["checker"], send, receive)
     finally:
+        timer.cancel()
         with contextlib.suppress(Exception):
             child.stdin.close()
         try:
             child.wait(timeout=10)
         except subprocess.TimeoutExpired:
-            child.kill()
+            stop()
             child.wait()
     printed = child.stderr.read()
+    for f in (child.stdout, child.stderr):
+        with contextlib.suppress(Exception):
+            f.close()
+    if stopped.is_set():
+        return {"passed": False, "said": f"the fresh check ran past {timeout_s:g} s and was stopped"}
     return {"passed": passed, "said": (printed.strip() + "\n" + said).strip()}
 
 
@@ -257,10 +287,13 @@ def main(argv) -> int:
     if argv[1:2] == ["--execute"]:
         return _execute()
     _not_dumpable()
-    if argv[1:2] == ["--grade"]:
-        job = json.loads(sys.stdin.readline())
-        result = grade(job)
-        sys.stdout.write(json.dumps(result) + "\n")
+    if argv[1:2] == ["--grade"]:  # one job a line, one verdict a line, in order, until the input ends
+        protocol = sys.stdout
+        sys.stdout = sys.stderr  # nothing but the verdicts on the real standard output
+        for line in sys.stdin:
+            if line.strip():
+                protocol.write(json.dumps(grade(json.loads(line))) + "\n")
+                protocol.flush()
         return 0
     if len(argv) != 3:
         print("usage: python -m posekit.exercises._judge MODULE CHECKER | --grade | --execute", file=sys.stderr)
