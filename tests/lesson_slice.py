@@ -9,9 +9,11 @@ cells they read, not on the rest. :func:`slice_for_grading` keeps
   scratch cells) and every markdown cell;
 * every read-only code cell that binds a name a kept cell reads, found backwards through the notebook: the latest
   binding before a read is the one kept (a cell that changes ``x.attr`` or ``x[k]`` counts as binding ``x``, and
-  reads it).
+  reads it);
+* of every other code cell, its top-level imports: the kernel imports what it would, and the fresh check, which
+  runs the lesson's imports before an answer (:func:`posekit.course.grading.lesson_imports`), gets the same ones.
 
-The cells left out are then the lesson's own (section cells before the exercises); :func:`independent` says that none
+The cells left out (or cut to their imports) are then the lesson's own (section cells before the exercises); :func:`independent` says that none
 of them reads anything an exercise cell binds, so they run the same whatever a student answers -- as the lesson's
 own notebook runs them under nbval.
 """
@@ -124,14 +126,32 @@ def slice_for_grading(nb):
         if _exercise_cell(cell) or binds & need:
             keep.add(k)
             need = (need - (binds - reads)) | reads
-    out.cells = [c for k, c in enumerate(out.cells) if k in keep]
+    cells = []
+    for k, cell in enumerate(out.cells):
+        if k in keep:
+            cells.append(cell)
+            continue
+        imports = _imports(cell.source)
+        if imports:  # the lesson's imports stay whole: the kernel and the fresh check import what they would
+            cell.source = imports
+            cells.append(cell)
+    out.cells = cells
     return out
+
+
+def _imports(source: str) -> str:
+    """The top-level import statements of ``source``, as ``posekit.course.grading.lesson_imports`` reads them."""
+    try:
+        tree = ast.parse(source)
+    except SyntaxError:
+        return ""
+    return "\n".join(ast.unparse(n) for n in tree.body if isinstance(n, (ast.Import, ast.ImportFrom)))
 
 
 def independent(nb, sliced) -> list[str]:
     """The grade ids of the cells ``sliced`` left out of ``nb`` that read (directly or through another cell) a name
     an exercise cell binds: none, when the cells left out run the same whatever the answers are."""
-    kept = {_grading(c).get("grade_id") for c in sliced.cells}
+    kept = {_grading(c).get("grade_id"): c.source for c in sliced.cells}
     tainted: set[str] = set()
     out = []
     for cell in nb.cells:
@@ -140,6 +160,6 @@ def independent(nb, sliced) -> list[str]:
         binds, reads = names(cell.source)
         if _exercise_cell(cell) or reads & tainted:
             tainted |= binds
-            if _grading(cell).get("grade_id") not in kept:
+            if not _exercise_cell(cell) and kept.get(_grading(cell)["grade_id"]) != cell.source:  # left out or cut
                 out.append(_grading(cell).get("grade_id"))
     return out

@@ -24,6 +24,7 @@ import pytest
 pytest.importorskip("nbgrader")
 
 from posekit.course.lessons import lessons, read_notebook  # noqa: E402
+from posekit.course.grading import lesson_imports  # noqa: E402
 from posekit.course.nbgrader import assignment_notebook, screen, scripts_on_path  # noqa: E402
 from posekit.course.solutions import exercises, notes  # noqa: E402
 from tests.lesson_slice import independent, names, slice_for_grading  # noqa: E402
@@ -211,7 +212,11 @@ def test_the_graded_course_leaves_out_only_lesson_cells_no_exercise_reads(lesson
         return [c for c in cells if c.cell_type == "markdown" or not _grading(c).get("locked") or _grading(c)["grade"]
                 or _grading(c)["grade_id"].endswith(("_before", "_after"))]
     assert kept_whole(sliced.cells) == kept_whole(nb.cells)
-    assert len(sliced.cells) < len(nb.cells)
+    assert sum(len(c.source) for c in sliced.cells) < sum(len(c.source) for c in nb.cells)
+    # the lesson's imports are all there: the fresh check runs the same ones before each answer
+    def imports(cells):
+        return lesson_imports(c.source for c in cells if c.cell_type == "code" and _grading(c).get("locked"))
+    assert imports(sliced.cells) == imports(nb.cells)
     # every lesson name a kept cell reads is bound by a kept cell before it (or by itself)
     lesson_binds = set().union(*(names(c.source)[0] for c in nb.cells if c.cell_type == "code"))
     bound = set()

@@ -322,10 +322,18 @@ def _execute() -> int:
         return 2
     namespace = {"__name__": "__answer__"}
     state: dict = {}
+    # the lesson's imports (its read-only cells') first, outside the watch, as the kernel ran them before the answer:
+    # importing torch makes code objects (asyncio's coroutines), which under the watch would read as switching it off
+    try:
+        exec(compile(define["imports"], "<lesson imports>", "exec"), namespace)  # noqa: S102 - the lesson's own
+    except Exception as e:  # noqa: BLE001 - said at the first case, as the answer's own error would be
+        state["imports"] = e
 
     def answer(*args):
+        if "imports" in state:
+            raise state["imports"]
         if "fn" not in state:
-            code = compile(define["imports"] + "\n" + define["source"], "<answer cell>", "exec")
+            code = compile("\n" * (define["imports"].count("\n") + 1) + define["source"], "<answer cell>", "exec")
             exec(code, namespace)  # noqa: S102 - the student's answer, in this throw-away process
             state["fn"] = namespace[define["function"]]
         return state["fn"](*args)
