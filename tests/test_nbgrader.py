@@ -24,8 +24,10 @@ import pytest
 pytest.importorskip("nbgrader")
 
 from posekit.course.lessons import lessons, read_notebook  # noqa: E402
+from posekit.course.grading import lesson_imports  # noqa: E402
 from posekit.course.nbgrader import assignment_notebook, screen, scripts_on_path  # noqa: E402
 from posekit.course.solutions import exercises, notes  # noqa: E402
+from tests.lesson_slice import independent, names, slice_for_grading  # noqa: E402
 
 scripts_on_path()  # nbgrader's grade book runs `alembic` by name, also when the venv is not activated
 
@@ -158,23 +160,71 @@ def _nbgrader(*args, cwd, ok=True):
     return _run([sys.executable, "-m", "nbgrader", *args, "--log-level=WARN"], cwd, ok)
 
 
-@pytest.fixture(scope="module")
-def course(tmp_path_factory):
-    """Every lesson written by the command and released by nbgrader's ``generate_assignment`` (its Python API,
-    in this process: one nbgrader start instead of seven)."""
+def _release(root) -> None:
+    """nbgrader's ``generate_assignment`` of every lesson of the course ``root`` (its Python API, in this process:
+    one nbgrader start instead of seven)."""
     from nbgrader.apps import NbGraderAPI
     from traitlets.config.loader import PyFileConfigLoader
 
     scripts_on_path()  # nbgrader's grade book runs `alembic` by name, also when the venv is not activated
-    root = tmp_path_factory.mktemp("course")
-    _run([sys.executable, "-m", "posekit", "course", "nbgrader", "--out", str(root)], ROOT)
     config = PyFileConfigLoader("nbgrader_config.py", path=str(root)).load_config()
     config.CourseDirectory.root = str(root)
     api = NbGraderAPI(config=config)
     for stem in STEMS:
         result = api.generate_assignment(stem)
         assert result["success"], result.get("error") or result.get("log")
+
+
+@pytest.fixture(scope="module")
+def course(tmp_path_factory):
+    """Every lesson written by the command and released by nbgrader's ``generate_assignment``."""
+    root = tmp_path_factory.mktemp("course")
+    _run([sys.executable, "-m", "posekit", "course", "nbgrader", "--out", str(root)], ROOT)
+    _release(root)
     return root
+
+
+@pytest.fixture(scope="module")
+def graded_course(course, tmp_path_factory):
+    """The course the classes are graded in: the command's course with each lesson cut to the cells its grading
+    needs (:func:`tests.lesson_slice.slice_for_grading`: every exercise cell, and the lesson cells they read), then
+    released. A class hands in, and nbgrader runs, each student's notebook top to bottom; the lesson cells left out
+    (benchmarks, demo training runs) read nothing an exercise binds (:func:`tests.lesson_slice.independent`, asserted
+    by ``test_the_graded_course_leaves_out_only_lesson_cells_no_exercise_reads``), so they would run the same in
+    every submission, as they run under nbval in the lesson itself."""
+    root = tmp_path_factory.mktemp("graded")
+    shutil.copy(course / "nbgrader_config.py", root / "nbgrader_config.py")
+    for stem in STEMS:
+        src = nbformat.read(str(course / "source" / stem / f"{stem}.ipynb"), as_version=4)
+        (root / "source" / stem).mkdir(parents=True)
+        nbformat.write(slice_for_grading(src), str(root / "source" / stem / f"{stem}.ipynb"))
+    _release(root)
+    return root
+
+
+@pytest.mark.parametrize("lesson", LESSONS, ids=STEMS)
+def test_the_graded_course_leaves_out_only_lesson_cells_no_exercise_reads(lesson):
+    nb = assignment_notebook(lesson)
+    sliced = slice_for_grading(nb)
+    assert independent(nb, sliced) == []
+    # every exercise cell and every markdown cell is kept, in order; only read-only lesson code cells go
+    def kept_whole(cells):
+        return [c for c in cells if c.cell_type == "markdown" or not _grading(c).get("locked") or _grading(c)["grade"]
+                or _grading(c)["grade_id"].endswith(("_before", "_after"))]
+    assert kept_whole(sliced.cells) == kept_whole(nb.cells)
+    assert sum(len(c.source) for c in sliced.cells) < sum(len(c.source) for c in nb.cells)
+    # the lesson's imports are all there: the fresh check runs the same ones before each answer
+    def imports(cells):
+        return lesson_imports(c.source for c in cells if c.cell_type == "code" and _grading(c).get("locked"))
+    assert imports(sliced.cells) == imports(nb.cells)
+    # every lesson name a kept cell reads is bound by a kept cell before it (or by itself)
+    lesson_binds = set().union(*(names(c.source)[0] for c in nb.cells if c.cell_type == "code"))
+    bound = set()
+    for c in sliced.cells:
+        if c.cell_type == "code":
+            binds, reads = names(c.source)
+            assert (reads & lesson_binds) - bound - binds == set(), c.source[:200]
+            bound |= binds
 
 
 @pytest.mark.slow
@@ -324,12 +374,13 @@ LOOP_TIMEOUT_S = 30
 
 
 @pytest.fixture(scope="module")
-def graded(course):
+def graded(graded_course):
     """``grade(stem)``: hands in the class of ``stem`` (:func:`_class`) and autogrades all of it with one
     ``posekit course autograde`` (nbgrader's ``autograde`` behind the screening), once per lesson.
     Returns ``(the course folder, what the class did, the finished command)``."""
     from nbgrader.api import Gradebook
 
+    course = graded_course
     done = {}
 
     def grade(stem):

@@ -24,6 +24,7 @@ instructor to read.
 from __future__ import annotations
 
 import ast
+import contextlib
 import json
 import os
 import re
@@ -32,7 +33,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["Finding", "fresh_check", "lesson_imports", "suspicious", "changed_read_only", "regrade"]
+__all__ = ["Finding", "fresh_check", "fresh_checks", "lesson_imports", "suspicious", "changed_read_only", "regrade"]
 
 SUSPICIOUS = re.compile(
     r"sys\.modules|\bsetattr\s*\(|\bdelattr\s*\(|setprofile|settrace|_getframe|f_back|f_locals|\bctypes\b|"
@@ -100,27 +101,76 @@ def fresh_check(lesson: str, checker: str, function: str, source: str, imports: 
     imports : str
         Statements run before it (the lesson's imports, so that ``np`` means what the lesson says).
     timeout_s : float
-        Seconds before the judge and the answer are killed (an endless loop fails the check).
+        Seconds before the answer's process (and what it started) is killed (an endless loop fails the check).
     """
     job = {"lesson": lesson, "checker": checker, "function": function, "source": source, "imports": imports}
+    return fresh_checks([job], timeout_s)[0]
+
+
+def fresh_checks(jobs: list[dict], timeout_s: float = 300) -> list[Fresh]:
+    """:func:`fresh_check` of many answers with one judge: ``jobs`` are dicts of its arguments (``lesson``,
+    ``checker``, ``function``, ``source``, ``imports``); one :class:`Fresh` each, in order.
+
+    The judge starts (and imports the checkers) once; each answer still runs in an executor process of its own, which
+    the judge kills after ``timeout_s`` seconds. Should the judge itself stop answering (``timeout_s`` and a minute
+    more for one verdict) or die, it is killed and a new one takes the jobs left.
+    """
+    import queue
+    import threading
+
+    def pump(stream, sink) -> None:
+        for line in stream:
+            sink(line)
+        sink(None)
+
+    out: list[Fresh] = []
     env = {k: v for k, v in os.environ.items() if not k.startswith("JPY_")}
     env.setdefault("MPLBACKEND", "Agg")
-    proc = subprocess.Popen([sys.executable, "-m", "posekit.exercises._judge", "--grade"], stdin=subprocess.PIPE,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
-                            start_new_session=True)
-    try:
-        out, err = proc.communicate(json.dumps(job) + "\n", timeout=timeout_s)
-    except subprocess.TimeoutExpired:
-        os.killpg(proc.pid, 9)  # the judge and the answer's process with it
-        proc.communicate()
-        return Fresh(False, f"the fresh check ran past {timeout_s:g} s and was stopped")
-    lines = out.strip().splitlines()
-    try:
-        verdict = json.loads(lines[-1])
-    except (IndexError, ValueError):
-        tail = (err.strip().splitlines() or ["no verdict"])[-1]
-        return Fresh(False, tail)
-    return Fresh(verdict.get("passed") is True, str(verdict.get("said", "")))
+    while len(out) < len(jobs):  # a judge for the jobs left
+        proc = subprocess.Popen([sys.executable, "-m", "posekit.exercises._judge", "--grade"], stdin=subprocess.PIPE,
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                                start_new_session=True)
+        verdicts: queue.Queue = queue.Queue()
+        said: list[str] = []
+        threading.Thread(target=pump, args=(proc.stdout, verdicts.put), daemon=True).start()
+        err = threading.Thread(target=pump, args=(proc.stderr, lambda x: said.append(x or "")), daemon=True)
+        err.start()
+        hung = False
+        try:
+            while len(out) < len(jobs):
+                try:
+                    proc.stdin.write(json.dumps({**jobs[len(out)], "timeout_s": timeout_s}) + "\n")
+                    proc.stdin.flush()
+                except OSError:  # the judge is gone: its verdicts so far are all there is
+                    pass
+                try:
+                    line = verdicts.get(timeout=timeout_s + 60)
+                except queue.Empty:
+                    hung = True
+                    out.append(Fresh(False, f"the fresh check ran past {timeout_s:g} s and was stopped"))
+                    break
+                try:
+                    verdict = json.loads(line) if line else None
+                except ValueError:
+                    verdict = None
+                if not isinstance(verdict, dict):  # the judge died (or wrote something else): why, and a new one
+                    if line is None:
+                        with contextlib.suppress(subprocess.TimeoutExpired):
+                            proc.wait(timeout=10)
+                        err.join(timeout=10)
+                    out.append(Fresh(False, ("".join(said).strip().splitlines() or ["no verdict"])[-1]))
+                    break
+                out.append(Fresh(verdict.get("passed") is True, str(verdict.get("said", ""))))
+        finally:
+            with contextlib.suppress(OSError):
+                proc.stdin.close()
+            try:
+                proc.wait(timeout=0 if hung else 30)
+            except subprocess.TimeoutExpired:
+                with contextlib.suppress(OSError):
+                    os.killpg(proc.pid, 9)
+                proc.wait()
+    return out
 
 
 def _grading(cell) -> dict:
@@ -174,6 +224,8 @@ def regrade(course_dir, assignment: str, students=None, timeout_s: float = 300) 
     tests = [c for c in released.cells if _grading(c).get("grade") and c.cell_type == "code"]
     findings = []
     with Gradebook(f"sqlite:///{course_dir / 'gradebook.db'}") as gb:
+        todo = []  # per submission: (student, its notebook, read-only findings, [(function, grade, job, source)])
+        jobs = []
         for folder in sorted((course_dir / "autograded").glob(f"*/{assignment}")):
             student = folder.parent.name
             if students and student not in students:
@@ -186,36 +238,45 @@ def regrade(course_dir, assignment: str, students=None, timeout_s: float = 300) 
                 sub_nb = gb.find_submission_notebook(assignment, assignment, student)
             except MissingEntry:
                 continue
-            notes: dict[str, list[str]] = {}
             handed = course_dir / "submitted" / student / assignment / f"{assignment}.ipynb"
             try:
                 handed_in = json.loads(handed.read_text(encoding="utf-8"))
             except (OSError, ValueError):
                 handed_in = {"cells": []}
-            for grade_id, how in changed_read_only(released, handed_in):
-                findings.append(Finding(student, assignment, grade_id,
-                                        f"read-only cell {how} by the student (nbgrader put it back before grading)"))
+            changed = [Finding(student, assignment, grade_id,
+                               f"read-only cell {how} by the student (nbgrader put it back before grading)")
+                       for grade_id, how in changed_read_only(released, handed_in)]
             cells = graded.cells
+            checks = []
             for test in tests:
                 test_id = _grading(test)["grade_id"]
                 function = test_id[:-len("_tests")] if test_id.endswith("_tests") else None
                 checker = re.search(r"\b(check_\w+)\(", test.source)
                 k = next((i for i, c in enumerate(cells) if _grading(c).get("grade_id") == function), None)
                 grade = gb.find_grade(test_id, assignment, assignment, student)
-                kernel_points = grade.auto_score or 0
-                points = grade.max_score
                 if function is None or checker is None:
                     continue
                 if k is None:
-                    fresh = Fresh(False, "no answer cell")
-                else:
-                    source = cells[k].source
-                    imports = lesson_imports(c.source for c in cells[:k]  # the lesson's own cells, not answers
-                                             if c.cell_type == "code" and not _grading(c).get("solution")
-                                             and _grading(c).get("locked"))
-                    fresh = fresh_check(lesson.number, checker.group(1), function, source, imports, timeout_s)
-                    for line in suspicious(source):
-                        notes.setdefault(function, []).append(f"the answer touches the grading machinery ({line})")
+                    checks.append((function, grade, Fresh(False, "no answer cell"), ""))
+                    continue
+                source = cells[k].source
+                imports = lesson_imports(c.source for c in cells[:k]  # the lesson's own cells, not answers
+                                         if c.cell_type == "code" and not _grading(c).get("solution")
+                                         and _grading(c).get("locked"))
+                checks.append((function, grade, len(jobs), source))
+                jobs.append({"lesson": lesson.number, "checker": checker.group(1), "function": function,
+                             "source": source, "imports": imports})
+            todo.append((student, sub_nb, changed, checks))
+        verdicts = fresh_checks(jobs, timeout_s) if jobs else []  # one judge for the lesson, an executor per answer
+        for student, sub_nb, changed, checks in todo:
+            findings += changed
+            notes: dict[str, list[str]] = {}
+            for function, grade, job, source in checks:
+                fresh = job if isinstance(job, Fresh) else verdicts[job]
+                for line in suspicious(source):
+                    notes.setdefault(function, []).append(f"the answer touches the grading machinery ({line})")
+                kernel_points = grade.auto_score or 0
+                points = grade.max_score
                 fresh_points = points if fresh.passed else 0
                 if fresh_points != kernel_points:
                     notes.setdefault(function, []).append(

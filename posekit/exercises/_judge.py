@@ -13,22 +13,30 @@ them, and one that rebound the comparison (``_check._allclose``) or the referenc
   afterwards (an answer that changes them in place is refused by the judge), what it raised, and what the watch saw.
 
 What crosses is data only (:mod:`posekit.exercises._wire`: JSON with NumPy arrays, never a pickle). In a lesson the
-student's kernel is the executor and :func:`ask` starts a judge (``python -m posekit.exercises._judge``); under
+student's kernel is the executor and :func:`ask` asks a judge (``python -m posekit.exercises._judge --serve``,
+started on the kernel's first check and kept for the next: one check after another, each begun by a ``check``
+line naming the lesson's checker); under
 ``posekit course autograde`` the judge is started by the grader and starts the executor itself
 (:func:`grade`: ``python -m posekit.exercises._judge --grade``), so the verdict the grade book keeps comes from a
-process the answer never ran in.
+process the answer never ran in. One such judge checks a whole lesson's submissions: it reads one job (a student's
+answer to one exercise) a line and writes its verdict a line, each job's answer in a fresh executor of its own, so
+that no answer runs where another student's, or another exercise's, does.
 """
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import functools
 import importlib
 import io
 import json
 import os
+import re
 import subprocess
 import sys
+import tempfile
+import threading
 
 from . import _wire
 from ._check import CURRENT, Forbidden, WatchOff, _Watch
@@ -127,32 +135,78 @@ def run_case(fn, message: dict) -> dict:
     return reply
 
 
-def ask(module: str, checker: str, fn) -> bool:
-    """A lesson's check: start a judge for ``module.checker``, run each case it sends on ``fn`` here, print its
-    verdict; True when it says every case passed."""
-    env = dict(os.environ)
-    env.setdefault("MPLBACKEND", "Agg")
-    proc = subprocess.Popen([sys.executable, "-m", "posekit.exercises._judge", module, checker],
-                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            env=env)
-    try:
-        for line in proc.stdout:
-            message = _wire.loads(line)
-            if "verdict" in message:
-                print(message["verdict"], end="")
-                return message.get("passed") is True
-            proc.stdin.write(_wire.dumps(run_case(fn, message)))
-            proc.stdin.flush()
-        err = proc.stderr.read().strip().splitlines()
-        print(f"✗ {checker}: the checker stopped before its verdict ({err[-1] if err else 'no message'})")
-        return False
-    finally:
+_WARM: dict = {"proc": None, "err": None}
+"""The judge this process asks (:func:`ask`), started on the first check and kept for the next ones."""
+_WARM_LOCK = threading.Lock()
+
+
+def _warm_judge():
+    proc = _WARM["proc"]
+    if proc is None or proc.poll() is not None:
+        _drop_judge()
+        env = dict(os.environ)
+        env.setdefault("MPLBACKEND", "Agg")
+        err = tempfile.TemporaryFile("w+")  # a file, not a pipe: what the judge says is never waited on
+        proc = subprocess.Popen([sys.executable, "-m", "posekit.exercises._judge", "--serve"],
+                                stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=err, text=True, env=env)
+        _WARM.update(proc=proc, err=err)
+    return proc
+
+
+def _drop_judge() -> str:
+    """Stop the warm judge (if any); the last line it wrote to standard error."""
+    proc, err = _WARM["proc"], _WARM["err"]
+    _WARM.update(proc=None, err=None)
+    said = ""
+    if proc is not None:
         if proc.poll() is None:
             proc.kill()
         proc.wait()
-        for f in (proc.stdin, proc.stdout, proc.stderr):
+        for f in (proc.stdin, proc.stdout):
             with contextlib.suppress(Exception):
                 f.close()
+    if err is not None:
+        with contextlib.suppress(Exception):
+            err.seek(0)
+            lines = err.read().strip().splitlines()
+            said = lines[-1] if lines else ""
+            err.close()
+    return said
+
+
+def ask(module: str, checker: str, fn) -> bool:
+    """A lesson's check: ask this process's judge (``python -m posekit.exercises._judge --serve``, started on the
+    first check and kept) for ``module.checker``, run each case it sends on ``fn`` here, print its verdict; True when
+    it says every case passed. A check that does not end with a verdict (an error, an interrupted cell) stops that
+    judge; the next check starts another."""
+    with _WARM_LOCK:
+        done = False
+        try:
+            proc = _warm_judge()
+            try:
+                proc.stdin.write(_wire.dumps({"check": [module, checker]}))
+                proc.stdin.flush()
+            except OSError:
+                pass
+            for line in proc.stdout:
+                message = _wire.loads(line)
+                if "verdict" in message:
+                    print(message["verdict"], end="")
+                    done = True
+                    return message.get("passed") is True
+                proc.stdin.write(_wire.dumps(run_case(fn, message)))
+                proc.stdin.flush()
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                proc.wait(timeout=10)
+            said = _drop_judge()
+            print(f"✗ {checker}: the checker stopped before its verdict ({said or 'no message'})")
+            return False
+        finally:
+            if not done:
+                _drop_judge()
+
+
+atexit.register(_drop_judge)
 
 
 def judged(checker):
@@ -203,27 +257,55 @@ def _writer(stream):
     return send
 
 
-def grade(job: dict, timeout_s: float = 300) -> dict:
+def grade(job: dict, timeout_s: float | None = None) -> dict:
     """The fresh check of one exercise (``posekit course autograde``): the judge in this process, the answer in a
     child (``python -m posekit.exercises._judge --execute``) that defines ``job["function"]`` from
-    ``job["imports"]`` and ``job["source"]`` and runs the cases. Returns ``{"passed", "said"}``."""
+    ``job["imports"]`` and ``job["source"]`` and runs the cases. Returns ``{"passed", "said"}``.
+
+    The child runs in a session of its own and is stopped with everything it started after ``timeout_s`` seconds
+    (default ``job["timeout_s"]``, else 300): an endless loop fails the check, and the judge goes on to its next job.
+    """
+    import threading
+
+    if timeout_s is None:
+        timeout_s = float(job.get("timeout_s", 300))
     env = {k: v for k, v in os.environ.items() if not k.startswith("JPY_")}
     env.setdefault("MPLBACKEND", "Agg")
     child = subprocess.Popen([sys.executable, "-m", "posekit.exercises._judge", "--execute"], stdin=subprocess.PIPE,
-                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                             start_new_session=True)
+    stopped = threading.Event()
+
+    def stop():
+        stopped.set()
+        with contextlib.suppress(OSError):
+            os.killpg(child.pid, 9)  # the answer's process and whatever it started
+
+    timer = threading.Timer(timeout_s, stop)
+    timer.daemon = True
+    timer.start()
     send, receive = _writer(child.stdin), _lines(child.stdout)
     try:
-        send({"define": {k: job[k] for k in ("imports", "source", "function")}})
+        try:
+            send({"define": {k: job[k] for k in ("imports", "source", "function")}})
+        except OSError:  # the child is gone already; the checker's first case says so
+            pass
         passed, said = _judge(f"posekit.exercises.nb{job['lesson']}", job["checker"], send, receive)
     finally:
+        timer.cancel()
         with contextlib.suppress(Exception):
             child.stdin.close()
         try:
             child.wait(timeout=10)
         except subprocess.TimeoutExpired:
-            child.kill()
+            stop()
             child.wait()
     printed = child.stderr.read()
+    for f in (child.stdout, child.stderr):
+        with contextlib.suppress(Exception):
+            f.close()
+    if stopped.is_set():
+        return {"passed": False, "said": f"the fresh check ran past {timeout_s:g} s and was stopped"}
     return {"passed": passed, "said": (printed.strip() + "\n" + said).strip()}
 
 
@@ -240,10 +322,18 @@ def _execute() -> int:
         return 2
     namespace = {"__name__": "__answer__"}
     state: dict = {}
+    # the lesson's imports (its read-only cells') first, outside the watch, as the kernel ran them before the answer:
+    # importing torch makes code objects (asyncio's coroutines), which under the watch would read as switching it off
+    try:
+        exec(compile(define["imports"], "<lesson imports>", "exec"), namespace)  # noqa: S102 - the lesson's own
+    except Exception as e:  # noqa: BLE001 - said at the first case, as the answer's own error would be
+        state["imports"] = e
 
     def answer(*args):
+        if "imports" in state:
+            raise state["imports"]
         if "fn" not in state:
-            code = compile(define["imports"] + "\n" + define["source"], "<answer cell>", "exec")
+            code = compile("\n" * (define["imports"].count("\n") + 1) + define["source"], "<answer cell>", "exec")
             exec(code, namespace)  # noqa: S102 - the student's answer, in this throw-away process
             state["fn"] = namespace[define["function"]]
         return state["fn"](*args)
@@ -257,13 +347,30 @@ def main(argv) -> int:
     if argv[1:2] == ["--execute"]:
         return _execute()
     _not_dumpable()
-    if argv[1:2] == ["--grade"]:
-        job = json.loads(sys.stdin.readline())
-        result = grade(job)
-        sys.stdout.write(json.dumps(result) + "\n")
+    if argv[1:2] == ["--grade"]:  # one job a line, one verdict a line, in order, until the input ends
+        protocol = sys.stdout
+        sys.stdout = sys.stderr  # nothing but the verdicts on the real standard output
+        for line in sys.stdin:
+            if line.strip():
+                protocol.write(json.dumps(grade(json.loads(line))) + "\n")
+                protocol.flush()
+        return 0
+    if argv[1:2] == ["--serve"]:  # a kernel's judge (ask): one check after another, until the input ends
+        receive = _lines(sys.stdin)
+        send = _writer(sys.stdout)
+        sys.stdout = sys.stderr  # nothing but the protocol on the real standard output
+        while (message := receive()) is not None:
+            module, checker = (list(message.get("check") or []) + ["", ""])[:2]
+            if not (re.fullmatch(r"posekit\.exercises\.nb\d\d", str(module))
+                    and re.fullmatch(r"check_\w+", str(checker))):
+                print(f"not a lesson's checker: {module}.{checker}", file=sys.stderr)
+                return 2
+            passed, said = _judge(module, checker, send, receive)
+            send({"verdict": said, "passed": passed})
         return 0
     if len(argv) != 3:
-        print("usage: python -m posekit.exercises._judge MODULE CHECKER | --grade | --execute", file=sys.stderr)
+        print("usage: python -m posekit.exercises._judge MODULE CHECKER | --serve | --grade | --execute",
+              file=sys.stderr)
         return 2
     receive = _lines(sys.stdin)
     protocol_out = sys.stdout
