@@ -40,9 +40,8 @@ LATENT_NOTEBOOK = "04_aegan_latent_space.ipynb"
 LATENT_CELLS = ("motions = load_bandai_mini()", "cases = build_cases(", "SolverPanel(")
 """Lesson 04's cells the browser test runs: set-up, the cases, the panel (its benchmark takes minutes)."""
 PROTORES_NOTEBOOK = "05_protores.ipynb"
-PROTORES_CELLS = ("solvers = {arch: ProtoResSolver", "benches = {name: load_benchmark", "order = [Effector(",
-                  "EffectorEditor(")
-"""Lesson 05's cells the browser test runs: set-up, the benchmarks, the Fig. 3 effectors, the editor."""
+PROTORES_CELLS = ("solvers = {arch: ProtoResSolver", "benches = {name: load_benchmark", "EffectorEditor(")
+"""Lesson 05's cells the browser test runs: set-up, the benchmarks, the editor (with the effectors it starts from)."""
 RIG_NOTEBOOK = "02_inverse_rig_mapping.ipynb"
 RIG_CELLS = ("rig = HumanoidRig(skel)", "train, test, test_clip = standard_sets(", "viewer = SkeletonViewer(skel, start_x")
 RIG_SHIM = ("from posekit.invrig import refine\nfrom posekit.invrig.nn import load_inverse_net, weights_path\n"
