@@ -798,6 +798,15 @@ def _sentence(text, pos):
     return " ".join(text[max(0, pos - 90):pos].split()) + " ⟦" + " ".join(text[pos:pos + 50].split())
 
 
+def _at_revision(rev: str, notebook) -> dict:
+    """The notebook ``notebook`` as git revision ``rev`` holds it."""
+    import subprocess
+
+    rel = Path(notebook).resolve().relative_to(ROOT)
+    return json.loads(subprocess.run(["git", "show", f"{rev}:{rel}"], cwd=ROOT, check=True, capture_output=True,
+                                     text=True).stdout)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("notebooks", nargs="+")
@@ -814,12 +823,8 @@ def main(argv=None):
     args = ap.parse_args(argv)
     exempt = json.loads(Path(args.exempt).read_text()) if args.exempt else {}
     if args.markdown_from:
-        import subprocess
-
         for nbp in args.notebooks:
-            rel = Path(nbp).resolve().relative_to(ROOT)
-            other = json.loads(subprocess.run(["git", "show", f"{args.markdown_from}:{rel}"], cwd=ROOT, check=True,
-                                              capture_output=True, text=True).stdout)
+            other = _at_revision(args.markdown_from, nbp)
             nb = json.loads(Path(nbp).read_text(encoding="utf-8"))
             missing = take_markdown(nb, other)
             print(f"{nbp}: markdown cells of {args.markdown_from}"
@@ -835,12 +840,8 @@ def main(argv=None):
                   + (f" ({', '.join(f'cell {i}: {n}' for i, n in moved.items())})" if moved else ""))
         return 0
     if args.carry_from:
-        import subprocess
-
         for nbp in args.notebooks:
-            rel = Path(nbp).resolve().relative_to(ROOT)
-            old = json.loads(subprocess.run(["git", "show", f"{args.carry_from}:{rel}"], cwd=ROOT, check=True,
-                                            capture_output=True, text=True).stdout)
+            old = _at_revision(args.carry_from, nbp)
             new = json.loads(Path(nbp).read_text(encoding="utf-8"))
             inline_all(old)
             inline_all(new)
