@@ -259,8 +259,6 @@ def test_the_fresh_check_passes_the_reference_solution():
 # -- the wrong answers the issue found passing, each refused with its reason; the right variants accepted ----------
 
 def _solutions(number):
-    import importlib.util
-
     from posekit.course.solutions import _module
 
     return _module(find_lesson(number))

@@ -35,7 +35,6 @@
 #                               default the hub's own user)
 
 import json
-import math
 import os
 import pwd
 import stat

@@ -154,7 +154,7 @@ class _Watch:
             sys.addaudithook(_audit)
             sys._posekit_audit = True
         self._previous = sys.getprofile()
-        self._previous_threads = getattr(threading, "_profile_hook", None)
+        self._previous_threads = threading.getprofile()
         if self.codes:
             threading.setprofile(self._hook)
             sys.setprofile(self._hook)

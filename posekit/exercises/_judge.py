@@ -265,8 +265,6 @@ def grade(job: dict, timeout_s: float | None = None) -> dict:
     The child runs in a session of its own and is stopped with everything it started after ``timeout_s`` seconds
     (default ``job["timeout_s"]``, else 300): an endless loop fails the check, and the judge goes on to its next job.
     """
-    import threading
-
     if timeout_s is None:
         timeout_s = float(job.get("timeout_s", 300))
     env = {k: v for k, v in os.environ.items() if not k.startswith("JPY_")}
@@ -368,17 +366,8 @@ def main(argv) -> int:
             passed, said = _judge(module, checker, send, receive)
             send({"verdict": said, "passed": passed})
         return 0
-    if len(argv) != 3:
-        print("usage: python -m posekit.exercises._judge MODULE CHECKER | --serve | --grade | --execute",
-              file=sys.stderr)
-        return 2
-    receive = _lines(sys.stdin)
-    protocol_out = sys.stdout
-    sys.stdout = sys.stderr  # nothing but the protocol on the real standard output
-    passed, said = _judge(argv[1], argv[2], _writer(protocol_out), receive)
-    _writer(protocol_out)({"verdict": said, "passed": passed})
-    return 0
-
+    print("usage: python -m posekit.exercises._judge --serve | --grade | --execute", file=sys.stderr)
+    return 2
 
 if __name__ == "__main__":
     sys.exit(main(sys.argv))
