@@ -7,14 +7,17 @@ how the cases are reduced (mean or median) and the unit. A quantity defined othe
 (lesson 05's world-frame *mean joint error* is not MPJPE; the distance to the true pose is not
 *naturalness*). ``tests/evaluation/test_measures.py`` checks the lessons' table headers against this list.
 
-Also here: :func:`verdict_table`, the goal / measured / met table that ends each lesson's Discussion.
+Also here: :func:`verdict_table`, the goal / measured / met table that ends each lesson's Discussion, and the one
+yardstick a lesson reads an ordering of trained models against (:func:`run_spread`, :func:`ordering`): a gap smaller
+than two runs of one setting differ is "level", whichever two methods it separates.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["Measure", "MEASURES", "measure", "glossary_markdown", "verdict_table", "header_names"]
+__all__ = ["Measure", "MEASURES", "measure", "glossary_markdown", "verdict_table", "header_names", "run_spread",
+           "ordering"]
 
 
 @dataclass(frozen=True)
@@ -184,6 +187,54 @@ def docs_page() -> str:
     for figure, marked in _PAGE_MARKERS.items():
         page = page.replace(figure, marked)
     return page
+
+
+def run_spread(*pairs) -> float:
+    """The run-to-run yardstick: the largest relative difference between two runs of one setting.
+
+    Parameters
+    ----------
+    *pairs : (float, float)
+        The same measure (lower is better, positive) from two training runs of one setting, one pair per place
+        it was measured (each benchmark, say).
+
+    Returns
+    -------
+    float
+        ``max |a - b| / min(a, b)`` over the pairs: 0.25 when one run's error is 25 % above the other's.
+    """
+    if not pairs:
+        raise ValueError("run_spread: expected at least one (run, run again) pair of values")
+    out = 0.0
+    for pair in pairs:
+        a, b = (float(v) for v in pair)
+        if not (a > 0 and b > 0):
+            raise ValueError(f"run_spread: expected two positive errors of one setting, got {a!r} and {b!r}")
+        out = max(out, abs(a - b) / min(a, b))
+    return out
+
+
+def ordering(a: float, b: float, spread: float) -> str:
+    """How a method's error ``a`` stands against another's ``b`` (lower is better), read against ``spread``.
+
+    Parameters
+    ----------
+    a, b : float
+        The two methods' values of one measure on the same cases (positive).
+    spread : float
+        The yardstick (:func:`run_spread`): a relative gap at most this large is within the run-to-run noise.
+
+    Returns
+    -------
+    str
+        ``"ahead"`` when ``b`` exceeds ``a`` by more than ``spread`` (``b / a - 1 > spread``), ``"behind"`` when
+        ``a`` exceeds ``b`` so, else ``"level"``. The same rule for every pair, learned or classical, so both sides
+        of a comparison meet one yardstick.
+    """
+    a, b, spread = float(a), float(b), float(spread)
+    if not (a > 0 and b > 0) or not spread >= 0:
+        raise ValueError(f"ordering: expected two positive errors and a spread >= 0, got {a!r}, {b!r}, {spread!r}")
+    return "ahead" if b / a - 1 > spread else "behind" if a / b - 1 > spread else "level"
 
 
 def verdict_table(rows) -> str:

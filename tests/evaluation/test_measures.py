@@ -8,7 +8,8 @@ from pathlib import Path
 import pytest
 
 from posekit.evaluation import measures
-from posekit.evaluation.measures import MEASURES, docs_page, glossary_markdown, header_names, measure, verdict_table
+from posekit.evaluation.measures import (MEASURES, docs_page, glossary_markdown, header_names, measure, ordering,
+                                         run_spread, verdict_table)
 
 ROOT = Path(__file__).resolve().parents[2]
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.ipynb"))
@@ -107,3 +108,26 @@ def test_lesson_01_shows_the_glossary_as_it_is_now():
     shown = ["".join(o["data"]["text/markdown"]) for c in nb["cells"] if c["cell_type"] == "code"
              and "glossary_markdown()" in "".join(c["source"]) for o in c.get("outputs", []) if "text/markdown" in o.get("data", {})]
     assert shown == [glossary_markdown()]
+
+
+def test_the_run_to_run_yardstick_is_the_largest_relative_gap_of_two_runs():
+    assert run_spread((9.422, 11.741), (17.725, 17.977)) == pytest.approx(11.741 / 9.422 - 1)
+    assert run_spread((2.0, 2.0)) == 0.0
+    with pytest.raises(ValueError, match="at least one"):
+        run_spread()
+    with pytest.raises(ValueError, match="two positive errors"):
+        run_spread((0.0, 1.0))
+
+
+def test_one_rule_reads_every_ordering_learned_or_classical():
+    # lesson 05's readings: a 2 % lead and a 24 % lead are level against a 25 % spread; a 130 % lead is ahead
+    assert ordering(2.91, 2.98, 0.25) == "level" and ordering(1.23, 1.52, 0.25) == "level"
+    assert ordering(1.52, 3.49, 0.25) == "ahead" and ordering(3.49, 1.52, 0.25) == "behind"
+    # the rule is symmetric: a pair read either way round gives the mirrored answer
+    for a, b in ((1.0, 1.3), (1.3, 1.0), (1.0, 1.2)):
+        flip = {"ahead": "behind", "behind": "ahead", "level": "level"}
+        assert ordering(b, a, 0.25) == flip[ordering(a, b, 0.25)]
+    assert ordering(1.0, 1.01, 0.0) == "ahead"           # no spread: any gap orders
+    for bad in ((0.0, 1.0, 0.1), (1.0, float("nan"), 0.1), (1.0, 2.0, -0.1)):
+        with pytest.raises(ValueError, match="positive errors"):
+            ordering(*bad)
