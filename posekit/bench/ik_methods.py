@@ -3,6 +3,9 @@
 Introduced in ``notebooks/01_fabrik.ipynb``. Each function below is registered with
 :func:`posekit.bench.ik.register_method` and called once per start condition:
 
+* ``fabrik-as-published`` (group ``paper``) — full-body FABRIK as Aristidou & Lasenby 2011 publish it, without
+  posekit's near-extended step (``FabrikSolver(extended=False)``), scored like every solver: the row a claim
+  compared with a paper's FABRIK needs (run only next to ``fabrik``);
 * ``numpy-fabrik`` (group ``baseline``) — the same full-body FABRIK as :class:`~posekit.ik.FabrikSolver` in
   plain numpy, joint by joint, no compilation: :func:`posekit.ik.fabrik_batched.fabrik_batched` given one
   problem at a time; its latency is the yardstick of the compiled solver (run only next to ``fabrik``);
@@ -21,9 +24,9 @@ import numpy as np
 from ..ik.api import EFFECTOR_SETS, Effector
 from ..ik.fabrik_batched import fabrik_batched
 from ..ik.registry import make_solver
-from .ik import MethodContext, register_method
+from .ik import PAPER, MethodContext, evaluate_solver, register_method
 
-__all__ = ["baseline_rows", "batched_rows", "ikpy_rows", "BASELINE_CASES", "BATCH_SOLVES",
+__all__ = ["as_published_rows", "baseline_rows", "batched_rows", "ikpy_rows", "BASELINE_CASES", "BATCH_SOLVES",
            "PEER_CASES"]
 
 BASELINE_CASES = 200
@@ -34,6 +37,22 @@ BATCH_SOLVES = 20_000
 
 PEER_CASES = 100
 """Cases a peer library solves."""
+
+
+def as_published_rows(ctx: MethodContext) -> list[dict]:
+    """Full-body FABRIK without posekit's near-extended step, on every named effector set, scored and timed by
+    :func:`~posekit.bench.ik.evaluate_solver` like the registered solvers."""
+    from ..ik.fabrik import FabrikSolver
+
+    solver = FabrikSolver(ctx.cases.skeleton, extended=False)
+    rows = []
+    for e in ctx.effector_sets:
+        row = {"method": "fabrik (as published)", "effectors": e,
+               **evaluate_solver(solver, ctx.cases, e, ctx.tolerance, ctx.natural, ctx.natural_floor)}
+        if ("fabrik", e) in PAPER:           # the paper's FABRIK time, beside the algorithm it timed
+            row["paper_latency_ms"] = PAPER[("fabrik", e)]
+        rows.append(row)
+    return rows
 
 
 def baseline_rows(ctx: MethodContext) -> list[dict]:
@@ -126,6 +145,8 @@ def ikpy_rows(ctx: MethodContext) -> list[dict]:
     return rows
 
 
+register_method("fabrik-as-published", as_published_rows, group="paper", needs=("fabrik",),
+                description="full-body FABRIK as Aristidou & Lasenby 2011 publish it, without the near-extended step")
 register_method("numpy-fabrik", baseline_rows, group="baseline", needs=("fabrik",),
                 description="the same FABRIK in plain numpy, one joint at a time (the speed yardstick)")
 register_method("fabrik-batched", batched_rows, group="batched", needs=("fabrik",),

@@ -118,6 +118,10 @@ class FabrikSolver(SolverBase):
     constraints : Constraints, True or None
         Joint limits; ``True`` uses :func:`default_constraints`. Chains through a limited joint are
         then only ever straightened in step 2, never bent further.
+    extended : bool
+        Run step 2 (default). ``False`` is FABRIK as Aristidou & Lasenby 2011 publish it: the two passes
+        alone, step 2 kept only for a target out of reach (a chain straight at it, their Algorithm 1) --
+        the yardstick a comparison with a paper's FABRIK needs.
 
     Notes
     -----
@@ -133,9 +137,11 @@ class FabrikSolver(SolverBase):
     kinds = ("position",)
     needs_start = True
 
-    def __init__(self, skeleton: Skeleton, max_iter: int = 20, base: str | None = None, constraints=None):
+    def __init__(self, skeleton: Skeleton, max_iter: int = 20, base: str | None = None, constraints=None,
+                 extended: bool = True):
         self.skeleton = skeleton
         self.max_iter = int(max_iter)
+        self.extended = bool(extended)
         J = skeleton.n_joints
         b = self.base = base_index(skeleton, base)
         fixed = np.zeros(J, dtype=np.bool_)
@@ -221,7 +227,8 @@ class FabrikSolver(SolverBase):
         it, done = _fabrik_tree(pos, tree["parents"], np.ascontiguousarray(lengths[tree["keep"]]), tree["child_start"],
                                 tree["child_idx"], active, tree["fixed"], slot, eff, np.ascontiguousarray(res.position),
                                 res.tolerance, self.max_iter, tree["limit_cos"], tree["no_fwd"], tree["hips"][0],
-                                tree["hips"][1], self.constraints is not None, starts, joints, bend, EXTENDED_RATIO)
+                                tree["hips"][1], self.constraints is not None, starts, joints, bend,
+                                EXTENDED_RATIO if self.extended else 1.0)
         return self.result(Pose(pos[tree["rep"]]), res, it)
 
     def _solve_many(self, starts, resolved) -> list[IKResult]:
@@ -230,7 +237,7 @@ class FabrikSolver(SolverBase):
         from .fabrik_batched import fabrik_batched
 
         joints = resolved[0].joints if resolved else None
-        if (len(starts) < 2 or self.constraints is not None
+        if (len(starts) < 2 or self.constraints is not None or not self.extended
                 or any(not np.array_equal(r.joints, joints) for r in resolved)):
             return super()._solve_many(starts, resolved)
         P = np.stack([np.asarray(s.global_pos, dtype=float) for s in starts])

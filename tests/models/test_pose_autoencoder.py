@@ -122,6 +122,29 @@ def test_compiled_single_pose_path_equals_the_batched_one(tiny, cases, post, cha
             assert np.allclose(one, batch[i], atol=1e-5)
 
 
+def test_the_authors_chaining_decodes_and_encodes_again_between_stages(tiny, mini, cases):
+    """reencode=True: z = E(D(z)) between two stages (the authors' CombinedSequentialIKSolver), on both the batched
+    and the compiled single-pose path; one stage alone is untouched by it."""
+    fast, s = tiny[0].compile(), cases.skeleton
+    x = tiny[0].norm.normalize(pose_vectors(mini.skeleton, mini.global_pos[:8])[0]).astype(np.float32)
+    p = {g: x[:, tiny[0].columns(g)] for g in CHAIN}
+    z = fast.encode(x)
+    by_hand = z
+    for k, g in enumerate(CHAIN):
+        if k:
+            by_hand = fast.encode(fast.decode(by_hand))
+        by_hand = fast._mlp(fast.solvers[g], np.concatenate([by_hand, p[g]], axis=-1))
+    assert np.allclose(fast.latent(z, p, chain=list(CHAIN), chain_aware=False, reencode=True), by_hand, atol=1e-5)
+    assert not np.allclose(fast.latent(z, p, chain=list(CHAIN), chain_aware=False), by_hand, atol=1e-3)
+    one = {"hands": p["hands"]}
+    assert np.array_equal(fast.latent(z, one, reencode=True), fast.latent(z, one))
+    solver = NeuralIKSolver(s, model=tiny[0], post="none", chain=True, chain_aware=False, reencode=True)
+    j = s.indices(EFFECTOR_SETS["5"])
+    batch, _, _ = solver.predict(cases.start_pos[:5], j, cases.target_pos[:5][:, j])
+    for i in range(5):
+        assert np.allclose(solver.predict_one(cases.start_pos[i], j, cases.target_pos[i][j])[0], batch[i], atol=1e-5)
+
+
 def test_solver_contract(tiny, cases):
     s = cases.skeleton
     solver = NeuralIKSolver(s, model=tiny[0])

@@ -145,9 +145,16 @@ class NumpyAESolvers:
     def decode(self, z):
         return self._mlp(self.dec, np.asarray(z, dtype=np.float32))
 
-    def latent(self, z, targets: dict, chain=None, chain_aware: bool = True):
-        """:meth:`AESolvers.latent <posekit.models.pose_autoencoder.networks.AESolvers.latent>` in numpy."""
-        for g, aware in stages(targets, chain, chain_aware, self.chained):
+    def latent(self, z, targets: dict, chain=None, chain_aware: bool = True, reencode: bool = False):
+        """:meth:`AESolvers.latent <posekit.models.pose_autoencoder.networks.AESolvers.latent>` in numpy.
+
+        ``reencode``: between two stages, decode the code and encode the pose again, ``z = E(D(z))`` — the
+        chaining of the authors' code (``CombinedSequentialIKSolver``), where the paper's Sec. 3.5 composes the
+        solvers in the latent space."""
+        plan = stages(targets, chain, chain_aware, self.chained)
+        for k, (g, aware) in enumerate(plan):
+            if reencode and k:
+                z = self.encode(self.decode(z))
             z = self._mlp((self.chained if aware else self.solvers)[g],
                           np.concatenate([z, np.asarray(targets[g], dtype=np.float32)], axis=-1))
         return z

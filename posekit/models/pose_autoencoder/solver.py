@@ -77,6 +77,10 @@ class NeuralIKSolver(SolverBase):
     chain_aware : bool
         With ``chain``: use the fine-tuned stages (False: naive chaining of the independent solvers).
     model : AESolvers, optional
+    reencode : bool
+        With ``chain``: between two stages decode the code and encode the pose again (``z = E(D(z))``), as the
+        authors' code chains its solvers (``CombinedSequentialIKSolver``); False composes them in the latent space,
+        as Sec. 3.5 writes it.
 
     Every solve runs numpy and compiled code only: without ``model`` the networks are read from the checkpoint
     without torch (:meth:`NumpyAESolvers.load <posekit.models.pose_autoencoder.numpy_nets.NumpyAESolvers.load>`);
@@ -89,7 +93,7 @@ class NeuralIKSolver(SolverBase):
     batch_atol = 1e-5  # float32 networks: the batched numpy path and the compiled single path round differently
 
     def __init__(self, skeleton, weights=None, post: str = "bones", chain: bool = False, chain_aware: bool = True,
-                 model=None):
+                 model=None, reencode: bool = False):
         if post not in POSTS:
             raise ValueError(f"post must be one of {', '.join(POSTS)}, got {post!r}")
         self.net = model.compile() if model is not None else load_cached(
@@ -98,6 +102,7 @@ class NeuralIKSolver(SolverBase):
         self._model, self._weights = model, weights
         self.skeleton = skeleton
         self.post, self.chain, self.chain_aware = post, bool(chain), bool(chain_aware)
+        self.reencode = bool(reencode)
         self.keeps_bone_lengths = post != "none"
         self.mean = self.net.norm.mean.astype(np.float32)
         self.std = self.net.norm.std.astype(np.float32)
@@ -160,7 +165,9 @@ class NeuralIKSolver(SolverBase):
         z = K.mlp(x, *self._enc, False)
         clamped = np.zeros(len(joints), dtype=np.bool_)
         order = dict(plan)
-        for g, aware in self._stages(plan):
+        for k, (g, aware) in enumerate(self._stages(plan)):
+            if self.reencode and k:                   # the authors' chaining: decode, then encode the pose again
+                z = K.mlp(K.mlp(z, *self._dec, False), *self._enc, False)
             v = np.empty(3 * len(order[g]), np.float32)
             cl = np.zeros(len(order[g]), dtype=np.bool_)
             K.targets(targets[order[g]], ox, oz, c, sn, *self._tnorm[g], v, cl)
@@ -256,7 +263,8 @@ class NeuralIKSolver(SolverBase):
                     clamped[:, order] |= out.reshape(B, -1, 3).any(-1)
                     v = np.clip(v, lo, hi)
             p[g] = v
-        z = self.net.latent(z, p, chain=[g for g, _ in plan] if self.chain else None, chain_aware=self.chain_aware)
+        z = self.net.latent(z, p, chain=[g for g, _ in plan] if self.chain else None, chain_aware=self.chain_aware,
+                            reencode=self.reencode)
         xo = self.net.decode(z) * self.std + self.mean
         raw = poses_from_vectors(s, xo, origin, angle)
         return self._post(raw, joints, targets), raw, clamped
