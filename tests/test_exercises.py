@@ -275,24 +275,6 @@ def _tolerance_after_the_pass(p, t, tol, it):
     return PLANTED(out, t, tol, it - 1) if it > 1 else out
 
 
-def _sorts(parents):
-    depths = _solutions("04").exercise_depths(list(parents))
-    parents.sort() if isinstance(parents, list) else None
-    return depths
-
-
-def _empties(parents):
-    depths = _solutions("04").exercise_depths(list(parents))
-    while isinstance(parents, list) and parents:
-        parents.pop()
-    return depths
-
-
-def _naive_generator_loss(logits):
-    with np.errstate(over="ignore", divide="ignore"):
-        return np.mean(-np.log(1.0 / (1.0 + np.exp(-np.asarray(logits, float)))))
-
-
 def _drag_ignoring_n(c, q, p0, n):
     d = q - c
     t = ((p0 - c) @ (c - p0)) / (d @ (c - p0))
@@ -328,9 +310,6 @@ WRONG = {
                                                            "case 7 differs"),
     "01 planted FABRIK testing the tolerance after a pass": ("check_fabrik_planted", _tolerance_after_the_pass,
                                                               "case 8 differs"),
-    "04 tree depths that sort the caller's list": ("check_tree_depths", _sorts, "changed its input `parents`"),
-    "04 tree depths that empty the caller's list": ("check_tree_depths", _empties, "changed its input `parents`"),
-    "04 the generator loss written naively": ("check_generator_loss", _naive_generator_loss, "overflows"),
     "06 a drag point that ignores n": ("check_drag_point", _drag_ignoring_n, "differs"),
     "06 a drag point with no parallel test": ("check_drag_point", _drag_without_parallel_test, "parallel"),
     "06 a drag point that accepts t = 0": ("check_drag_point", _drag_t_at_zero, "t <= 0"),
@@ -355,9 +334,9 @@ CALLS_POSEKIT = {  # checker: (lesson, the reference solution, the posekit funct
     "check_gpr_mean": ("02", "exercise_gpr_mean", "posekit.invrig.gpr:GPR.predict"),
     "check_tied_decoder": ("03", "exercise_tied_decoder", "posekit.models.pose_autoencoder.networks:PoseAutoencoder.decode"),
     "check_solver_loss": ("03", "exercise_solver_loss", "posekit.models.pose_autoencoder.train:solver_loss"),
-    "check_tree_depths": ("04", "exercise_depths", "posekit.models.aegan.spl:tree_levels"),
+    "check_spl_all": ("04", "exercise_spl_all", "posekit.models.aegan.numpy_nets:tree_levels"),
     "check_latent_loss": ("04", "exercise_latent_loss", "posekit.models.aegan.latent_opt:Problem.loss"),
-    "check_generator_loss": ("04", "exercise_generator_loss", "posekit.models.aegan.train:_bce"),
+    "check_adversarial": ("04", "exercise_adversarial", "posekit.models.aegan.train:_bce"),
     "check_prototype_step": ("05", "exercise_step", "posekit.models.protores.networks:ProtoResEncoder.forward"),
     "check_tolerance_weight": ("05", "exercise_weight", "posekit.models.protores.networks:tolerance_to_sigma"),
     "check_centroid": ("05", "exercise_centroid", "posekit.models.protores.networks:centroid"),
@@ -402,3 +381,284 @@ def test_float32_answers_and_tuples_of_rows_are_accepted(capsys):
     assert check_fabrik_planted(lambda *a: tuple(PLANTED(*a)))  # the joints as a tuple of rows
     out = capsys.readouterr().out
     assert out.count("✓") == 2, out
+
+
+# -- every checker: its wrong answers, each refused with its reason; its right variants, each accepted ---------------
+# (lesson: {checker: ({wrong answer: (function, what the verdict must say)}, {right variant: function})}), filled in
+# below lesson by lesson; two tests read it.
+
+BY_CHECKER: dict = {}
+
+
+def _checker(name):
+    import posekit.exercises
+
+    return getattr(posekit.exercises, name)
+
+
+def _all_wrong():
+    return [(checker, slip) for checker, (wrong, _) in BY_CHECKER.items() for slip in wrong]
+
+
+def _all_right():
+    return [(checker, variant) for checker, (_, right) in BY_CHECKER.items() for variant in right]
+
+
+# lesson 04, exercise 1: the dense SPL
+
+SPL_ALL = solution_function(find_lesson("04"), "exercise_spl_all")
+
+
+def _chains(parents):
+    out = []
+    for j in range(len(parents)):
+        chain, k = [], int(parents[j])
+        while k >= 0:
+            chain.append(k)
+            k = int(parents[k])
+        out.append(chain)
+    return out
+
+
+def _spl_own(h, parents, U, c, A, V, d, order="depth", ancestors="all", relu=True, out_bias=True, dtype=float):
+    """A student's own dense SPL, with the slips below as options."""
+    h = np.asarray(h, dtype)
+    J = len(parents)
+    chains = _chains(parents)
+    o = V[0].shape[0]
+    outs = [np.zeros((len(h), o), dtype) for _ in range(J)]
+    if order == "depth":
+        visit = sorted(range(J), key=lambda j: len(chains[j]))
+    elif order == "index":
+        visit = range(J)
+    else:  # breadth first from the first root only
+        root = list(parents).index(-1)
+        visit, queue = [], [root]
+        while queue:
+            j = queue.pop(0)
+            visit.append(j)
+            queue += [k for k in range(J) if parents[k] == j]
+    for j in visit:
+        pre = h @ np.asarray(U[j], dtype).T + np.asarray(c[j], dtype)
+        chain = chains[j]
+        if chain:
+            if ancestors == "parent":
+                pre = pre + outs[chain[0]] @ np.asarray(A[j], dtype)[:, :o].T
+            else:
+                row = chain if ancestors == "all" else chain[::-1]
+                pre = pre + np.concatenate([outs[a] for a in row], axis=1) @ np.asarray(A[j], dtype).T
+        act = np.maximum(pre, 0) if relu else pre
+        outs[j] = act @ np.asarray(V[j], dtype).T + (np.asarray(d[j], dtype) if out_bias else 0)
+    return np.stack(outs, axis=1)
+
+
+def _spl_recursive(h, parents, U, c, A, V, d):
+    """Each joint's output on demand, its parent's first (memoised): no ordering needed."""
+    memo = {}
+
+    def o(j):
+        if j not in memo:
+            chain = _chains(parents)[j]
+            pre = h @ U[j].T + c[j]
+            if chain:
+                pre = pre + np.concatenate([o(a) for a in chain], axis=1) @ A[j].T
+            memo[j] = np.maximum(pre, 0) @ V[j].T + d[j]
+        return memo[j]
+    return np.stack([o(j) for j in range(len(parents))], axis=1)
+
+
+def _sorts_parents(h, parents, *rest):
+    out = SPL_ALL(h, list(parents), *rest)
+    if isinstance(parents, list):
+        parents.sort()
+    return out
+
+
+def _pops_a(h, parents, U, c, A, V, d):
+    out = SPL_ALL(h, parents, U, c, list(A), V, d)
+    A.pop()
+    return out
+
+
+def _centres_h(h, parents, *rest):
+    out = SPL_ALL(h, parents, *rest)
+    h -= h.mean(axis=0)
+    return out
+
+
+def _calls_tree_levels(h, parents, *rest):
+    from posekit.models.aegan.spl import tree_levels
+
+    tree_levels(parents, "all")
+    return SPL_ALL(h, parents, *rest)
+
+
+BY_CHECKER["check_spl_all"] = ({
+    "the parent only (the sparse variant)": (lambda *a: _spl_own(*a, ancestors="parent"),
+                                             "ancestors' outputs side by side, nearest first"),
+    "the ancestors root first": (lambda *a: _spl_own(*a, ancestors="root first"), "nearest first"),
+    "the joints visited by index": (lambda *a: _spl_own(*a, order="index"), "case 2 differs"),
+    "one root assumed": (lambda *a: _spl_own(*a, order="first root"), "never computed"),
+    "no relu": (lambda *a: _spl_own(*a, relu=False), "relu before V_j"),
+    "no output bias": (lambda *a: _spl_own(*a, out_bias=False), "both biases"),
+    "the caller's parents sorted": (_sorts_parents, "changed its input `parents` in place"),
+    "an item popped off the caller's A": (_pops_a, "changed its input `A` in place"),
+    "the caller's h centred in place": (_centres_h, "changed its input `h` in place"),
+    "posekit's tree_levels called": (_calls_tree_levels, "calls posekit.models.aegan.numpy_nets.tree_levels"),
+    "the joints' axis first": (lambda *a: np.swapaxes(SPL_ALL(*a), 0, 1), "returned shape"),
+}, {
+    "the reference solution": SPL_ALL,
+    "in float32": lambda *a: _spl_own(*a, dtype=np.float32),
+    "(N, J * out), posekit's layout": lambda *a: SPL_ALL(*a).reshape(len(a[0]), -1),
+    "recursive, memoised": _spl_recursive,
+})
+
+
+def test_the_dense_spl_reference_is_posekits_layer_with_every_ancestor():
+    """The checker's expected answers are posekit's ``StructuredPrediction(ancestors="all")``, weights mapped."""
+    import torch
+
+    from posekit.exercises.nb04 import spl_all_reference
+    from posekit.models.aegan.spl import StructuredPrediction
+
+    parents = [2, -1, 1, 2, 3, -1, 5]
+    torch.manual_seed(0)
+    layer = StructuredPrediction(5, parents, out=3, hidden=4, ancestors="all")
+    J, k, H, o = len(parents), 4, 5, 3
+    U = layer.shared.weight.detach().double().numpy().reshape(J, k, H)
+    c = layer.shared.bias.detach().double().numpy().reshape(J, k)
+    A, V, d = [None] * J, np.zeros((J, o, k)), np.zeros((J, o))
+    for lv, (js, _) in enumerate(layer.levels):
+        for r, j in enumerate(js):
+            A[j] = layer.anc[lv][r].detach().double().numpy().T
+            V[j] = layer.w_out[lv][r].detach().double().numpy().T
+            d[j] = layer.b_out[lv][r].detach().double().numpy()
+    h = torch.randn(6, H)
+    with torch.no_grad():
+        theirs = layer(h).double().numpy().reshape(6, J, o)
+    assert np.allclose(spl_all_reference(h.double().numpy(), parents, U, c, A, V, d), theirs, atol=1e-5)
+
+
+# lesson 04, exercise 2: Eq. (6) and its gradient
+
+LATENT = solution_function(find_lesson("04"), "exercise_latent_loss")
+
+
+def _latent_own(x, t, cols, sc, scale=True, mean=False, two=True, one_scale=False, zero_elsewhere=True,
+                dtype=float):
+    x, t, sc = (np.asarray(a, dtype) for a in (x, t, sc))
+    s = np.full_like(sc, sc[0]) if one_scale else sc
+    diff = (x[cols] - t) * (s if scale else 1)
+    loss = np.mean(diff ** 2) if mean else np.sum(diff ** 2)
+    g = np.zeros_like(x) if zero_elsewhere else np.ones_like(x)
+    g[cols] = (2 if two else 1) * diff * (s if scale else 1)
+    return loss, g
+
+
+def _latent_in_place(x, t, cols, sc):
+    x[cols] -= t  # the difference, in the caller's pose
+    diff = x[cols] * sc
+    g = np.zeros(len(x))
+    g[cols] = 2 * diff * sc
+    return np.sum(diff ** 2), g
+
+
+BY_CHECKER["check_latent_loss"] = ({
+    "the scale ignored (z-scored units, not metres)": (lambda *a: _latent_own(*a, scale=False), "the loss is"),
+    "a mean, not a sum": (lambda *a: _latent_own(*a, mean=True), "not a mean"),
+    "one scale for every column": (lambda *a: _latent_own(*a, one_scale=True), "the loss is"),
+    "the gradient without its factor 2": (lambda *a: _latent_own(*a, two=False), "the gradient differs"),
+    "a gradient outside the target columns": (lambda *a: _latent_own(*a, zero_elsewhere=False),
+                                             "0 elsewhere"),
+    "the caller's pose changed in place": (_latent_in_place, "changed its input `x` in place"),
+}, {
+    "the reference solution": LATENT,
+    "in float32": lambda *a: _latent_own(*a, dtype=np.float32),
+    "the loss as a 0-d array": lambda *a: (np.asarray(LATENT(*a)[0]), LATENT(*a)[1]),
+})
+
+
+# lesson 04, exercise 3: the adversarial losses and their gradients
+
+ADVERSARIAL = solution_function(find_lesson("04"), "exercise_adversarial")
+
+
+def _sig(x):
+    with np.errstate(over="ignore"):
+        return 1.0 / (1.0 + np.exp(-x))
+
+
+def _adv_own(real, fake, s, naive=False, sigmoid_ratio=False, saturating=False, no_smoothing=False, pooled=False,
+             not_mean_grad=False, sign=1.0, wrt_d=False, smooth_fake=False, log1p=False, dtype=float):
+    """A student's own adversarial losses, with the slips below as options."""
+    r, f = np.asarray(real, dtype), np.asarray(fake, dtype)
+    s = 1.0 if no_smoothing else s
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+        if naive:
+            sp = lambda x: -np.log(_sig(-x))  # noqa: E731 - softplus(x) = -log sigmoid(-x), overflowing
+        elif log1p:
+            sp = lambda x: np.maximum(x, 0) + np.log1p(np.exp(-np.abs(x)))  # noqa: E731
+        else:
+            sp = lambda x: np.logaddexp(0, x)  # noqa: E731
+        if sigmoid_ratio:
+            sig = lambda x: np.exp(x) / (1 + np.exp(x))  # noqa: E731
+        else:
+            sig = lambda x: np.asarray(_sig(x), dtype)  # noqa: E731
+        yf = (1 - s) if smooth_fake else 0.0
+        terms_r = s * sp(-r) + (1 - s) * sp(r)
+        terms_f = yf * sp(-f) + (1 - yf) * sp(f)
+        loss_d = (terms_r.sum() + terms_f.sum()) if pooled else terms_r.mean() + terms_f.mean()
+        loss_g = -np.mean(sp(f)) if saturating else np.mean(sp(-f))
+        nr, nf = (1, 1) if not_mean_grad else (len(r), len(f))
+        dr, df, dg = sig(r) - s, sig(f) - yf, sig(f) - 1
+        if wrt_d:  # d BCE / d D instead of d BCE / d logit
+            dr, df, dg = (x / (sig(v) * (1 - sig(v))) for x, v in ((dr, r), (df, f), (dg, f)))
+        return loss_d, sign * dr / nr, sign * df / nf, loss_g, sign * dg / nf
+
+
+def _clips_in_place(real, fake, s):
+    np.clip(real, -50, 50, out=real)
+    return ADVERSARIAL(real, fake, s)
+
+
+def _calls_torch_bce(real, fake, s):
+    import torch
+    import torch.nn.functional as F
+
+    F.binary_cross_entropy_with_logits(torch.as_tensor(fake), torch.ones(len(fake), dtype=torch.float64))
+    return ADVERSARIAL(real, fake, s)
+
+
+BY_CHECKER["check_adversarial"] = ({
+    "-log(sigmoid(l)) written naively": (lambda *a: _adv_own(*a, naive=True), "not finite"),
+    "sigmoid as exp(l) / (1 + exp(l))": (lambda *a: _adv_own(*a, sigmoid_ratio=True), "not finite"),
+    "the saturating generator loss": (lambda *a: _adv_own(*a, saturating=True), "the saturating form"),
+    "the smoothing ignored": (lambda *a: _adv_own(*a, no_smoothing=True), "the smoothing ignored"),
+    "the smoothing put on the fake labels too": (lambda *a: _adv_own(*a, smooth_fake=True),
+                                                 "case 1 differs: the discriminator's loss"),
+    "one sum over real and fake": (lambda *a: _adv_own(*a, pooled=True), "not one sum or mean"),
+    "gradients not divided by N": (lambda *a: _adv_own(*a, not_mean_grad=True), "divided by N"),
+    "gradients of the wrong sign": (lambda *a: _adv_own(*a, sign=-1.0), "the sign"),
+    "gradients with respect to D, not the logit": (lambda *a: _adv_own(*a, wrt_d=True), "not to D"),
+    "the caller's logits clipped in place": (_clips_in_place, "changed its input `real_logits` in place"),
+    "torch's binary cross-entropy called": (_calls_torch_bce,
+                                            "calls torch.nn.functional.binary_cross_entropy_with_logits"),
+}, {
+    "the reference solution": ADVERSARIAL,
+    "its own softplus and sigmoid": _adv_own,
+    "in float32": lambda *a: _adv_own(*a, dtype=np.float32),
+    "softplus as max(x, 0) + log1p(exp(-|x|))": lambda *a: _adv_own(*a, log1p=True),
+})
+
+
+@pytest.mark.parametrize("checker,slip", _all_wrong())
+def test_each_checker_refuses_each_wrong_answer_and_says_why(checker, slip, capsys):
+    answer, said = BY_CHECKER[checker][0][slip]
+    assert _checker(checker)(answer) is False
+    out = capsys.readouterr().out
+    assert said in out, out
+
+
+@pytest.mark.parametrize("checker,variant", _all_right())
+def test_each_checker_accepts_each_right_variant(checker, variant, capsys):
+    assert _checker(checker)(BY_CHECKER[checker][1][variant]) is True, capsys.readouterr().out

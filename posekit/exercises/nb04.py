@@ -102,9 +102,14 @@ def check_spl_all(my_spl_all) -> bool:
     def describe_for(parents):
         def describe(got, exp):
             err = np.abs(got - exp).max(axis=(0, 2))
-            j = int(np.argmax(err))
-            depth = len(_ancestors(parents, j))
+            depths = [len(_ancestors(parents, k)) for k in range(len(parents))]
+            # the shallowest joint that is off: a mistake there runs down to every joint below it
+            j = min((k for k in range(len(parents)) if err[k] > 1e-6 * max(1.0, np.abs(exp[:, k]).max())),
+                    key=lambda k: (depths[k], -err[k]), default=int(np.argmax(err)))
+            depth = depths[j]
             said = f"joint {j} is off by up to {err[j]:.3g}"
+            if np.allclose(got[:, j], 0) and not np.allclose(exp[:, j], 0):
+                return said + ": it was never computed (every joint visited? there may be several roots)"
             if depth == 0:
                 return (said + " (a root: it reads no ancestor): o_j = V_j relu(U_j h + c_j) + d_j — relu before "
                         "V_j, both biases, h @ U_j.T?")
