@@ -275,27 +275,6 @@ def _tolerance_after_the_pass(p, t, tol, it):
     return PLANTED(out, t, tol, it - 1) if it > 1 else out
 
 
-def _drag_ignoring_n(c, q, p0, n):
-    d = q - c
-    t = ((p0 - c) @ (c - p0)) / (d @ (c - p0))
-    return c + t * d if t > 0 else None
-
-
-def _drag_without_parallel_test(c, q, p0, n):
-    d = q - c
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = ((p0 - c) @ n) / (d @ n)
-        return c + t * d if t > 0 else None
-
-
-def _drag_t_at_zero(c, q, p0, n):
-    d = q - c
-    if abs(d @ n) < 1e-12:
-        return None
-    t = ((p0 - c) @ n) / (d @ n)
-    return c + t * d if t >= 0 else None
-
-
 def _slerp_without_guard(q0, q1, s):
     q0, q1 = np.asarray(q0, float), np.asarray(q1, float)
     if q0 @ q1 < 0:
@@ -310,9 +289,6 @@ WRONG = {
                                                            "case 7 differs"),
     "01 planted FABRIK testing the tolerance after a pass": ("check_fabrik_planted", _tolerance_after_the_pass,
                                                               "case 8 differs"),
-    "06 a drag point that ignores n": ("check_drag_point", _drag_ignoring_n, "differs"),
-    "06 a drag point with no parallel test": ("check_drag_point", _drag_without_parallel_test, "parallel"),
-    "06 a drag point that accepts t = 0": ("check_drag_point", _drag_t_at_zero, "t <= 0"),
     "06 slerp with no guard for nearly equal quaternions": ("check_slerp", _slerp_without_guard, "lerp"),
 }
 
@@ -340,7 +316,7 @@ CALLS_POSEKIT = {  # checker: (lesson, the reference solution, the posekit funct
     "check_prototype_step": ("05", "exercise_step", "posekit.models.protores.networks:ProtoResEncoder.forward"),
     "check_tolerance_weight": ("05", "exercise_weight", "posekit.models.protores.networks:tolerance_to_sigma"),
     "check_centroid": ("05", "exercise_centroid", "posekit.models.protores.networks:centroid"),
-    "check_drag_point": ("06", "exercise_drag", "posekit.viz.drag:drag_point"),
+    "check_drag_on_sphere": ("06", "exercise_drag_on_sphere", "posekit.exercises.nb06:sphere_drag_reference"),
     "check_slerp": ("06", "exercise_slerp", "posekit.ik.keyframes:slerp"),
 }
 
@@ -648,6 +624,107 @@ BY_CHECKER["check_adversarial"] = ({
     "its own softplus and sigmoid": _adv_own,
     "in float32": lambda *a: _adv_own(*a, dtype=np.float32),
     "softplus as max(x, 0) + log1p(exp(-|x|))": lambda *a: _adv_own(*a, log1p=True),
+})
+
+
+# lesson 06, exercise 1: a drag on the bone's sphere
+
+SPHERE = solution_function(find_lesson("06"), "exercise_drag_on_sphere")
+
+
+def _sphere_own(c, q, centre, r, far=False, unit_d=False, miss="nearest", in_front=True, clamp=True,
+                radius=None, dtype=float):
+    """A student's own sphere drag, with the slips below as options."""
+    c, q, centre = (np.asarray(a, dtype) for a in (c, q, centre))
+    r = r if radius is None else radius
+    d = q - c
+    a = 1.0 if unit_d else d @ d
+    b = 2 * d @ (c - centre)
+    disc = b * b - 4 * a * ((c - centre) @ (c - centre) - r * r)
+    if disc >= 0:
+        roots = ((-b + np.sqrt(disc)) / (2 * a), (-b - np.sqrt(disc)) / (2 * a))
+        roots = sorted(roots, reverse=far)
+        for t in roots:
+            if t > 0 or not in_front:
+                return c + t * d
+    if miss == "none":
+        return None
+    if miss == "nan":
+        return np.full(3, np.nan)
+    if miss == "near q":
+        v = q - centre
+    else:
+        t = ((centre - c) @ d) / (d @ d)
+        v = c + (max(t, 0.0) if clamp else t) * d - centre
+    return centre + r * v / np.linalg.norm(v)
+
+
+def _sphere_moves_q(c, q, centre, r):
+    q -= c  # the ray's direction, in the caller's array
+    return SPHERE(c, q + c, centre, r)
+
+
+def _plane_drag(c, q, centre, r):
+    """Section 3's drag, on the plane through the joint facing the camera: the bone's length is lost."""
+    n = c - (centre + [0.0, r, 0.0])
+    d = q - c
+    t = ((centre + [0.0, r, 0.0] - c) @ n) / (d @ n)
+    return c + t * d
+
+
+BY_CHECKER["check_drag_on_sphere"] = ({
+    "the far intersection": (lambda *a: _sphere_own(*a, far=True), "case 1 differs"),
+    "d taken as a unit vector": (lambda *a: _sphere_own(*a, unit_d=True), "not of unit length"),
+    "None when the ray misses": (lambda *a: _sphere_own(*a, miss="none"), "got None"),
+    "nan when the ray misses": (lambda *a: _sphere_own(*a, miss="nan"), "not finite"),
+    "an intersection behind the camera": (lambda *a: _sphere_own(*a, in_front=False), "where the ray leaves"),
+    "the line's nearest point, not the ray's": (lambda *a: _sphere_own(*a, clamp=False), "the camera itself"),
+    "the sphere's point nearest q": (lambda *a: _sphere_own(*a, miss="near q"), "the sphere's point nearest the ray"),
+    "the radius ignored": (lambda *a: _sphere_own(*a, radius=1.0), "not on the sphere"),
+    "section 3's plane drag": (_plane_drag, "not on the sphere"),
+    "the caller's q changed in place": (_sphere_moves_q, "changed its input `q` in place"),
+}, {
+    "the reference solution": SPHERE,
+    "the quadratic's coefficients": _sphere_own,
+    "in float32": lambda *a: _sphere_own(*a, dtype=np.float32),
+    "a list": lambda *a: list(SPHERE(*a)),
+})
+
+
+# lesson 06, exercise 2: slerp
+
+SLERP = solution_function(find_lesson("06"), "exercise_slerp")
+
+
+def _slerp_own(q0, q1, s, flip=True, lerp_above=1 - 1e-12, in_place=False, swap=False, dtype=float):
+    q0, q1 = np.asarray(q0, dtype), (q1 if in_place else np.asarray(q1, dtype))
+    if flip and q0 @ q1 < 0:
+        if in_place:
+            q1 *= -1
+        else:
+            q1 = -q1
+    d = float(np.clip(q0 @ q1, -1, 1))
+    if swap:
+        s = 1 - s
+    if abs(d) > lerp_above:
+        q = (1 - s) * q0 + s * q1
+        return (q / np.linalg.norm(q)).astype(dtype)
+    theta = np.arccos(d)
+    return ((np.sin((1 - s) * theta) * q0 + np.sin(s * theta) * q1) / np.sin(theta)).astype(dtype)
+
+
+BY_CHECKER["check_slerp"] = ({
+    "no guard for nearly equal quaternions": (_slerp_without_guard, "lerp"),
+    "the long way round": (lambda *a: _slerp_own(*a, flip=False), "the shorter way round"),
+    "the lerp fallback far from equal": (lambda *a: _slerp_own(*a, lerp_above=0.99), "taken too early"),
+    "s and 1 - s swapped": (lambda *a: _slerp_own(*a, swap=True), "case 1 differs"),
+    "the caller's q1 flipped in place": (lambda *a: _slerp_own(*a, in_place=True), "changed its input `q1` in place"),
+}, {
+    "the reference solution": SLERP,
+    "posekit's threshold (lerp above q0 . q1 = 0.9995)": lambda *a: _slerp_own(*a, lerp_above=0.9995),
+    "in float32": lambda *a: _slerp_own(*a, dtype=np.float32),
+    "the other sign": lambda *a: -SLERP(*a),
+    "a list": lambda *a: list(SLERP(*a)),
 })
 
 

@@ -112,7 +112,7 @@ def check_slerp(my_slerp) -> bool:
     q = random_rotations((6,), rng)
     cases = []
 
-    def describe_for(what):
+    def describe_for(what, q0, q1):
         def describe(got, exp):
             got = np.asarray(got, float)
             said = f"got {np.round(got, 4)}, expected {np.round(exp, 4)} (or its negative)"
@@ -122,14 +122,14 @@ def check_slerp(my_slerp) -> bool:
                 return said + f": |q| = {np.linalg.norm(got):.4f}, a unit quaternion expected (normalised?)"
             if what == "a small angle":
                 return said + ": the angle is small but sin(theta) is not tiny — the lerp fallback taken too early?"
-            if what == "opposite signs":
+            if np.dot(q0, q1) < 0:
                 return said + ": q0 . q1 < 0 — the shorter way round takes -q1 (the same rotation)"
             return said + ": (sin((1 - s) theta) q0 + sin(s theta) q1) / sin(theta), theta = arccos(|q0 . q1|)?"
         return describe
 
     for k, s in zip(range(0, 6, 2), (0.25, 0.5, 0.9)):
-        cases.append(((q[k], q[k + 1], s), slerp(q[k], q[k + 1], s), describe_for("generic")))
-        cases.append(((q[k], -q[k + 1], s), slerp(q[k], q[k + 1], s), describe_for("opposite signs")))
+        for q1 in (q[k + 1], -q[k + 1]):  # as drawn, then of the other sign: one of them has q0 . q1 < 0
+            cases.append(((q[k], q1, s), slerp(q[k], q1, s), describe_for("generic", q[k], q1)))
     near = q[1] + 1e-9 * rng.normal(size=4)
     near /= np.linalg.norm(near)
     axis = rng.normal(size=3)
@@ -144,10 +144,10 @@ def check_slerp(my_slerp) -> bool:
                             (q[4], small, 0.3, "a small angle"),
                             (q[2], q[3], 0.0, "the first end"), (q[2], q[3], 1.0, "the last end")):
         q1 = q1 / np.linalg.norm(q1)
-        cases.append(((q0, q1, s), slerp(q0, q1, s), describe_for(what)))
+        cases.append(((q0, q1, s), slerp(q0, q1, s), describe_for(what, q0, q1)))
     q32 = q[:2].astype(np.float32)  # float32 quaternions
     cases.append(((q32[0], q32[1], 0.35), slerp(q32[0].astype(float), q32[1].astype(float), 0.35),
-                  describe_for("generic")))
+                  describe_for("generic", q32[0], q32[1])))
 
     def flat(q0, q1, s):
         raw = my_slerp(q0, q1, s)
