@@ -728,6 +728,230 @@ BY_CHECKER["check_slerp"] = ({
 })
 
 
+# lessons 00, 02, 03 and 05: the usual wrong answers of their kind (an argument ignored, a convention slipped, an
+# input changed in place), each refused; float32 and other right variants, each accepted
+
+def _sol(lesson, name):
+    return solution_function(find_lesson(lesson), name)
+
+
+FK, SIXD, BONES = _sol("00", "exercise_fk"), _sol("00", "exercise_sixd_to_matrix"), _sol("00", "exercise_bone_lengths")
+
+
+def _fk_own(skeleton, local_rot, root_pos, root=True, order="parent first", offset_by="parent", dtype=float):
+    J = skeleton.n_joints
+    R, x = np.zeros((J, 3, 3), dtype), np.zeros((J, 3), dtype)
+    R[0], x[0] = local_rot[0], (root_pos if root else 0.0)
+    for j in range(1, J):
+        p = skeleton.parents[j]
+        R[j] = R[p] @ local_rot[j] if order == "parent first" else local_rot[j] @ R[p]
+        x[j] = x[p] + (R[p] if offset_by == "parent" else R[j]) @ skeleton.offsets[j]
+    return x
+
+
+def _fk_resets_root(skeleton, local_rot, root_pos):
+    local_rot[0] = np.eye(3)  # "the root's rotation is applied later", in the caller's array
+    return FK(skeleton, local_rot, root_pos)
+
+
+def _sixd_own(x, columns=True, normalise=True, order=1.0, in_place=False):
+    x = x if in_place else np.array(x, float)
+    a1, a2 = x[:3], x[3:6]
+    if in_place:
+        a1 /= np.linalg.norm(a1)
+    b1 = a1 / np.linalg.norm(a1) if normalise else a1
+    b2 = a2 - (b1 @ a2) * b1
+    b2 = b2 / np.linalg.norm(b2)
+    b3 = np.cross(b1, b2) if order > 0 else np.cross(b2, b1)
+    return np.stack([b1, b2, b3], axis=1 if columns else 0)
+
+
+def _bones_root_first(parents, global_pos):
+    p = np.asarray(global_pos)
+    return np.concatenate([[0.0], np.linalg.norm(p[1:] - p[np.asarray(parents)[1:]], axis=1)])
+
+
+def _bones_sorts(parents, global_pos):
+    out = BONES(list(parents), global_pos)
+    if isinstance(parents, list):
+        parents.sort()
+    return out
+
+
+BY_CHECKER["check_fk"] = ({
+    "root_pos ignored": (lambda *a: _fk_own(*a, root=False), "case 1 differs"),
+    "rotations composed child first": (lambda *a: _fk_own(*a, order="child first"), "case 1 differs"),
+    "the offset turned by the joint's own rotation": (lambda *a: _fk_own(*a, offset_by="own"), "case 1 differs"),
+    "the caller's root rotation reset": (_fk_resets_root, "changed its input `local_rot` in place"),
+}, {
+    "the reference solution": FK,
+    "section 2's loop": _fk_own,
+    "in float32": lambda *a: _fk_own(*a, dtype=np.float32),
+})
+BY_CHECKER["check_sixd_to_matrix"] = ({
+    "rows, not columns": (lambda x: _sixd_own(x, columns=False), "columns must be b1, b2, b1 x b2"),
+    "b1 not normalised": (lambda x: _sixd_own(x, normalise=False), "case 4 differs"),
+    "b3 = b2 x b1": (lambda x: _sixd_own(x, order=-1.0), "case 1 differs"),
+    "the caller's x normalised in place": (lambda x: _sixd_own(x, in_place=True), "changed its input `x` in place"),
+}, {
+    "the reference solution": SIXD,
+    "its own Gram-Schmidt": _sixd_own,
+    "in float32": lambda x: _sixd_own(x).astype(np.float32),
+})
+BY_CHECKER["check_bone_lengths"] = ({
+    "the root assumed at index 0": (_bones_root_first, "of parents [3, 0, 0, -1]"),
+    "the caller's parents sorted": (_bones_sorts, "changed its input `parents` in place"),
+}, {
+    "the reference solution": BONES,
+    "in float32": lambda par, pos: BONES(par, pos).astype(np.float32),
+})
+
+GPR_MEAN, DLS = _sol("02", "exercise_gpr_mean"), _sol("02", "exercise_dls_step")
+
+
+def _gpr_own(X, Y, Xq, theta0, theta1, square_theta0=True, reg=True, inv=False, centre_x=False):
+    if centre_x:
+        X -= X.mean(axis=0)  # in the caller's array
+    t0 = theta0**2 if square_theta0 else theta0
+    k = lambda A, B: np.sqrt(((A[:, None, :] - B[None, :, :]) ** 2).sum(-1) + t0)  # noqa: E731
+    K = k(X, X) + (theta1 * np.eye(len(X)) if reg else 0)
+    return k(Xq, X) @ (np.linalg.inv(K) @ Y if inv else np.linalg.solve(K, Y))
+
+
+def _dls_own(J, dx, damping, square=True, use_damping=True, lstsq=False, clip_dx=False, dtype=float):
+    if clip_dx:
+        np.clip(dx, -0.5, 0.5, out=dx)
+    J, dx = np.asarray(J, dtype), np.asarray(dx, dtype)
+    lam = (damping if use_damping else 0.0)
+    if lstsq:  # min |J dy - dx|^2 + lam^2 |dy|^2 as one least-squares problem
+        A = np.vstack([J, lam * np.eye(J.shape[1])])
+        return np.linalg.lstsq(A, np.concatenate([dx, np.zeros(J.shape[1])]), rcond=None)[0]
+    lam2 = lam**2 if square else lam
+    return np.linalg.solve(J.T @ J + lam2 * np.eye(J.shape[1], dtype=dtype), J.T @ dx)
+
+
+BY_CHECKER["check_gpr_mean"] = ({
+    "theta0 not squared": (lambda *a: _gpr_own(*a, square_theta0=False), "theta0 = 0.5"),
+    "theta1 ignored": (lambda *a: _gpr_own(*a, reg=False), "differs"),
+    "the caller's X centred in place": (lambda *a: _gpr_own(*a, centre_x=True), "changed its input `X` in place"),
+}, {
+    "the reference solution": GPR_MEAN,
+    "its own kernel and solve": _gpr_own,
+    "through the inverse": lambda *a: _gpr_own(*a, inv=True),
+})
+BY_CHECKER["check_dls_step"] = ({
+    "the damping not squared": (lambda *a: _dls_own(*a, square=False), "damping squared on the diagonal"),
+    "the damping ignored": (lambda *a: _dls_own(*a, use_damping=False), "damping 0.1"),
+    "the caller's dx clipped in place": (lambda *a: _dls_own(*a, clip_dx=True), "changed its input `dx` in place"),
+}, {
+    "the reference solution": DLS,
+    "the normal equations": _dls_own,
+    "one stacked least-squares problem": lambda *a: _dls_own(*a, lstsq=True),
+    "in float32": lambda *a: _dls_own(*a, dtype=np.float32),
+})
+
+TIED, SOLVER_LOSS = _sol("03", "exercise_tied_decoder"), _sol("03", "exercise_solver_loss")
+
+
+def _tied_own(z, W1, W2, W3, last_relu=False, relus=True, in_place=False, dtype=float):
+    if in_place:
+        np.maximum(z, 0, out=z)
+    z, W1, W2, W3 = (np.asarray(a, dtype) for a in (z, W1, W2, W3))
+    act = (lambda v: np.maximum(v, 0)) if relus else (lambda v: v)  # noqa: E731
+    x = act(act(z @ W3) @ W2) @ W1
+    return np.maximum(x, 0) if last_relu else x
+
+
+def _loss_own(decoded, target, columns, k, use_k=True, use_columns=True, in_place=False):
+    if in_place:
+        decoded -= target
+        sq = decoded ** 2
+    else:
+        sq = (np.asarray(decoded) - target) ** 2
+    if not use_columns:
+        return float(sq.mean())
+    mask = np.zeros(sq.shape[1], bool)
+    mask[np.asarray(columns)] = True
+    return float(sq[:, mask].mean() + (k if use_k else 1.0) * sq[:, ~mask].mean())
+
+
+BY_CHECKER["check_tied_decoder"] = ({
+    "a relu on the output": (lambda *a: _tied_own(*a, last_relu=True), "ReLU after the first two"),
+    "no relu": (lambda *a: _tied_own(*a, relus=False), "case 1 differs"),
+    "the caller's codes rectified in place": (lambda *a: _tied_own(*a, in_place=True), "changed its input `z`"),
+}, {
+    "the reference solution": TIED,
+    "its own": _tied_own,
+    "in float32": lambda *a: _tied_own(*a, dtype=np.float32),
+})
+BY_CHECKER["check_solver_loss"] = ({
+    "k ignored": (lambda *a: _loss_own(*a, use_k=False), "case 1 differs"),
+    "columns ignored": (lambda *a: _loss_own(*a, use_columns=False), "case 1 differs"),
+    "the caller's decoded poses changed in place": (lambda *a: _loss_own(*a, in_place=True),
+                                                     "changed its input `decoded` in place"),
+}, {
+    "the reference solution": SOLVER_LOSS,
+    "a mask": _loss_own,
+})
+
+STEP, WEIGHT, CENTROID = _sol("05", "exercise_step"), _sol("05", "exercise_weight"), _sol("05", "exercise_centroid")
+
+
+def _step_own(b, f, e_prev, r, use_r=True, relu=True, in_place=False, axis=0):
+    e = e_prev if in_place else e_prev + 0
+    e += f
+    p = e.mean(axis)
+    x = b - p / (r if use_r else 1)
+    return e, p, (np.maximum(x, 0) if relu else x)
+
+
+def _weight_own(lam, cap=True, eta=13, in_place=False, dtype=float):
+    if in_place:
+        lam **= eta
+        sigma = 0.1 * lam
+    else:
+        sigma = 0.1 * np.asarray(lam, dtype) ** eta
+    with np.errstate(divide="ignore"):
+        w = 1.0 / sigma
+    return sigma, (np.minimum(1000.0, w) if cap else w).astype(dtype)
+
+
+def _centroid_own(kind, value, lam, all_kinds=False, weight="1 - lam", dtype=float):
+    pos = np.ones(len(kind), bool) if all_kinds else np.asarray(kind) == 0
+    w = {"1 - lam": 1 - lam + 1e-3, "lam": lam, "no 1e-3": 1 - lam}[weight][pos]
+    with np.errstate(invalid="ignore"):
+        out = (w[:, None] * value[pos, :3]).sum(0) / w.sum()
+    return np.zeros(3, dtype) if not pos.any() and weight != "no 1e-3" else out.astype(dtype)
+
+
+BY_CHECKER["check_prototype_step"] = ({
+    "r ignored": (lambda *a: _step_own(*a, use_r=False), "case 2 differs"),
+    "no relu": (lambda *a: _step_own(*a, relu=False), "case 1 differs"),
+    "the mean over the features": (lambda *a: _step_own(*a, axis=1), "case 1"),
+    "the caller's encodings accumulated in place": (lambda *a: _step_own(*a, in_place=True),
+                                                     "changed its input `e_prev` in place"),
+}, {
+    "the reference solution": STEP,
+    "its own": _step_own,
+})
+BY_CHECKER["check_tolerance_weight"] = ({
+    "1 / sigma not capped": (lambda lam: _weight_own(lam, cap=False), "min(W_M, 1/sigma)"),
+    "eta = 1": (lambda lam: _weight_own(lam, eta=1), "sigma_M * lam**eta"),
+    "the caller's lam raised in place": (lambda lam: _weight_own(lam, in_place=True), "changed its input `lam`"),
+}, {
+    "the reference solution": WEIGHT,
+    "in float32": lambda lam: _weight_own(lam, dtype=np.float32),
+})
+BY_CHECKER["check_centroid"] = ({
+    "every kind averaged": (lambda *a: _centroid_own(*a, all_kinds=True), "only kind 0"),
+    "weighted by lam": (lambda *a: _centroid_own(*a, weight="lam"), "weights 1 - lam + 1e-3"),
+    "without the 1e-3": (lambda *a: _centroid_own(*a, weight="no 1e-3"), "weights 1 - lam + 1e-3"),
+}, {
+    "the reference solution": CENTROID,
+    "in float32": lambda *a: _centroid_own(*a, dtype=np.float32),
+})
+
+
 @pytest.mark.parametrize("checker,slip", _all_wrong())
 def test_each_checker_refuses_each_wrong_answer_and_says_why(checker, slip, capsys):
     answer, said = BY_CHECKER[checker][0][slip]

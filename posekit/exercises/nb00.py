@@ -41,7 +41,7 @@ def check_fk(my_fk) -> bool:
                   _worst_joint(skel)))
     R32, p32 = R[1].astype(np.float32), root[1].astype(np.float32)  # float32 rotations and root
     cases.append(((skel, R32, p32), fk(skel, R32.astype(float), p32.astype(float))[0], _worst_joint(skel)))
-    return report("check_fk", my_fk, cases, forbid=(fk,), arg_names=("skeleton", "local_rot_matrices", "root_pos"))
+    return report("check_fk", my_fk, cases, forbid=(fk,), arg_names=("skeleton", "local_rot", "root_pos"))
 
 
 @judged
