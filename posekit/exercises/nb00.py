@@ -29,7 +29,7 @@ def _worst_joint(skeleton):
 
 @judged
 def check_fk(my_fk) -> bool:
-    """Check ``my_fk(skeleton, local_rot_matrices (J,3,3), root_pos (3,)) -> global_pos (J,3)``
+    """Check ``my_fk(skeleton, local_rot (J,3,3), root_pos (3,)) -> global_pos (J,3)``
     on real poses of the shipped sample and on a random pose."""
     skel, q, root = _skeleton_and_poses()
     R = quat_to_matrix(q)
