@@ -275,45 +275,6 @@ def _tolerance_after_the_pass(p, t, tol, it):
     return PLANTED(out, t, tol, it - 1) if it > 1 else out
 
 
-def _sorts(parents):
-    depths = _solutions("04").exercise_depths(list(parents))
-    parents.sort() if isinstance(parents, list) else None
-    return depths
-
-
-def _empties(parents):
-    depths = _solutions("04").exercise_depths(list(parents))
-    while isinstance(parents, list) and parents:
-        parents.pop()
-    return depths
-
-
-def _naive_generator_loss(logits):
-    with np.errstate(over="ignore", divide="ignore"):
-        return np.mean(-np.log(1.0 / (1.0 + np.exp(-np.asarray(logits, float)))))
-
-
-def _drag_ignoring_n(c, q, p0, n):
-    d = q - c
-    t = ((p0 - c) @ (c - p0)) / (d @ (c - p0))
-    return c + t * d if t > 0 else None
-
-
-def _drag_without_parallel_test(c, q, p0, n):
-    d = q - c
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = ((p0 - c) @ n) / (d @ n)
-        return c + t * d if t > 0 else None
-
-
-def _drag_t_at_zero(c, q, p0, n):
-    d = q - c
-    if abs(d @ n) < 1e-12:
-        return None
-    t = ((p0 - c) @ n) / (d @ n)
-    return c + t * d if t >= 0 else None
-
-
 def _slerp_without_guard(q0, q1, s):
     q0, q1 = np.asarray(q0, float), np.asarray(q1, float)
     if q0 @ q1 < 0:
@@ -328,12 +289,6 @@ WRONG = {
                                                            "case 7 differs"),
     "01 planted FABRIK testing the tolerance after a pass": ("check_fabrik_planted", _tolerance_after_the_pass,
                                                               "case 8 differs"),
-    "04 tree depths that sort the caller's list": ("check_tree_depths", _sorts, "changed its input `parents`"),
-    "04 tree depths that empty the caller's list": ("check_tree_depths", _empties, "changed its input `parents`"),
-    "04 the generator loss written naively": ("check_generator_loss", _naive_generator_loss, "overflows"),
-    "06 a drag point that ignores n": ("check_drag_point", _drag_ignoring_n, "differs"),
-    "06 a drag point with no parallel test": ("check_drag_point", _drag_without_parallel_test, "parallel"),
-    "06 a drag point that accepts t = 0": ("check_drag_point", _drag_t_at_zero, "t <= 0"),
     "06 slerp with no guard for nearly equal quaternions": ("check_slerp", _slerp_without_guard, "lerp"),
 }
 
@@ -355,13 +310,13 @@ CALLS_POSEKIT = {  # checker: (lesson, the reference solution, the posekit funct
     "check_gpr_mean": ("02", "exercise_gpr_mean", "posekit.invrig.gpr:GPR.predict"),
     "check_tied_decoder": ("03", "exercise_tied_decoder", "posekit.models.pose_autoencoder.networks:PoseAutoencoder.decode"),
     "check_solver_loss": ("03", "exercise_solver_loss", "posekit.models.pose_autoencoder.train:solver_loss"),
-    "check_tree_depths": ("04", "exercise_depths", "posekit.models.aegan.spl:tree_levels"),
+    "check_spl_all": ("04", "exercise_spl_all", "posekit.models.aegan.numpy_nets:tree_levels"),
     "check_latent_loss": ("04", "exercise_latent_loss", "posekit.models.aegan.latent_opt:Problem.loss"),
-    "check_generator_loss": ("04", "exercise_generator_loss", "posekit.models.aegan.train:_bce"),
+    "check_adversarial": ("04", "exercise_adversarial", "posekit.models.aegan.train:_bce"),
     "check_prototype_step": ("05", "exercise_step", "posekit.models.protores.networks:ProtoResEncoder.forward"),
     "check_tolerance_weight": ("05", "exercise_weight", "posekit.models.protores.networks:tolerance_to_sigma"),
     "check_centroid": ("05", "exercise_centroid", "posekit.models.protores.networks:centroid"),
-    "check_drag_point": ("06", "exercise_drag", "posekit.viz.drag:drag_point"),
+    "check_drag_on_sphere": ("06", "exercise_drag_on_sphere", "posekit.exercises.nb06:sphere_drag_reference"),
     "check_slerp": ("06", "exercise_slerp", "posekit.ik.keyframes:slerp"),
 }
 
@@ -402,3 +357,609 @@ def test_float32_answers_and_tuples_of_rows_are_accepted(capsys):
     assert check_fabrik_planted(lambda *a: tuple(PLANTED(*a)))  # the joints as a tuple of rows
     out = capsys.readouterr().out
     assert out.count("✓") == 2, out
+
+
+# -- every checker: its wrong answers, each refused with its reason; its right variants, each accepted ---------------
+# (lesson: {checker: ({wrong answer: (function, what the verdict must say)}, {right variant: function})}), filled in
+# below lesson by lesson; two tests read it.
+
+BY_CHECKER: dict = {}
+
+
+def _checker(name):
+    import posekit.exercises
+
+    return getattr(posekit.exercises, name)
+
+
+def _all_wrong():
+    return [(checker, slip) for checker, (wrong, _) in BY_CHECKER.items() for slip in wrong]
+
+
+def _all_right():
+    return [(checker, variant) for checker, (_, right) in BY_CHECKER.items() for variant in right]
+
+
+# lesson 04, exercise 1: the dense SPL
+
+SPL_ALL = solution_function(find_lesson("04"), "exercise_spl_all")
+
+
+def _chains(parents):
+    out = []
+    for j in range(len(parents)):
+        chain, k = [], int(parents[j])
+        while k >= 0:
+            chain.append(k)
+            k = int(parents[k])
+        out.append(chain)
+    return out
+
+
+def _spl_own(h, parents, U, c, A, V, d, order="depth", ancestors="all", relu=True, out_bias=True, dtype=float):
+    """A student's own dense SPL, with the slips below as options."""
+    h = np.asarray(h, dtype)
+    J = len(parents)
+    chains = _chains(parents)
+    o = V[0].shape[0]
+    outs = [np.zeros((len(h), o), dtype) for _ in range(J)]
+    if order == "depth":
+        visit = sorted(range(J), key=lambda j: len(chains[j]))
+    elif order == "index":
+        visit = range(J)
+    else:  # breadth first from the first root only
+        root = list(parents).index(-1)
+        visit, queue = [], [root]
+        while queue:
+            j = queue.pop(0)
+            visit.append(j)
+            queue += [k for k in range(J) if parents[k] == j]
+    for j in visit:
+        pre = h @ np.asarray(U[j], dtype).T + np.asarray(c[j], dtype)
+        chain = chains[j]
+        if chain:
+            if ancestors == "parent":
+                pre = pre + outs[chain[0]] @ np.asarray(A[j], dtype)[:, :o].T
+            else:
+                row = chain if ancestors == "all" else chain[::-1]
+                pre = pre + np.concatenate([outs[a] for a in row], axis=1) @ np.asarray(A[j], dtype).T
+        act = np.maximum(pre, 0) if relu else pre
+        outs[j] = act @ np.asarray(V[j], dtype).T + (np.asarray(d[j], dtype) if out_bias else 0)
+    return np.stack(outs, axis=1)
+
+
+def _spl_recursive(h, parents, U, c, A, V, d):
+    """Each joint's output on demand, its parent's first (memoised): no ordering needed."""
+    memo = {}
+
+    def o(j):
+        if j not in memo:
+            chain = _chains(parents)[j]
+            pre = h @ U[j].T + c[j]
+            if chain:
+                pre = pre + np.concatenate([o(a) for a in chain], axis=1) @ A[j].T
+            memo[j] = np.maximum(pre, 0) @ V[j].T + d[j]
+        return memo[j]
+    return np.stack([o(j) for j in range(len(parents))], axis=1)
+
+
+def _sorts_parents(h, parents, *rest):
+    out = SPL_ALL(h, list(parents), *rest)
+    if isinstance(parents, list):
+        parents.sort()
+    return out
+
+
+def _pops_a(h, parents, U, c, A, V, d):
+    out = SPL_ALL(h, parents, U, c, list(A), V, d)
+    A.pop()
+    return out
+
+
+def _centres_h(h, parents, *rest):
+    out = SPL_ALL(h, parents, *rest)
+    h -= h.mean(axis=0)
+    return out
+
+
+def _calls_tree_levels(h, parents, *rest):
+    from posekit.models.aegan.spl import tree_levels
+
+    tree_levels(parents, "all")
+    return SPL_ALL(h, parents, *rest)
+
+
+BY_CHECKER["check_spl_all"] = ({
+    "the parent only (the sparse variant)": (lambda *a: _spl_own(*a, ancestors="parent"),
+                                             "ancestors' outputs side by side, nearest first"),
+    "the ancestors root first": (lambda *a: _spl_own(*a, ancestors="root first"), "nearest first"),
+    "the joints visited by index": (lambda *a: _spl_own(*a, order="index"), "case 2 differs"),
+    "one root assumed": (lambda *a: _spl_own(*a, order="first root"), "never computed"),
+    "no relu": (lambda *a: _spl_own(*a, relu=False), "relu before V_j"),
+    "no output bias": (lambda *a: _spl_own(*a, out_bias=False), "both biases"),
+    "the caller's parents sorted": (_sorts_parents, "changed its input `parents` in place"),
+    "an item popped off the caller's A": (_pops_a, "changed its input `A` in place"),
+    "the caller's h centred in place": (_centres_h, "changed its input `h` in place"),
+    "posekit's tree_levels called": (_calls_tree_levels, "calls posekit.models.aegan.numpy_nets.tree_levels"),
+    "the joints' axis first": (lambda *a: np.swapaxes(SPL_ALL(*a), 0, 1), "returned shape"),
+}, {
+    "the reference solution": SPL_ALL,
+    "in float32": lambda *a: _spl_own(*a, dtype=np.float32),
+    "(N, J * out), posekit's layout": lambda *a: SPL_ALL(*a).reshape(len(a[0]), -1),
+    "recursive, memoised": _spl_recursive,
+})
+
+
+def test_the_dense_spl_reference_is_posekits_layer_with_every_ancestor():
+    """The checker's expected answers are posekit's ``StructuredPrediction(ancestors="all")``, weights mapped."""
+    import torch
+
+    from posekit.exercises.nb04 import spl_all_reference
+    from posekit.models.aegan.spl import StructuredPrediction
+
+    parents = [2, -1, 1, 2, 3, -1, 5]
+    torch.manual_seed(0)
+    layer = StructuredPrediction(5, parents, out=3, hidden=4, ancestors="all")
+    J, k, H, o = len(parents), 4, 5, 3
+    U = layer.shared.weight.detach().double().numpy().reshape(J, k, H)
+    c = layer.shared.bias.detach().double().numpy().reshape(J, k)
+    A, V, d = [None] * J, np.zeros((J, o, k)), np.zeros((J, o))
+    for lv, (js, _) in enumerate(layer.levels):
+        for r, j in enumerate(js):
+            A[j] = layer.anc[lv][r].detach().double().numpy().T
+            V[j] = layer.w_out[lv][r].detach().double().numpy().T
+            d[j] = layer.b_out[lv][r].detach().double().numpy()
+    h = torch.randn(6, H)
+    with torch.no_grad():
+        theirs = layer(h).double().numpy().reshape(6, J, o)
+    assert np.allclose(spl_all_reference(h.double().numpy(), parents, U, c, A, V, d), theirs, atol=1e-5)
+
+
+# lesson 04, exercise 2: Eq. (6) and its gradient
+
+LATENT = solution_function(find_lesson("04"), "exercise_latent_loss")
+
+
+def _latent_own(x, t, cols, sc, scale=True, mean=False, two=True, one_scale=False, zero_elsewhere=True,
+                dtype=float):
+    x, t, sc = (np.asarray(a, dtype) for a in (x, t, sc))
+    s = np.full_like(sc, sc[0]) if one_scale else sc
+    diff = (x[cols] - t) * (s if scale else 1)
+    loss = np.mean(diff ** 2) if mean else np.sum(diff ** 2)
+    g = np.zeros_like(x) if zero_elsewhere else np.ones_like(x)
+    g[cols] = (2 if two else 1) * diff * (s if scale else 1)
+    return loss, g
+
+
+def _latent_in_place(x, t, cols, sc):
+    x[cols] -= t  # the difference, in the caller's pose
+    diff = x[cols] * sc
+    g = np.zeros(len(x))
+    g[cols] = 2 * diff * sc
+    return np.sum(diff ** 2), g
+
+
+BY_CHECKER["check_latent_loss"] = ({
+    "the scale ignored (z-scored units, not metres)": (lambda *a: _latent_own(*a, scale=False), "the loss is"),
+    "a mean, not a sum": (lambda *a: _latent_own(*a, mean=True), "not a mean"),
+    "one scale for every column": (lambda *a: _latent_own(*a, one_scale=True), "the loss is"),
+    "the gradient without its factor 2": (lambda *a: _latent_own(*a, two=False), "the gradient differs"),
+    "a gradient outside the target columns": (lambda *a: _latent_own(*a, zero_elsewhere=False),
+                                             "0 elsewhere"),
+    "the caller's pose changed in place": (_latent_in_place, "changed its input `x` in place"),
+}, {
+    "the reference solution": LATENT,
+    "in float32": lambda *a: _latent_own(*a, dtype=np.float32),
+    "the loss as a 0-d array": lambda *a: (np.asarray(LATENT(*a)[0]), LATENT(*a)[1]),
+})
+
+
+# lesson 04, exercise 3: the adversarial losses and their gradients
+
+ADVERSARIAL = solution_function(find_lesson("04"), "exercise_adversarial")
+
+
+def _sig(x):
+    with np.errstate(over="ignore"):
+        return 1.0 / (1.0 + np.exp(-x))
+
+
+def _adv_own(real, fake, s, naive=False, sigmoid_ratio=False, saturating=False, no_smoothing=False, pooled=False,
+             not_mean_grad=False, sign=1.0, wrt_d=False, smooth_fake=False, log1p=False, dtype=float):
+    """A student's own adversarial losses, with the slips below as options."""
+    r, f = np.asarray(real, dtype), np.asarray(fake, dtype)
+    s = 1.0 if no_smoothing else s
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+        if naive:
+            sp = lambda x: -np.log(_sig(-x))  # noqa: E731 - softplus(x) = -log sigmoid(-x), overflowing
+        elif log1p:
+            sp = lambda x: np.maximum(x, 0) + np.log1p(np.exp(-np.abs(x)))  # noqa: E731
+        else:
+            sp = lambda x: np.logaddexp(0, x)  # noqa: E731
+        if sigmoid_ratio:
+            sig = lambda x: np.exp(x) / (1 + np.exp(x))  # noqa: E731
+        else:
+            sig = lambda x: np.asarray(_sig(x), dtype)  # noqa: E731
+        yf = (1 - s) if smooth_fake else 0.0
+        terms_r = s * sp(-r) + (1 - s) * sp(r)
+        terms_f = yf * sp(-f) + (1 - yf) * sp(f)
+        loss_d = (terms_r.sum() + terms_f.sum()) if pooled else terms_r.mean() + terms_f.mean()
+        loss_g = -np.mean(sp(f)) if saturating else np.mean(sp(-f))
+        nr, nf = (1, 1) if not_mean_grad else (len(r), len(f))
+        dr, df, dg = sig(r) - s, sig(f) - yf, sig(f) - 1
+        if wrt_d:  # d BCE / d D instead of d BCE / d logit
+            dr, df, dg = (x / (sig(v) * (1 - sig(v))) for x, v in ((dr, r), (df, f), (dg, f)))
+        return loss_d, sign * dr / nr, sign * df / nf, loss_g, sign * dg / nf
+
+
+def _clips_in_place(real, fake, s):
+    np.clip(real, -50, 50, out=real)
+    return ADVERSARIAL(real, fake, s)
+
+
+def _calls_torch_bce(real, fake, s):
+    import torch
+    import torch.nn.functional as F
+
+    F.binary_cross_entropy_with_logits(torch.as_tensor(fake), torch.ones(len(fake), dtype=torch.float64))
+    return ADVERSARIAL(real, fake, s)
+
+
+BY_CHECKER["check_adversarial"] = ({
+    "-log(sigmoid(l)) written naively": (lambda *a: _adv_own(*a, naive=True), "not finite"),
+    "sigmoid as exp(l) / (1 + exp(l))": (lambda *a: _adv_own(*a, sigmoid_ratio=True), "not finite"),
+    "the saturating generator loss": (lambda *a: _adv_own(*a, saturating=True), "the saturating form"),
+    "the smoothing ignored": (lambda *a: _adv_own(*a, no_smoothing=True), "the smoothing ignored"),
+    "the smoothing put on the fake labels too": (lambda *a: _adv_own(*a, smooth_fake=True),
+                                                 "case 1 differs: the discriminator's loss"),
+    "one sum over real and fake": (lambda *a: _adv_own(*a, pooled=True), "not one sum or mean"),
+    "gradients not divided by N": (lambda *a: _adv_own(*a, not_mean_grad=True), "divided by N"),
+    "gradients of the wrong sign": (lambda *a: _adv_own(*a, sign=-1.0), "the sign"),
+    "gradients with respect to D, not the logit": (lambda *a: _adv_own(*a, wrt_d=True), "not to D"),
+    "the caller's logits clipped in place": (_clips_in_place, "changed its input `real_logits` in place"),
+    "torch's binary cross-entropy called": (_calls_torch_bce,
+                                            "calls torch.nn.functional.binary_cross_entropy_with_logits"),
+}, {
+    "the reference solution": ADVERSARIAL,
+    "its own softplus and sigmoid": _adv_own,
+    "in float32": lambda *a: _adv_own(*a, dtype=np.float32),
+    "softplus as max(x, 0) + log1p(exp(-|x|))": lambda *a: _adv_own(*a, log1p=True),
+})
+
+
+# lesson 06, exercise 1: a drag on the bone's sphere
+
+SPHERE = solution_function(find_lesson("06"), "exercise_drag_on_sphere")
+
+
+def _sphere_own(c, q, centre, r, far=False, unit_d=False, miss="nearest", in_front=True, clamp=True,
+                radius=None, dtype=float):
+    """A student's own sphere drag, with the slips below as options."""
+    c, q, centre = (np.asarray(a, dtype) for a in (c, q, centre))
+    r = r if radius is None else radius
+    d = q - c
+    a = 1.0 if unit_d else d @ d
+    b = 2 * d @ (c - centre)
+    disc = b * b - 4 * a * ((c - centre) @ (c - centre) - r * r)
+    if disc >= 0:
+        roots = ((-b + np.sqrt(disc)) / (2 * a), (-b - np.sqrt(disc)) / (2 * a))
+        roots = sorted(roots, reverse=far)
+        for t in roots:
+            if t > 0 or not in_front:
+                return c + t * d
+    if miss == "none":
+        return None
+    if miss == "nan":
+        return np.full(3, np.nan)
+    if miss == "near q":
+        v = q - centre
+    else:
+        t = ((centre - c) @ d) / (d @ d)
+        v = c + (max(t, 0.0) if clamp else t) * d - centre
+    return centre + r * v / np.linalg.norm(v)
+
+
+def _sphere_moves_q(c, q, centre, r):
+    q -= c  # the ray's direction, in the caller's array
+    return SPHERE(c, q + c, centre, r)
+
+
+def _plane_drag(c, q, centre, r):
+    """Section 3's drag, on the plane through the joint facing the camera: the bone's length is lost."""
+    n = c - (centre + [0.0, r, 0.0])
+    d = q - c
+    t = ((centre + [0.0, r, 0.0] - c) @ n) / (d @ n)
+    return c + t * d
+
+
+BY_CHECKER["check_drag_on_sphere"] = ({
+    "the far intersection": (lambda *a: _sphere_own(*a, far=True), "case 1 differs"),
+    "d taken as a unit vector": (lambda *a: _sphere_own(*a, unit_d=True), "not of unit length"),
+    "None when the ray misses": (lambda *a: _sphere_own(*a, miss="none"), "got None"),
+    "nan when the ray misses": (lambda *a: _sphere_own(*a, miss="nan"), "not finite"),
+    "an intersection behind the camera": (lambda *a: _sphere_own(*a, in_front=False), "where the ray leaves"),
+    "the line's nearest point, not the ray's": (lambda *a: _sphere_own(*a, clamp=False), "the camera itself"),
+    "the sphere's point nearest q": (lambda *a: _sphere_own(*a, miss="near q"), "the sphere's point nearest the ray"),
+    "the radius ignored": (lambda *a: _sphere_own(*a, radius=1.0), "not on the sphere"),
+    "section 3's plane drag": (_plane_drag, "not on the sphere"),
+    "the caller's q changed in place": (_sphere_moves_q, "changed its input `q` in place"),
+}, {
+    "the reference solution": SPHERE,
+    "the quadratic's coefficients": _sphere_own,
+    "in float32": lambda *a: _sphere_own(*a, dtype=np.float32),
+    "a list": lambda *a: list(SPHERE(*a)),
+})
+
+
+# lesson 06, exercise 2: slerp
+
+SLERP = solution_function(find_lesson("06"), "exercise_slerp")
+
+
+def _slerp_own(q0, q1, s, flip=True, lerp_above=1 - 1e-12, in_place=False, swap=False, dtype=float):
+    q0, q1 = np.asarray(q0, dtype), (q1 if in_place else np.asarray(q1, dtype))
+    if flip and q0 @ q1 < 0:
+        if in_place:
+            q1 *= -1
+        else:
+            q1 = -q1
+    d = float(np.clip(q0 @ q1, -1, 1))
+    if swap:
+        s = 1 - s
+    if abs(d) > lerp_above:
+        q = (1 - s) * q0 + s * q1
+        return (q / np.linalg.norm(q)).astype(dtype)
+    theta = np.arccos(d)
+    return ((np.sin((1 - s) * theta) * q0 + np.sin(s * theta) * q1) / np.sin(theta)).astype(dtype)
+
+
+BY_CHECKER["check_slerp"] = ({
+    "no guard for nearly equal quaternions": (_slerp_without_guard, "lerp"),
+    "the long way round": (lambda *a: _slerp_own(*a, flip=False), "the shorter way round"),
+    "the lerp fallback far from equal": (lambda *a: _slerp_own(*a, lerp_above=0.99), "taken too early"),
+    "s and 1 - s swapped": (lambda *a: _slerp_own(*a, swap=True), "case 1 differs"),
+    "the caller's q1 flipped in place": (lambda *a: _slerp_own(*a, in_place=True), "changed its input `q1` in place"),
+}, {
+    "the reference solution": SLERP,
+    "posekit's threshold (lerp above q0 . q1 = 0.9995)": lambda *a: _slerp_own(*a, lerp_above=0.9995),
+    "in float32": lambda *a: _slerp_own(*a, dtype=np.float32),
+    "the other sign": lambda *a: -SLERP(*a),
+    "a list": lambda *a: list(SLERP(*a)),
+})
+
+
+# lessons 00, 02, 03 and 05: the usual wrong answers of their kind (an argument ignored, a convention slipped, an
+# input changed in place), each refused; float32 and other right variants, each accepted
+
+def _sol(lesson, name):
+    return solution_function(find_lesson(lesson), name)
+
+
+FK, SIXD, BONES = _sol("00", "exercise_fk"), _sol("00", "exercise_sixd_to_matrix"), _sol("00", "exercise_bone_lengths")
+
+
+def _fk_own(skeleton, local_rot, root_pos, root=True, order="parent first", offset_by="parent", dtype=float):
+    J = skeleton.n_joints
+    R, x = np.zeros((J, 3, 3), dtype), np.zeros((J, 3), dtype)
+    R[0], x[0] = local_rot[0], (root_pos if root else 0.0)
+    for j in range(1, J):
+        p = skeleton.parents[j]
+        R[j] = R[p] @ local_rot[j] if order == "parent first" else local_rot[j] @ R[p]
+        x[j] = x[p] + (R[p] if offset_by == "parent" else R[j]) @ skeleton.offsets[j]
+    return x
+
+
+def _fk_resets_root(skeleton, local_rot, root_pos):
+    local_rot[0] = np.eye(3)  # "the root's rotation is applied later", in the caller's array
+    return FK(skeleton, local_rot, root_pos)
+
+
+def _sixd_own(x, columns=True, normalise=True, order=1.0, in_place=False):
+    x = x if in_place else np.array(x, float)
+    a1, a2 = x[:3], x[3:6]
+    if in_place:
+        a1 /= np.linalg.norm(a1)
+    b1 = a1 / np.linalg.norm(a1) if normalise else a1
+    b2 = a2 - (b1 @ a2) * b1
+    b2 = b2 / np.linalg.norm(b2)
+    b3 = np.cross(b1, b2) if order > 0 else np.cross(b2, b1)
+    return np.stack([b1, b2, b3], axis=1 if columns else 0)
+
+
+def _bones_root_first(parents, global_pos):
+    p = np.asarray(global_pos)
+    return np.concatenate([[0.0], np.linalg.norm(p[1:] - p[np.asarray(parents)[1:]], axis=1)])
+
+
+def _bones_sorts(parents, global_pos):
+    out = BONES(list(parents), global_pos)
+    if isinstance(parents, list):
+        parents.sort()
+    return out
+
+
+BY_CHECKER["check_fk"] = ({
+    "root_pos ignored": (lambda *a: _fk_own(*a, root=False), "case 1 differs"),
+    "rotations composed child first": (lambda *a: _fk_own(*a, order="child first"), "case 1 differs"),
+    "the offset turned by the joint's own rotation": (lambda *a: _fk_own(*a, offset_by="own"), "case 1 differs"),
+    "the caller's root rotation reset": (_fk_resets_root, "changed its input `local_rot` in place"),
+}, {
+    "the reference solution": FK,
+    "section 2's loop": _fk_own,
+    "in float32": lambda *a: _fk_own(*a, dtype=np.float32),
+})
+BY_CHECKER["check_sixd_to_matrix"] = ({
+    "rows, not columns": (lambda x: _sixd_own(x, columns=False), "columns must be b1, b2, b1 x b2"),
+    "b1 not normalised": (lambda x: _sixd_own(x, normalise=False), "case 4 differs"),
+    "b3 = b2 x b1": (lambda x: _sixd_own(x, order=-1.0), "case 1 differs"),
+    "the caller's x normalised in place": (lambda x: _sixd_own(x, in_place=True), "changed its input `x` in place"),
+}, {
+    "the reference solution": SIXD,
+    "its own Gram-Schmidt": _sixd_own,
+    "in float32": lambda x: _sixd_own(x).astype(np.float32),
+})
+BY_CHECKER["check_bone_lengths"] = ({
+    "the root assumed at index 0": (_bones_root_first, "of parents [3, 0, 0, -1]"),
+    "the caller's parents sorted": (_bones_sorts, "changed its input `parents` in place"),
+}, {
+    "the reference solution": BONES,
+    "in float32": lambda par, pos: BONES(par, pos).astype(np.float32),
+})
+
+GPR_MEAN, DLS = _sol("02", "exercise_gpr_mean"), _sol("02", "exercise_dls_step")
+
+
+def _gpr_own(X, Y, Xq, theta0, theta1, square_theta0=True, reg=True, inv=False, centre_x=False):
+    if centre_x:
+        X -= X.mean(axis=0)  # in the caller's array
+    t0 = theta0**2 if square_theta0 else theta0
+    k = lambda A, B: np.sqrt(((A[:, None, :] - B[None, :, :]) ** 2).sum(-1) + t0)  # noqa: E731
+    K = k(X, X) + (theta1 * np.eye(len(X)) if reg else 0)
+    return k(Xq, X) @ (np.linalg.inv(K) @ Y if inv else np.linalg.solve(K, Y))
+
+
+def _dls_own(J, dx, damping, square=True, use_damping=True, lstsq=False, clip_dx=False, dtype=float):
+    if clip_dx:
+        np.clip(dx, -0.5, 0.5, out=dx)
+    J, dx = np.asarray(J, dtype), np.asarray(dx, dtype)
+    lam = (damping if use_damping else 0.0)
+    if lstsq:  # min |J dy - dx|^2 + lam^2 |dy|^2 as one least-squares problem
+        A = np.vstack([J, lam * np.eye(J.shape[1])])
+        return np.linalg.lstsq(A, np.concatenate([dx, np.zeros(J.shape[1])]), rcond=None)[0]
+    lam2 = lam**2 if square else lam
+    return np.linalg.solve(J.T @ J + lam2 * np.eye(J.shape[1], dtype=dtype), J.T @ dx)
+
+
+BY_CHECKER["check_gpr_mean"] = ({
+    "theta0 not squared": (lambda *a: _gpr_own(*a, square_theta0=False), "theta0 = 0.5"),
+    "theta1 ignored": (lambda *a: _gpr_own(*a, reg=False), "differs"),
+    "the caller's X centred in place": (lambda *a: _gpr_own(*a, centre_x=True), "changed its input `X` in place"),
+}, {
+    "the reference solution": GPR_MEAN,
+    "its own kernel and solve": _gpr_own,
+    "through the inverse": lambda *a: _gpr_own(*a, inv=True),
+})
+BY_CHECKER["check_dls_step"] = ({
+    "the damping not squared": (lambda *a: _dls_own(*a, square=False), "damping squared on the diagonal"),
+    "the damping ignored": (lambda *a: _dls_own(*a, use_damping=False), "damping 0.1"),
+    "the caller's dx clipped in place": (lambda *a: _dls_own(*a, clip_dx=True), "changed its input `dx` in place"),
+}, {
+    "the reference solution": DLS,
+    "the normal equations": _dls_own,
+    "one stacked least-squares problem": lambda *a: _dls_own(*a, lstsq=True),
+    "in float32": lambda *a: _dls_own(*a, dtype=np.float32),
+})
+
+TIED, SOLVER_LOSS = _sol("03", "exercise_tied_decoder"), _sol("03", "exercise_solver_loss")
+
+
+def _tied_own(z, W1, W2, W3, last_relu=False, relus=True, in_place=False, dtype=float):
+    if in_place:
+        np.maximum(z, 0, out=z)
+    z, W1, W2, W3 = (np.asarray(a, dtype) for a in (z, W1, W2, W3))
+    act = (lambda v: np.maximum(v, 0)) if relus else (lambda v: v)  # noqa: E731
+    x = act(act(z @ W3) @ W2) @ W1
+    return np.maximum(x, 0) if last_relu else x
+
+
+def _loss_own(decoded, target, columns, k, use_k=True, use_columns=True, in_place=False):
+    if in_place:
+        decoded -= target
+        sq = decoded ** 2
+    else:
+        sq = (np.asarray(decoded) - target) ** 2
+    if not use_columns:
+        return float(sq.mean())
+    mask = np.zeros(sq.shape[1], bool)
+    mask[np.asarray(columns)] = True
+    return float(sq[:, mask].mean() + (k if use_k else 1.0) * sq[:, ~mask].mean())
+
+
+BY_CHECKER["check_tied_decoder"] = ({
+    "a relu on the output": (lambda *a: _tied_own(*a, last_relu=True), "ReLU after the first two"),
+    "no relu": (lambda *a: _tied_own(*a, relus=False), "case 1 differs"),
+    "the caller's codes rectified in place": (lambda *a: _tied_own(*a, in_place=True), "changed its input `z`"),
+}, {
+    "the reference solution": TIED,
+    "its own": _tied_own,
+    "in float32": lambda *a: _tied_own(*a, dtype=np.float32),
+})
+BY_CHECKER["check_solver_loss"] = ({
+    "k ignored": (lambda *a: _loss_own(*a, use_k=False), "case 1 differs"),
+    "columns ignored": (lambda *a: _loss_own(*a, use_columns=False), "case 1 differs"),
+    "the caller's decoded poses changed in place": (lambda *a: _loss_own(*a, in_place=True),
+                                                     "changed its input `decoded` in place"),
+}, {
+    "the reference solution": SOLVER_LOSS,
+    "a mask": _loss_own,
+})
+
+STEP, WEIGHT, CENTROID = _sol("05", "exercise_step"), _sol("05", "exercise_weight"), _sol("05", "exercise_centroid")
+
+
+def _step_own(b, f, e_prev, r, use_r=True, relu=True, in_place=False, axis=0):
+    e = e_prev if in_place else e_prev + 0
+    e += f
+    p = e.mean(axis)
+    x = b - p / (r if use_r else 1)
+    return e, p, (np.maximum(x, 0) if relu else x)
+
+
+def _weight_own(lam, cap=True, eta=13, in_place=False, dtype=float):
+    if in_place:
+        lam **= eta
+        sigma = 0.1 * lam
+    else:
+        sigma = 0.1 * np.asarray(lam, dtype) ** eta
+    with np.errstate(divide="ignore"):
+        w = 1.0 / sigma
+    return sigma, (np.minimum(1000.0, w) if cap else w).astype(dtype)
+
+
+def _centroid_own(kind, value, lam, all_kinds=False, weight="1 - lam", dtype=float):
+    pos = np.ones(len(kind), bool) if all_kinds else np.asarray(kind) == 0
+    w = {"1 - lam": 1 - lam + 1e-3, "lam": lam, "no 1e-3": 1 - lam}[weight][pos]
+    with np.errstate(invalid="ignore"):
+        out = (w[:, None] * value[pos, :3]).sum(0) / w.sum()
+    return np.zeros(3, dtype) if not pos.any() and weight != "no 1e-3" else out.astype(dtype)
+
+
+BY_CHECKER["check_prototype_step"] = ({
+    "r ignored": (lambda *a: _step_own(*a, use_r=False), "case 2 differs"),
+    "no relu": (lambda *a: _step_own(*a, relu=False), "case 1 differs"),
+    "the mean over the features": (lambda *a: _step_own(*a, axis=1), "case 1"),
+    "the caller's encodings accumulated in place": (lambda *a: _step_own(*a, in_place=True),
+                                                     "changed its input `e_prev` in place"),
+}, {
+    "the reference solution": STEP,
+    "its own": _step_own,
+})
+BY_CHECKER["check_tolerance_weight"] = ({
+    "1 / sigma not capped": (lambda lam: _weight_own(lam, cap=False), "min(W_M, 1/sigma)"),
+    "eta = 1": (lambda lam: _weight_own(lam, eta=1), "sigma_M * lam**eta"),
+    "the caller's lam raised in place": (lambda lam: _weight_own(lam, in_place=True), "changed its input `lam`"),
+}, {
+    "the reference solution": WEIGHT,
+    "in float32": lambda lam: _weight_own(lam, dtype=np.float32),
+})
+BY_CHECKER["check_centroid"] = ({
+    "every kind averaged": (lambda *a: _centroid_own(*a, all_kinds=True), "only kind 0"),
+    "weighted by lam": (lambda *a: _centroid_own(*a, weight="lam"), "weights 1 - lam + 1e-3"),
+    "without the 1e-3": (lambda *a: _centroid_own(*a, weight="no 1e-3"), "weights 1 - lam + 1e-3"),
+}, {
+    "the reference solution": CENTROID,
+    "in float32": lambda *a: _centroid_own(*a, dtype=np.float32),
+})
+
+
+@pytest.mark.parametrize("checker,slip", _all_wrong())
+def test_each_checker_refuses_each_wrong_answer_and_says_why(checker, slip, capsys):
+    answer, said = BY_CHECKER[checker][0][slip]
+    assert _checker(checker)(answer) is False
+    out = capsys.readouterr().out
+    assert said in out, out
+
+
+@pytest.mark.parametrize("checker,variant", _all_right())
+def test_each_checker_accepts_each_right_variant(checker, variant, capsys):
+    assert _checker(checker)(BY_CHECKER[checker][1][variant]) is True, capsys.readouterr().out

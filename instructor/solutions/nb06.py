@@ -3,41 +3,51 @@ them into the lesson)."""
 
 from __future__ import annotations
 
-__all__ = ["exercise_drag", "exercise_slerp"]
+__all__ = ["exercise_drag_on_sphere", "exercise_slerp"]
 
 
-def exercise_drag(c, q, p0, n):
-    """Where the mouse ray meets the drag plane: a ray-plane intersection.
+def exercise_drag_on_sphere(c, q, centre, radius):
+    """A joint dragged on the sphere of its bone around its parent: the bone keeps its length (an FK drag).
 
-    The ray runs from the camera ``c`` through ``q``, ``c + t d`` with ``d = q - c``; the plane passes
-    through ``p0`` with normal ``n``, so ``t = ((p0 - c) . n) / (d . n)``. No point when the ray runs along
-    the plane (``d . n = 0``) or meets it behind the camera (``t <= 0``).
+    The ray is ``c + t d``, ``d = q - c``, ``t >= 0``. With ``t_c = ((centre - c) . d) / (d . d)`` (the line's point
+    nearest the centre, ``x_c = c + t_c d``) and ``h^2 = radius^2 - |x_c - centre|^2``, the line meets the sphere
+    at ``t = t_c -+ sqrt(h^2 / (d . d))`` when ``h^2 >= 0``; the answer is the first of them in front of the camera
+    (``t > 0``: from inside the sphere, the far one). When neither is in front (the ray passes beside the sphere,
+    or the sphere is behind the camera), the joint goes to the sphere's point nearest the ray,
+    ``centre + radius (x - centre) / |x - centre|`` with ``x = c + max(t_c, 0) d``. Both rules give the same point
+    where the ray just touches the sphere, so the joint does not jump as the mouse leaves the sphere's outline.
 
     Parameters
     ----------
     c : ndarray, shape (3,), metres
         Camera position.
     q : ndarray, shape (3,), metres
-        A point on the mouse ray.
-    p0 : ndarray, shape (3,), metres
-        The grabbed point, on the plane.
-    n : ndarray, shape (3,)
-        Plane normal (need not be unit).
+        A point on the mouse ray (``q - c`` is not of unit length).
+    centre : ndarray, shape (3,), metres
+        The parent joint.
+    radius : float, metres
+        The bone's length.
 
     Returns
     -------
-    ndarray, shape (3,), metres, or None
+    ndarray, shape (3,), metres
+        A point at ``radius`` from ``centre``.
     """
     import numpy as np
 
+    c, q, centre = (np.asarray(a, dtype=float) for a in (c, q, centre))
     d = q - c
-    denom = d @ n
-    if abs(denom) <= 1e-12 * np.linalg.norm(d) * np.linalg.norm(n):  # parallel, up to rounding
-        return None
-    t = ((p0 - c) @ n) / denom
-    if t <= 0:  # the plane is behind the camera
-        return None
-    return c + t * d
+    dd = d @ d
+    t_c = ((centre - c) @ d) / dd
+    h2 = radius**2 - np.sum((c + t_c * d - centre) ** 2)
+    if h2 >= 0:
+        dt = np.sqrt(h2 / dd)
+        for t in (t_c - dt, t_c + dt):  # the nearer first
+            if t > 0:
+                return c + t * d
+    x = c + max(t_c, 0.0) * d  # the ray's point nearest the centre
+    v = x - centre
+    return centre + radius * v / np.linalg.norm(v)
 
 
 def exercise_slerp(q0, q1, s):

@@ -176,6 +176,14 @@ class _Watch:
         return False
 
 
+def flat(*parts) -> np.ndarray:
+    """The parts of an answer (a loss and a gradient, three arrays) as one flat vector, in float32 when any part is
+    float32, so that :func:`report` judges a float32 answer with float32's tolerance (a wrapper that made everything
+    float64 would hold it to float64's)."""
+    single = any(getattr(p, "dtype", None) == np.float32 for p in parts)
+    return np.concatenate([np.ravel(_asarray(p, dtype=np.float32 if single else float)) for p in parts])
+
+
 def _snapshot(args):
     return [copy.deepcopy(a) if isinstance(a, (np.ndarray, list, dict)) else None for a in args]
 

@@ -44,15 +44,17 @@ def check_tied_decoder(my_decode) -> bool:
 
     def describe(got, expected):
         return f"max error {np.abs(got - expected).max():.3g}; transposed weights, ReLU after the first two, no biases?"
-    for seed, (F, H, d) in enumerate(((12, 8, 4), (63, 200, 64), (9, 5, 3))):
+    for seed, (F, H, d, N) in enumerate(((12, 8, 4, 6), (63, 200, 64, 6), (9, 5, 3, 6), (7, 6, 4, 1))):
         torch.manual_seed(seed)
         ae = PoseAutoencoder(F, H, d, tied=True)
-        z = torch.randn(6, d)
+        z = torch.randn(N, d)  # the last: one code, (1, d)
         with torch.no_grad():
             expected = ae.decode(z).numpy().astype(float)
         weights = (m.weight.detach().numpy().astype(float) for m in (ae.enc1, ae.enc2, ae.enc3))
         args = (z.numpy().astype(float), *weights)
         cases.append((args, expected, describe))
+    z, W1, W2, W3 = (np.asarray(a, np.float32) for a in cases[0][0])  # float32 codes and weights
+    cases.append(((z, W1, W2, W3), cases[0][1], describe))
     return report("check_tied_decoder", my_decode, cases, atol=1e-5, forbid=(PoseAutoencoder.decode,),
                   arg_names=("z", "W1", "W2", "W3"))
 
@@ -72,9 +74,11 @@ def check_solver_loss(my_loss) -> bool:
     def describe(got, expected):
         return (f"got {float(np.ravel(got)[0]):.6g}, expected {float(expected):.6g}; a mean per group, k on the "
                 "others only?")
-    for N, F, cols, k in ((4, 9, [0, 1, 2], 0.01), (10, 63, list(range(27, 33)), 0.1), (3, 6, [3, 4, 5], 1.0)):
+    for N, F, cols, k in ((4, 9, [0, 1, 2], 0.01), (10, 63, list(range(27, 33)), 0.1), (3, 6, [3, 4, 5], 1.0),
+                          (5, 12, np.array([9, 10, 11, 0, 1, 2]), 0.0),  # an index array, not in order; k = 0
+                          (2, 6, [0, 1, 2], 10.0)):                       # the others weighted above the targets
         d, t = rng.normal(size=(N, F)), rng.normal(size=(N, F))
-        expected = float(solver_loss(F, cols, k)(torch.as_tensor(d), torch.as_tensor(t)))
+        expected = float(solver_loss(F, list(cols), k)(torch.as_tensor(d), torch.as_tensor(t)))
         cases.append(((d, t, cols, k), np.float64(expected), describe))
     return report("check_solver_loss", lambda *a: np.float64(my_loss(*a)), cases, atol=1e-9, forbid=(solver_loss,),
                   arg_names=("decoded", "target", "columns", "k"))

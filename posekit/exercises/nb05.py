@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._check import report
+from ._check import flat, report
 from ._judge import judged
 
 
@@ -19,18 +19,18 @@ def check_prototype_step(my_step) -> bool:
     def describe(got, exp):
         i = int(np.argmax(np.abs(got - exp)))
         return f"entry {i}: got {got.ravel()[i]:.4g}, expected {exp.ravel()[i]:.4g}; p / r, mean over effectors?"
-    for N, d, r in ((3, 4, 1), (7, 5, 2), (1, 6, 3)):
-        b, f, e0 = rng.normal(size=(N, d)), rng.normal(size=(N, d)), rng.normal(size=(N, d))
-        e = e0 + f
+    for N, d, r, dtype in ((3, 4, 1, float), (7, 5, 2, float), (1, 6, 3, float), (4, 3, 5, np.float32)):
+        b, f, e0 = (rng.normal(size=(N, d)).astype(dtype) for _ in range(3))
+        e = e0.astype(float) + f
         p = e.mean(0)
         cases.append(((b, f, e0, r), np.concatenate([e.ravel(), p, np.maximum(b - p / r, 0).ravel()]), describe))
 
-    def flat(*a):
+    def both(*a):
         e, p, x = my_step(*a)
-        return np.concatenate([np.ravel(e), np.ravel(p), np.ravel(x)])
+        return flat(e, p, x)
     from ..models.protores.networks import ProtoResEncoder
 
-    return report("check_prototype_step", flat, cases, atol=1e-9, forbid=(ProtoResEncoder.forward,),
+    return report("check_prototype_step", both, cases, atol=1e-9, forbid=(ProtoResEncoder.forward,),
                   arg_names=("b", "f", "e_prev", "r"))
 
 
@@ -45,16 +45,17 @@ def check_tolerance_weight(my_weight) -> bool:
         i = int(np.argmax(np.abs(got - exp) / (np.abs(exp) + 1e-12)))
         return f"entry {i}: got {got[i]:.6g}, expected {exp[i]:.6g}; sigma_M * lam**eta, and min(W_M, 1/sigma)?"
     cases = []
-    for lam in (np.array([0.0, 0.5, 1.0]), np.linspace(0, 1, 11), np.array([0.7, 0.75, 0.9])):
-        s = SIGMA_M * lam ** ETA
+    for lam in (np.array([0.0, 0.5, 1.0]), np.linspace(0, 1, 11), np.array([0.7, 0.75, 0.9]),
+                np.array([0.0, 0.0]), np.array([0.6, 0.95], np.float32)):  # exact effectors only; float32
+        s = SIGMA_M * lam.astype(float) ** ETA
         with np.errstate(divide="ignore"):
             w = np.minimum(1000.0, 1.0 / s)
         cases.append(((lam,), np.concatenate([s, w]), describe))
 
-    def flat(lam):
+    def both(lam):
         s, w = my_weight(lam)
-        return np.concatenate([np.ravel(s), np.ravel(w)])
-    return report("check_tolerance_weight", flat, cases, atol=1e-9, forbid=(tolerance_to_sigma,), arg_names=("lam",))
+        return flat(s, w)
+    return report("check_tolerance_weight", both, cases, atol=1e-9, forbid=(tolerance_to_sigma,), arg_names=("lam",))
 
 
 @judged
@@ -71,10 +72,13 @@ def check_centroid(my_centroid) -> bool:
     def describe(got, exp):
         return f"got {np.round(got, 4)}, expected {np.round(exp, 4)}; only kind 0, weights 1 - lam + 1e-3?"
     cases = []
-    for kind in (np.array([0, 0, 0]), np.array([0, 1, 2, 0, 1]), np.array([1, 2]), np.array([2, 0, 0, 1, 0, 0])):
+    for kind in (np.array([0, 0, 0]), np.array([0, 1, 2, 0, 1]), np.array([1, 2]), np.array([2, 0, 0, 1, 0, 0]),
+                 np.array([1, 0, 2]), np.array([0, 0])):
         value = rng.normal(size=(len(kind), 6))
         lam = rng.uniform(0, 1, len(kind))
+        if len(kind) == 2:  # both loose at the limit: weights 1e-3 each, still a mean
+            lam = np.ones(2)
         exp = centroid(torch.as_tensor(kind)[None], torch.as_tensor(value)[None], torch.as_tensor(lam)[None])[0].numpy()
         cases.append(((kind, value, lam), exp, describe))
-    return report("check_centroid", lambda *a: np.asarray(my_centroid(*a), dtype=float), cases, atol=1e-9,
+    return report("check_centroid", lambda *a: flat(my_centroid(*a)), cases, atol=1e-9,
                   forbid=(centroid,), arg_names=("kind", "value", "lam"))

@@ -220,16 +220,9 @@ def test_compiled_path_matches_numpy(mini, shipped):
 
 
 def test_checkers_accept_a_right_answer_and_reject_a_wrong_one(capsys):
-    from posekit.exercises import check_generator_loss, check_latent_loss, check_tree_depths
-
-    def depths(parents):
-        out = []
-        for j in range(len(parents)):
-            k, n = parents[j], 0
-            while k >= 0:
-                k, n = parents[k], n + 1
-            out.append(n)
-        return np.array(out)
+    """Lesson 04's checkers on answers written here (tests/test_exercises.py lists every wrong answer and right
+    variant of each)."""
+    from posekit.exercises import check_adversarial, check_latent_loss
 
     def loss(x, t, cols, sc):
         diff = (x[cols] - t) * sc
@@ -237,9 +230,19 @@ def test_checkers_accept_a_right_answer_and_reject_a_wrong_one(capsys):
         g[cols] = 2 * diff * sc
         return (diff ** 2).sum(), g
 
-    assert check_tree_depths(depths) and check_latent_loss(loss)
-    assert check_generator_loss(lambda lg: np.mean(np.logaddexp(0.0, -lg)))
-    assert not check_tree_depths(lambda p: np.zeros(len(p)))
+    def adversarial(real, fake, s):
+        sig = lambda v: 0.5 * (1 + np.tanh(v / 2))  # noqa: E731 - finite everywhere
+        loss_d = np.mean(s * np.logaddexp(0, -real) + (1 - s) * np.logaddexp(0, real)) + np.mean(np.logaddexp(0, fake))
+        return (loss_d, (sig(real) - s) / len(real), sig(fake) / len(fake), np.mean(np.logaddexp(0, -fake)),
+                (sig(fake) - 1) / len(fake))
+
+    assert check_latent_loss(loss) and check_adversarial(adversarial)
     assert not check_latent_loss(lambda x, t, c, s: (np.sum(((x[c] - t)) ** 2), np.zeros_like(x)))  # forgot metres
-    assert not check_generator_loss(lambda lg: np.mean(np.log1p(-1 / (1 + np.exp(-lg)))))  # the saturating form
-    assert "not log(1 - D(fake))" in capsys.readouterr().out
+
+    def saturating(real, fake, s):
+        out = list(adversarial(real, fake, s))
+        out[3] = np.mean(-np.logaddexp(0, fake))  # log(1 - sigmoid(l))
+        return tuple(out)
+
+    assert not check_adversarial(saturating)
+    assert "the saturating form" in capsys.readouterr().out
