@@ -19,7 +19,7 @@ What it writes (``out``, a folder; by default ``data_samples/results``):
 * ``bench_all.md`` — what was measured, one Markdown table per effector set and start condition sorted by
   MPJPE, the best solver of each (:func:`winners`), and how to read the scatter;
 * ``bench_all.png`` — median time per solve (ms) against median MPJPE (mm), both log, one panel per effector
-  set, one point per solver and start condition: a speed/quality scatter in the spirit of Fig. 5 of Victor
+  set and start condition, one point per solver: a speed/quality scatter in the spirit of Fig. 5 of Victor
   et al. 2021.
 
 Units: times in milliseconds on one thread; distances in millimetres (the library's metres times 1000).
@@ -38,7 +38,7 @@ from ..ik.api import EFFECTOR_SETS
 from ..ik.registry import solver_info
 from .ik import RANDOM, TABLE_LABELS, TABLES as IK_TABLES, WEIGHTS_HELP, _group_title, default_data, effector_set_names, resolve_solvers
 from .ik import run as run_ik
-from .all_plot import plot
+from .all_plot import pareto, plot
 from .verdicts import footer as verdict_footer, verdicts
 from .plugin import arg, register_benchmark
 from ..provenance import machine, today
@@ -230,13 +230,6 @@ def write_report(rows: list[dict], meta: dict, out) -> list[Path]:
 
 
 # ------------------------------------------------------------------------------------------- the report
-def pareto(rows: list[dict]) -> list[dict]:
-    """The rows no other row beats on both speed and MPJPE (no row is both faster and closer), fastest first."""
-    xy = [(r["latency_ms_median"], r["mpjpe_mm_median"]) for r in rows]
-    front = [r for r, (x, y) in zip(rows, xy) if not any(a <= x and b <= y and (a, b) != (x, y) for a, b in xy)]
-    return sorted(front, key=lambda r: r["latency_ms_median"])
-
-
 def _ms(v: float) -> str:
     return f"{v:.0f}" if v >= 100 else f"{v:.1f}" if v >= 10 else f"{v:.2f}" if v >= 1 else f"{v:.3f}"
 
@@ -418,10 +411,11 @@ def _kept_text(rows: list[dict], meta: dict) -> str:
 
 
 def _reading(rows: list[dict], starts: list, sets: list) -> str:
-    text = ("One panel per effector set. Each point is one solver under one start condition (marker and colour: "
-            "the start); a thin grey line joins a solver's points. Left is faster and lower is closer to the true "
-            "pose (both axes log: equal steps are equal ratios), so the useful solvers sit on the lower-left edge, "
-            "where no other solver is both faster and closer: ")
+    text = ("One panel per effector set (rows) and start condition (columns); a row's panels share their axes, so "
+            "a solver sits at the same place in both when its start does not matter. Each point is one solver. Left "
+            "is faster and lower is closer to the true pose (both axes log: equal steps are equal ratios), so the "
+            "useful solvers sit on the lower-left edge, drawn filled and joined, where no other solver is both "
+            "faster and closer: ")
     fronts = []
     for e in sets:
         for st in starts:
@@ -440,8 +434,8 @@ def _reading(rows: list[dict], starts: list, sets: list) -> str:
             free.append(n)
     if free and len(starts) > 1:
         text += (f"Solvers that predict a whole pose without a start pose ({', '.join(f'`{n}`' for n in free)}) "
-                 "give the same MPJPE under every start, so their grey lines are flat: only the time changes. ")
-    text += ("A grey line that climbs or falls means the result depends on where the solver starts. MPJPE and "
+                 "give the same MPJPE under every start: they sit at the same height in every column of a row. ")
+    text += ("A solver that moves up or down from one column to the next depends on where it starts. MPJPE and "
              "*effector mm* tell "
              "different stories: the effectors do not determine the pose, so a solver can meet every effector "
              "(converged) and still be far from the true pose, and a learned solver can land close to it while "

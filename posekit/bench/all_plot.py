@@ -1,17 +1,20 @@
-"""The speed/quality scatter of ``posekit bench all``: one panel per effector set, one point per solver and start
-condition, labelled.
+"""The speed/quality scatter of ``posekit bench all``: one panel per effector set and start condition, one
+labelled point per solver.
 
 Introduced in ``notebooks/06_posing_studio.ipynb`` with :mod:`posekit.bench.all`, which writes it as
 ``bench_all.png``: median time per solve (ms) against median MPJPE (mm), both log, in the spirit of Fig. 5
-of Victor et al. 2021; :func:`_label_points` places the solver names so that they overlap neither the
-points nor each other, with a margin between labels; solvers whose points of one start coincide share one label.
+of Victor et al. 2021. Rows are the effector sets, columns the start conditions, so a panel holds one point per
+solver (about 20 labels, not twice that); the panels of a row share both axes, so a solver's two starts are read
+at the same place. The lower-left edge (:func:`pareto`: no solver both faster and closer) is
+drawn filled and joined; :func:`_label_points` places the solver names so that they overlap neither the points nor
+each other, with a margin between labels; solvers whose points coincide share one label.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["plot", "DPI", "LABEL_GAP_PX", "label_groups"]
+__all__ = ["plot", "pareto", "DPI", "LABEL_GAP_PX", "label_groups"]
 
 DPI = 150
 """Resolution of the saved scatter, dots per inch."""
@@ -19,50 +22,63 @@ DPI = 150
 _STYLE = {"same-clip": ("o", "C0"), "other-clip": ("s", "C2"), "rest": ("^", "C3")}
 
 
+def pareto(rows: list[dict]) -> list[dict]:
+    """The rows no other row beats on both speed and MPJPE (no row is both faster and closer), fastest first."""
+    xy = [(r["latency_ms_median"], r["mpjpe_mm_median"]) for r in rows]
+    front = [r for r, (x, y) in zip(rows, xy) if not any(a <= x and b <= y and (a, b) != (x, y) for a, b in xy)]
+    return sorted(front, key=lambda r: r["latency_ms_median"])
+
+
 def plot(rows: list[dict], meta: dict, path=None):
     """The speed/quality scatter: median ms per solve against median MPJPE mm (both log), one panel per effector
-    set, one labelled point per solver and start condition. Rendered with Agg at :data:`DPI`; saved to ``path``
-    when given.
+    set (row) and start condition (column), one labelled point per solver; a row's panels share both axes.
+    Rendered with Agg at :data:`DPI`; saved to ``path`` when given.
 
     Returns
     -------
     matplotlib.figure.Figure
+        Its axes in row-major order (effector set, then start).
     """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
     sets = [meta["effectors"]] if isinstance(meta["effectors"], str) else list(meta["effectors"])
     sets = [e for e in sets if any(r.get("effectors", e) == e for r in rows)] or sets[:1]
-    fig = Figure(figsize=(10, 6.5 * len(sets)), dpi=DPI)
+    starts = [st for st in meta["starts"] if any(r["start"] == st for r in rows)] or list(meta["starts"])[:1]
+    fig = Figure(figsize=(7.2 * len(starts), 5.6 * len(sets)), dpi=DPI)
     FigureCanvasAgg(fig)
-    axes = [fig.add_subplot(len(sets), 1, i + 1) for i in range(len(sets))]
-    starts = list(meta["starts"])
     colours = {st: _STYLE.get(st, ("D", f"C{4 + i}"))[1] for i, st in enumerate(starts)}
-    for ax, e in zip(axes, sets):
-        _panel(ax, [r for r in rows if r.get("effectors", e) == e], starts, meta, e)
+    grid = []
+    for i, e in enumerate(sets):
+        of_set = [r for r in rows if r.get("effectors", e) == e]
+        for k, st in enumerate(starts):
+            ax = fig.add_subplot(len(sets), len(starts), i * len(starts) + k + 1)
+            _panel(ax, [r for r in of_set if r["start"] == st], of_set, st, meta, e, k)
+            grid.append((ax, [r for r in of_set if r["start"] == st]))
     fig.tight_layout()
-    for ax, e in zip(axes, sets):
-        _label_points(fig, ax, [r for r in rows if r.get("effectors", e) == e], colours)
+    for ax, mine in grid:
+        _label_points(fig, ax, mine, colours)
     if path is not None:
         fig.savefig(path, dpi=DPI)
     return fig
 
 
-def _panel(ax, rows: list[dict], starts: list, meta: dict, effectors: str) -> None:
-    """One effector set's scatter on ``ax`` (points, grey lines joining a solver's starts, axes, legend)."""
+def _panel(ax, rows: list[dict], row_of_set: list[dict], start: str, meta: dict, effectors: str, column: int) -> None:
+    """One effector set and start's scatter on ``ax``: its points (the lower-left edge filled and joined), axes
+    spanning every start of the set (``row_of_set``) so the row's panels compare, a title naming both."""
     from matplotlib.lines import Line2D
     from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
-    for name in dict.fromkeys(r["method"] for r in rows):
-        mine = [r for r in rows if r["method"] == name]
-        if len(mine) > 1:
-            ax.plot([r["latency_ms_median"] for r in mine], [r["mpjpe_mm_median"] for r in mine], color="0.75",
-                    lw=0.8, zorder=1)
-    for i, st in enumerate(starts):
-        marker, colour = _STYLE.get(st, ("D", f"C{4 + i}"))
-        mine = [r for r in rows if r["start"] == st]
-        ax.scatter([r["latency_ms_median"] for r in mine], [r["mpjpe_mm_median"] for r in mine], s=28,
-                   marker=marker, color=colour, zorder=3, label=f"start: {st}")
+    marker, colour = _STYLE.get(start, ("D", f"C{4 + column}"))
+    front = pareto(rows) if rows else []
+    on = {id(r) for r in front}
+    rest = [r for r in rows if id(r) not in on]
+    ax.scatter([r["latency_ms_median"] for r in rest], [r["mpjpe_mm_median"] for r in rest], s=30, marker=marker,
+               facecolors="white", edgecolors=colour, linewidths=1.1, zorder=3)
+    ax.plot([r["latency_ms_median"] for r in front], [r["mpjpe_mm_median"] for r in front], color=colour, lw=1.0,
+            alpha=0.6, zorder=2)
+    ax.scatter([r["latency_ms_median"] for r in front], [r["mpjpe_mm_median"] for r in front], s=34, marker=marker,
+               color=colour, zorder=3)
     ax.set_xscale("log")
     ax.set_yscale("log")  # both log: equal steps are equal ratios (twice as fast, half the error)
     # x spans decades (1, 2, 5 per decade); y spans less than one or two, so it is labelled at 1-1.5-2-3-...-8:
@@ -71,20 +87,23 @@ def _panel(ax, rows: list[dict], starts: list, meta: dict, effectors: str) -> No
         axis.set_major_locator(LogLocator(base=10, subs=subs))
         axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
         axis.set_minor_formatter(NullFormatter())
-    x = np.array([r["latency_ms_median"] for r in rows])
-    y = np.array([r["mpjpe_mm_median"] for r in rows])
+    x = np.array([r["latency_ms_median"] for r in row_of_set])
+    y = np.array([r["mpjpe_mm_median"] for r in row_of_set])
     ax.set_xlim(x.min() / 1.8, x.max() * 1.8)
     ax.set_ylim(y.min() / 1.3, y.max() * 1.3)
     ax.grid(True, which="major", color="0.9", lw=0.6)
     ax.set_axisbelow(True)
-    ax.set_xlabel("median time per solve, ms (one thread, log scale)")
-    ax.set_ylabel("median MPJPE, mm (body joints, pelvis-relative; log scale)")
-    ax.set_title(f"Effector set {effectors}: every posekit IK solver, {meta['data']}, {meta['cases']} held-out "
-                 "cases per start", fontsize=10)
-    handles, _ = ax.get_legend_handles_labels()
-    if len(starts) > 1:
-        handles.append(Line2D([], [], color="0.75", lw=0.8, label="one solver, its starts joined"))
-    ax.legend(handles=handles, loc="upper left", fontsize=8, frameon=False)
+    ax.set_xlabel("median time per solve, ms (one thread, log scale)", fontsize=8)
+    if column == 0:
+        ax.set_ylabel("median MPJPE, mm (pelvis-relative; log scale)", fontsize=8)
+    ax.tick_params(labelsize=8)
+    ax.set_title(f"Effector set {effectors}, start: {start} — {meta['data']}, {meta['cases']} held-out cases",
+                 fontsize=9)
+    handles = [Line2D([], [], marker=marker, color=colour, lw=1.0, alpha=0.8,
+                      label="no solver both faster and closer"),
+               Line2D([], [], marker=marker, ls="", markerfacecolor="white", markeredgecolor=colour,
+                      label="another solver is")]
+    ax.legend(handles=handles, loc="upper left", fontsize=7, frameon=False)
 
 
 LABEL_GAP_PX = 3.0

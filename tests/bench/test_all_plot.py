@@ -27,10 +27,13 @@ def test_the_shipped_scatter_names_every_solver_and_no_two_labels_touch():
             "starts": list(dict.fromkeys(r["start"] for r in rows)), "data": shipped["data"], "cases": shipped["cases"]}
     fig = plot(rows, meta)
     renderer = fig.canvas.get_renderer()
-    for ax, e in zip(fig.axes, meta["effectors"]):
+    cells = [(e, st) for e in meta["effectors"] for st in meta["starts"]]
+    assert len(fig.axes) == len(cells) == 6      # one panel per effector set and start: about 20 labels each, not 40
+    for ax, (e, st) in zip(fig.axes, cells):
+        assert f"set {e}, start: {st}" in ax.get_title()
         texts = _labels(ax)
         named = [n for t in texts for n in t.get_text().split(" / ")]
-        mine = [r for r in rows if r["effectors"] == e]
+        mine = [r for r in rows if r["effectors"] == e and r["start"] == st]
         assert sorted(named) == sorted(r["method"] for r in mine)  # every point named once
         half = 0.5  # at least a pixel between any two labels (LABEL_GAP_PX wherever the crowd leaves room)
         boxes = [t.get_window_extent(renderer) for t in texts]
@@ -40,3 +43,7 @@ def test_the_shipped_scatter_names_every_solver_and_no_two_labels_touch():
                     and min(boxes[i][3], boxes[j][3]) > max(boxes[i][1], boxes[j][1])]
         assert touching == [], f"set {e}: labels touch"
         assert len(texts) < len(mine) or e != "2"  # set 2 has solvers drawn on one spot: they share labels
+    # the panels of one effector set share their axes: a solver's two starts are read at the same place
+    for i in range(0, len(cells), 2):
+        a, b = fig.axes[i], fig.axes[i + 1]
+        assert a.get_xlim() == b.get_xlim() and a.get_ylim() == b.get_ylim()

@@ -139,7 +139,7 @@ def test_the_png_is_a_valid_figure(report):
         im.verify()
     with Image.open(path) as im:
         assert im.format == "PNG"
-        assert (im.width, im.height) == (1500, 975 * len(SETS))  # a 10 x 6.5 in panel per set at 150 dpi
+        assert (im.width, im.height) == (1080, 840 * len(SETS))  # a 7.2 x 5.6 in panel per set and start at 150 dpi
         pixels = np.asarray(im.convert("L"))
     assert pixels.std() > 5 and (pixels < 128).mean() > 0.002  # drawn on, not blank
 
