@@ -6,7 +6,9 @@ moved) and for lesson 03's pose vector (indices of one skeleton hard-coded); the
 
 from __future__ import annotations
 
+import inspect
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -963,3 +965,76 @@ def test_each_checker_refuses_each_wrong_answer_and_says_why(checker, slip, caps
 @pytest.mark.parametrize("checker,variant", _all_right())
 def test_each_checker_accepts_each_right_variant(checker, variant, capsys):
     assert _checker(checker)(BY_CHECKER[checker][1][variant]) is True, capsys.readouterr().out
+
+
+# -- the fresh check's executors: forked from a template that ran the lesson's imports once -------------------------
+
+KILLS_ITS_TEMPLATE = '''
+import os, signal
+os.kill(os.getppid(), signal.SIGKILL)          # the process it was forked from: the next answers' template
+def exercise_fabrik_planted(positions, target, tolerance, max_iter):
+    raise NotImplementedError
+'''
+
+PRINTS_A_LOT = '''
+print("x" * 300_000)                           # more than a pipe holds: nothing may wait on it
+''' + inspect.getsource(PLANTED)
+
+LOOPS = '''
+def exercise_fabrik_planted(positions, target, tolerance, max_iter):
+    while True:
+        pass
+'''
+
+LEAVES_A_DAEMON = '''
+import os, time
+if os.fork() == 0:                              # a child that outlives the answer, in the answer's session
+    time.sleep(600)
+    os._exit(0)
+''' + inspect.getsource(PLANTED)
+
+
+def test_each_answer_runs_in_a_fresh_fork_and_a_killed_template_costs_no_one_a_point():
+    """One judge checks a lesson's answers one after another, each in an executor forked from a template that ran the
+    lesson's imports once: an answer that kills the template, prints more than a pipe holds, loops or leaves a
+    process behind fails or passes on its own merit, and the answers after it are checked as before (spawned,
+    once the template is gone)."""
+    from posekit.course.grading import fresh_checks
+
+    right = inspect.getsource(PLANTED)
+    job = lambda source: {"lesson": "01", "checker": "check_fabrik_planted", "function": "exercise_fabrik_planted",
+                          "source": source, "imports": "import numpy as np"}
+    t0 = time.perf_counter()
+    got = fresh_checks([job(s) for s in (right, LEAVES_A_DAEMON, right, KILLS_ITS_TEMPLATE, right, PRINTS_A_LOT,
+                                         LOOPS, right)], timeout_s=8)
+    assert [f.passed for f in got] == [True, True, True, False, True, True, False, True], [f.said for f in got]
+    assert "not attempted" in got[3].said and "ran past 8 s" in got[6].said
+    assert "x" * 1000 in got[5].said
+    assert time.perf_counter() - t0 < 120          # the daemon's sleep was not waited for
+
+
+def test_an_answer_cannot_reach_the_template_nor_another_answer():
+    """The template is not dumpable (its forks inherit that: an executor reads its own flag), so no process of the
+    same user may trace it or read its memory -- checked directly where the tests do not run as root, whom nothing
+    stops; and what one answer defines is not in the next answer's namespace."""
+    from posekit.course.grading import fresh_checks
+
+    reads_template = '''
+import ctypes, os
+if ctypes.CDLL(None).prctl(3, 0, 0, 0, 0) != 0:         # PR_GET_DUMPABLE: as the template was when it forked
+    raise SystemExit("the template is dumpable")
+if os.geteuid() != 0:
+    try:
+        with open(f"/proc/{os.getppid()}/mem", "rb"):
+            raise SystemExit("opened the template's memory")
+    except PermissionError:
+        pass
+LEFT_BEHIND = 1
+''' + inspect.getsource(PLANTED)
+    looks_for_it = '''
+assert "LEFT_BEHIND" not in globals(), "another answer's name is here"
+''' + inspect.getsource(PLANTED)
+    job = lambda source: {"lesson": "01", "checker": "check_fabrik_planted", "function": "exercise_fabrik_planted",
+                          "source": source, "imports": "import numpy as np"}
+    got = fresh_checks([job(reads_template), job(looks_for_it)], timeout_s=60)
+    assert [f.passed for f in got] == [True, True], [f.said for f in got]

@@ -20,7 +20,9 @@ line naming the lesson's checker); under
 (:func:`grade`: ``python -m posekit.exercises._judge --grade``), so the verdict the grade book keeps comes from a
 process the answer never ran in. One such judge checks a whole lesson's submissions: it reads one job (a student's
 answer to one exercise) a line and writes its verdict a line, each job's answer in a fresh executor of its own, so
-that no answer runs where another student's, or another exercise's, does.
+that no answer runs where another student's, or another exercise's, does. The executors are forked from a template
+process that ran the lesson's imports once (:class:`_Template`; a new interpreter should it fail): a fork starts in
+a tenth of a second where an interpreter importing torch takes seconds.
 """
 
 from __future__ import annotations
@@ -257,75 +259,211 @@ def _writer(stream):
     return send
 
 
-def grade(job: dict, timeout_s: float | None = None) -> dict:
-    """The fresh check of one exercise (``posekit course autograde``): the judge in this process, the answer in a
-    child (``python -m posekit.exercises._judge --execute``) that defines ``job["function"]`` from
-    ``job["imports"]`` and ``job["source"]`` and runs the cases. Returns ``{"passed", "said"}``.
+class _Spawned:
+    """An answer's executor started as a new interpreter (``python -m posekit.exercises._judge --execute``): the
+    lesson's imports run in it before the answer."""
 
-    The child runs in a session of its own and is stopped with everything it started after ``timeout_s`` seconds
-    (default ``job["timeout_s"]``, else 300): an endless loop fails the check, and the judge goes on to its next job.
+    def __init__(self, env):
+        self.proc = subprocess.Popen([sys.executable, "-m", "posekit.exercises._judge", "--execute"],
+                                     stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                     env=env, start_new_session=True)
+        self.send, self.receive = _writer(self.proc.stdin), _lines(self.proc.stdout)
+        self._printed = _drain(self.proc.stderr)
+
+    def kill(self) -> None:
+        with contextlib.suppress(OSError):
+            os.killpg(self.proc.pid, 9)  # the answer's process and whatever it started
+
+    def close(self) -> str:
+        """End the answer's input, wait for it (10 s, then kill it and what it started); what it printed."""
+        with contextlib.suppress(Exception):
+            self.proc.stdin.close()
+        try:
+            self.proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            self.kill()
+            self.proc.wait()
+        printed = self._printed(10) or ""  # what it started may hold its standard error open: not waited for
+        with contextlib.suppress(Exception):
+            self.proc.stdout.close()
+        return printed
+
+
+class _Forked:
+    """An answer's executor forked from a :class:`_Template` whose lesson imports have run: a process of its own,
+    in a session of its own, that starts in a fraction of the time a new interpreter and the imports take."""
+
+    def __init__(self, template: "_Template"):
+        import socket
+
+        ours, theirs = socket.socketpair()
+        r, w = os.pipe()
+        try:
+            template.ask([theirs.fileno(), w])
+            self.pid = int(template.reply()["pid"])
+        finally:
+            theirs.close()
+            os.close(w)
+        self.sock = ours
+        self.send = _writer(ours.makefile("w", encoding="utf-8"))
+        self.receive = _lines(ours.makefile("r", encoding="utf-8"))
+        self._printed = _drain(os.fdopen(r, encoding="utf-8", errors="replace"))
+
+    def kill(self) -> None:
+        for kill in (os.killpg, os.kill):  # its session, or itself if it has not made one yet
+            with contextlib.suppress(OSError):
+                kill(self.pid, 9)
+
+    def close(self) -> str:
+        import socket
+
+        with contextlib.suppress(OSError):
+            self.sock.shutdown(socket.SHUT_WR)  # the answer's input ends: the executor returns
+        printed = self._printed(10)  # its standard error closes when it (and what it started) ends
+        if printed is None:
+            self.kill()
+            printed = self._printed(10) or ""
+        with contextlib.suppress(OSError):
+            self.sock.close()
+        return printed
+
+
+def _drain(stream):
+    """Read ``stream`` to its end in a thread (an answer that prints a lot never blocks); ``wait(timeout)`` gives the
+    text, or None when it has not ended by then."""
+    chunks: list[str] = []
+    done = threading.Event()
+
+    def pump():
+        with contextlib.suppress(Exception):
+            for chunk in iter(lambda: stream.read(65536), ""):
+                chunks.append(chunk)
+        with contextlib.suppress(Exception):
+            stream.close()
+        done.set()
+
+    threading.Thread(target=pump, daemon=True).start()
+
+    def wait(timeout: float):
+        return "".join(chunks) if done.wait(timeout) else None
+    return wait
+
+
+class _Template:
+    """A process that ran a lesson's imports once and forks a fresh executor for each answer
+    (``python -m posekit.exercises._judge --template FD``). It never sees an answer nor an expected one: it receives
+    the two ends an executor will use (a socket for the protocol, a pipe for what the answer prints) and replies with
+    the executor's process id. It is not dumpable, so an answer cannot trace it and change the next forks; should an
+    answer stop or kill it, the next answers are spawned as new interpreters instead (:class:`_Spawned`)."""
+
+    def __init__(self, imports: str, env, timeout_s: float = 120):
+        import socket
+
+        self.imports = imports
+        self.ctl, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
+        self.proc = subprocess.Popen([sys.executable, "-m", "posekit.exercises._judge", "--template",
+                                      str(theirs.fileno())], pass_fds=(theirs.fileno(),), stdin=subprocess.DEVNULL,
+                                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env,
+                                     start_new_session=True)
+        theirs.close()
+        self.ctl.settimeout(timeout_s)
+        self.ctl.send(json.dumps({"imports": imports}).encode())
+        self.ok = self.reply().get("ready") is True
+        self.ctl.settimeout(10)
+
+    def ask(self, fds) -> None:
+        import socket
+
+        socket.send_fds(self.ctl, [b"fork"], fds)
+
+    def reply(self) -> dict:
+        data = self.ctl.recv(4096)
+        if not data:
+            raise OSError("the template process has ended")
+        return json.loads(data)
+
+    def stop(self) -> None:
+        with contextlib.suppress(OSError):
+            self.ctl.close()
+        with contextlib.suppress(OSError):
+            os.killpg(self.proc.pid, 9)
+        with contextlib.suppress(Exception):
+            self.proc.wait(timeout=10)
+
+
+_TEMPLATES: list = []
+"""The ``--grade`` judge's template process (:func:`grade` with ``fork``), started on its first job with that job's
+lesson imports; stopped when the judge ends."""
+
+
+def _executor(job: dict, env, fork: bool):
+    """A fresh executor for ``job``'s answer: forked from the judge's template when ``fork`` (started on the first
+    such job), else (or should the template fail) a new interpreter. A forked executor runs its own job's imports
+    again before the answer: the template's are already loaded, a later exercise's extra ones load there."""
+    if fork:
+        template = _TEMPLATES[0] if _TEMPLATES else None
+        try:
+            if template is None:
+                template = _Template(job.get("imports", ""), env)
+                _TEMPLATES.append(template)
+            if template.ok:
+                return _Forked(template)
+        except Exception:  # noqa: BLE001 - a stopped or killed template: this answer and the next are spawned
+            if template is not None:
+                template.ok = False
+    return _Spawned(env)
+
+
+@atexit.register
+def _stop_templates() -> None:
+    for template in _TEMPLATES:
+        template.stop()
+    _TEMPLATES.clear()
+
+
+def grade(job: dict, timeout_s: float | None = None, fork: bool = False) -> dict:
+    """The fresh check of one exercise (``posekit course autograde``): the judge in this process, the answer in a
+    child executor that defines ``job["function"]`` from ``job["imports"]`` and ``job["source"]`` and runs the cases.
+    Returns ``{"passed", "said"}``.
+
+    The child is a process of its own in a session of its own, and is stopped with everything it started after
+    ``timeout_s`` seconds (default ``job["timeout_s"]``, else 300): an endless loop fails the check, and the judge
+    goes on to its next job. With ``fork`` (the ``--grade`` judge, which checks a lesson's answers one after another)
+    it is forked from a template process that ran the lesson's imports once, else it is a new interpreter
+    (``python -m posekit.exercises._judge --execute``); either way no other answer has run in it.
     """
     if timeout_s is None:
         timeout_s = float(job.get("timeout_s", 300))
     env = {k: v for k, v in os.environ.items() if not k.startswith("JPY_")}
     env.setdefault("MPLBACKEND", "Agg")
-    child = subprocess.Popen([sys.executable, "-m", "posekit.exercises._judge", "--execute"], stdin=subprocess.PIPE,
-                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
-                             start_new_session=True)
+    child = _executor(job, env, fork)
     stopped = threading.Event()
 
     def stop():
         stopped.set()
-        with contextlib.suppress(OSError):
-            os.killpg(child.pid, 9)  # the answer's process and whatever it started
+        child.kill()
 
     timer = threading.Timer(timeout_s, stop)
     timer.daemon = True
     timer.start()
-    send, receive = _writer(child.stdin), _lines(child.stdout)
     try:
         try:
-            send({"define": {k: job[k] for k in ("imports", "source", "function")}})
+            child.send({"define": {k: job[k] for k in ("imports", "source", "function")}})
         except OSError:  # the child is gone already; the checker's first case says so
             pass
-        passed, said = _judge(f"posekit.exercises.nb{job['lesson']}", job["checker"], send, receive)
+        passed, said = _judge(f"posekit.exercises.nb{job['lesson']}", job["checker"], child.send, child.receive)
     finally:
         timer.cancel()
-        with contextlib.suppress(Exception):
-            child.stdin.close()
-        try:
-            child.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            stop()
-            child.wait()
-    printed = child.stderr.read()
-    for f in (child.stdout, child.stderr):
-        with contextlib.suppress(Exception):
-            f.close()
+        printed = child.close()
     if stopped.is_set():
         return {"passed": False, "said": f"the fresh check ran past {timeout_s:g} s and was stopped"}
     return {"passed": passed, "said": (printed.strip() + "\n" + said).strip()}
 
 
-def _execute() -> int:
-    """The executor of :func:`grade`: define the student's function (from the first line), then run each case.
-
-    The protocol keeps the process's original standard output; the answer's own prints go to standard error."""
-    protocol = os.fdopen(os.dup(1), "w")
-    os.dup2(2, 1)
-    sys.stdout = sys.stderr
-    receive, send = _lines(sys.stdin), _writer(protocol)
-    define = (receive() or {}).get("define")
-    if not define:
-        return 2
-    namespace = {"__name__": "__answer__"}
-    state: dict = {}
-    # the lesson's imports (its read-only cells') first, outside the watch, as the kernel ran them before the answer:
-    # importing torch makes code objects (asyncio's coroutines), which under the watch would read as switching it off
-    try:
-        exec(compile(define["imports"], "<lesson imports>", "exec"), namespace)  # noqa: S102 - the lesson's own
-    except Exception as e:  # noqa: BLE001 - said at the first case, as the answer's own error would be
-        state["imports"] = e
+def _answer_loop(define: dict, namespace: dict, receive, send, imports_error=None) -> None:
+    """Define the student's function in ``namespace`` (where the lesson's imports have run) on the first case, then
+    run each case the judge sends (:func:`run_case`) until its input ends."""
+    state: dict = {} if imports_error is None else {"imports": imports_error}
 
     def answer(*args):
         if "imports" in state:
@@ -338,20 +476,110 @@ def _execute() -> int:
 
     while (message := receive()) is not None:
         send(run_case(answer, message))
+
+
+def _run_imports(imports: str, namespace: dict):
+    """The lesson's imports (its read-only cells') in ``namespace``, outside the watch, as the kernel ran them before
+    the answer: importing torch makes code objects (asyncio's coroutines), which under the watch would read as
+    switching it off. Returns the error they raised, or None."""
+    try:
+        exec(compile(imports, "<lesson imports>", "exec"), namespace)  # noqa: S102 - the lesson's own
+    except Exception as e:  # noqa: BLE001 - said at the first case, as the answer's own error would be
+        return e
+    return None
+
+
+def _execute() -> int:
+    """The executor of :func:`grade` as a new interpreter: define the student's function (from the first line),
+    then run each case.
+
+    The protocol keeps the process's original standard output; the answer's own prints go to standard error."""
+    protocol = os.fdopen(os.dup(1), "w")
+    os.dup2(2, 1)
+    sys.stdout = sys.stderr
+    receive, send = _lines(sys.stdin), _writer(protocol)
+    define = (receive() or {}).get("define")
+    if not define:
+        return 2
+    namespace = {"__name__": "__answer__"}
+    _answer_loop(define, namespace, receive, send, _run_imports(define["imports"], namespace))
     return 0
+
+
+def _template(fd: int) -> int:
+    """The template of :class:`_Template`: run the lesson's imports, then fork an executor for each request."""
+    import signal
+    import socket
+
+    _not_dumpable()
+    ctl = socket.socket(fileno=fd)
+    signal.signal(signal.SIGCHLD, signal.SIG_IGN)  # the executors are reaped as they end
+    imports = json.loads(ctl.recv(1 << 20) or b"{}").get("imports", "")
+    namespace = {"__name__": "__answer__"}
+    if _run_imports(imports, namespace) is not None:
+        ctl.send(json.dumps({"ready": False}).encode())  # the judge spawns each answer instead: it says the error
+        return 1
+    ctl.send(json.dumps({"ready": True}).encode())
+    while True:
+        try:
+            data, fds, _, _ = socket.recv_fds(ctl, 64, 2)
+        except OSError:
+            return 0
+        if not data:
+            return 0
+        if len(fds) != 2:
+            for f in fds:
+                os.close(f)
+            return 2
+        pid = os.fork()
+        if pid == 0:  # the executor: a session of its own, the protocol on the socket, prints to the pipe
+            code = 0
+            try:
+                ctl.close()
+                os.setsid()
+                signal.signal(signal.SIGCHLD, signal.SIG_DFL)
+                os.dup2(fds[1], 1)
+                os.dup2(fds[1], 2)
+                os.close(fds[1])
+                null = os.open(os.devnull, os.O_RDONLY)
+                os.dup2(null, 0)
+                os.close(null)
+                sys.stdout = sys.stderr = io.TextIOWrapper(os.fdopen(2, "wb", buffering=0), write_through=True)
+                sock = socket.socket(fileno=fds[0])
+                receive = _lines(sock.makefile("r", encoding="utf-8"))
+                send = _writer(sock.makefile("w", encoding="utf-8"))
+                define = (receive() or {}).get("define")
+                if define:  # this job's imports: the template's ran already (cached), a later exercise's are added
+                    _answer_loop(define, namespace, receive, send, _run_imports(define["imports"], namespace))
+                else:
+                    code = 2
+            except BaseException:  # noqa: BLE001 - an executor never returns into the template's loop
+                code = 1
+            finally:
+                with contextlib.suppress(Exception):
+                    sys.stderr.flush()
+                os._exit(code)
+        for f in fds:
+            os.close(f)
+        ctl.send(json.dumps({"pid": pid}).encode())
 
 
 def main(argv) -> int:
     if argv[1:2] == ["--execute"]:
         return _execute()
+    if argv[1:2] == ["--template"] and len(argv) == 3 and argv[2].isdigit():
+        return _template(int(argv[2]))
     _not_dumpable()
     if argv[1:2] == ["--grade"]:  # one job a line, one verdict a line, in order, until the input ends
         protocol = sys.stdout
         sys.stdout = sys.stderr  # nothing but the verdicts on the real standard output
-        for line in sys.stdin:
-            if line.strip():
-                protocol.write(json.dumps(grade(json.loads(line))) + "\n")
-                protocol.flush()
+        try:
+            for line in sys.stdin:
+                if line.strip():
+                    protocol.write(json.dumps(grade(json.loads(line), fork=True)) + "\n")
+                    protocol.flush()
+        finally:
+            _stop_templates()
         return 0
     if argv[1:2] == ["--serve"]:  # a kernel's judge (ask): one check after another, until the input ends
         receive = _lines(sys.stdin)
@@ -366,7 +594,7 @@ def main(argv) -> int:
             passed, said = _judge(module, checker, send, receive)
             send({"verdict": said, "passed": passed})
         return 0
-    print("usage: python -m posekit.exercises._judge --serve | --grade | --execute", file=sys.stderr)
+    print("usage: python -m posekit.exercises._judge --serve | --grade | --execute | --template FD", file=sys.stderr)
     return 2
 
 if __name__ == "__main__":
