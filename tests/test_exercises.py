@@ -304,7 +304,7 @@ def test_each_checker_refuses_the_wrong_answers_that_used_to_pass(slip, capsys):
 
 
 CALLS_POSEKIT = {  # checker: (lesson, the reference solution, the posekit function the answer calls, its name)
-    "check_fk": ("00", "exercise_fk", "posekit.kinematics:fk"),
+    "check_local_from_global": ("00", "exercise_local_from_global", "posekit.kinematics:fk"),
     "check_sixd_to_matrix": ("00", "exercise_sixd_to_matrix", "posekit.rotations:sixd_to_matrix"),
     "check_bone_lengths": ("00", "exercise_bone_lengths", "posekit.kinematics:bone_lengths_of"),
     "check_gpr_mean": ("02", "exercise_gpr_mean", "posekit.invrig.gpr:GPR.predict"),
@@ -735,23 +735,35 @@ def _sol(lesson, name):
     return solution_function(find_lesson(lesson), name)
 
 
-FK, SIXD, BONES = _sol("00", "exercise_fk"), _sol("00", "exercise_sixd_to_matrix"), _sol("00", "exercise_bone_lengths")
+LOCAL, SIXD, BONES = _sol("00", "exercise_local_from_global"), _sol("00", "exercise_sixd_to_matrix"), _sol("00", "exercise_bone_lengths")
 
 
-def _fk_own(skeleton, local_rot, root_pos, root=True, order="parent first", offset_by="parent", dtype=float):
-    J = skeleton.n_joints
-    R, x = np.zeros((J, 3, 3), dtype), np.zeros((J, 3), dtype)
-    R[0], x[0] = local_rot[0], (root_pos if root else 0.0)
-    for j in range(1, J):
-        p = skeleton.parents[j]
-        R[j] = R[p] @ local_rot[j] if order == "parent first" else local_rot[j] @ R[p]
-        x[j] = x[p] + (R[p] if offset_by == "parent" else R[j]) @ skeleton.offsets[j]
-    return x
-
-
-def _fk_resets_root(skeleton, local_rot, root_pos):
-    local_rot[0] = np.eye(3)  # "the root's rotation is applied later", in the caller's array
-    return FK(skeleton, local_rot, root_pos)
+def _local_own(parents, global_rot, global_pos, order="parent first", offsets="parent frame", root="kept",
+               one_pose=False, in_place=False, dtype=float):
+    """A student's own FK undone, with the slips below as options."""
+    Rg, Pg = (global_rot, global_pos) if in_place else (np.array(global_rot, dtype), np.array(global_pos, dtype))
+    if one_pose:  # written for (J, 3, 3): the first axis taken for the joints
+        L, O = Rg.copy(), Pg.copy()
+        for j, p in enumerate(parents):
+            if p >= 0:
+                L[j], O[j] = Rg[p].T @ Rg[j], Rg[p].T @ (Pg[j] - Pg[p])
+        return L, O
+    L, O = (Rg, Pg) if in_place else (Rg.copy(), Pg.copy())
+    for j in sorted(range(len(parents)), key=lambda j: -j if in_place else j):
+        p = parents[j]
+        if p < 0:
+            if root == "zeroed":
+                O[..., j, :] = 0.0
+            continue
+        Rp = Rg[..., p, :, :]
+        RpT = np.swapaxes(Rp, -1, -2)
+        Rj = Rg[..., j, :, :]
+        L[..., j, :, :] = {"parent first": RpT @ Rj, "child first": Rj @ RpT,
+                           "transposed": np.swapaxes(Rj, -1, -2) @ Rp}[order]
+        d = Pg[..., j, :] - Pg[..., p, :]
+        O[..., j, :] = {"parent frame": np.einsum("...ba,...b->...a", Rp, d), "world": d,
+                        "own frame": np.einsum("...ba,...b->...a", Rj, d)}[offsets]
+    return L, O
 
 
 def _sixd_own(x, columns=True, normalise=True, order=1.0, in_place=False):
@@ -778,15 +790,25 @@ def _bones_sorts(parents, global_pos):
     return out
 
 
-BY_CHECKER["check_fk"] = ({
-    "root_pos ignored": (lambda *a: _fk_own(*a, root=False), "case 1 differs"),
-    "rotations composed child first": (lambda *a: _fk_own(*a, order="child first"), "case 1 differs"),
-    "the offset turned by the joint's own rotation": (lambda *a: _fk_own(*a, offset_by="own"), "case 1 differs"),
-    "the caller's root rotation reset": (_fk_resets_root, "changed its input `local_rot` in place"),
+BY_CHECKER["check_local_from_global"] = ({
+    "rotations undone on the wrong side": (lambda *a: _local_own(*a, order="child first"),
+                                           "R_loc = R_p^T R_j (the parent's inverse on the left)"),
+    "the transposed local rotation": (lambda *a: _local_own(*a, order="transposed"), "is the transpose"),
+    "the offset left in the world's frame": (lambda *a: _local_own(*a, offsets="world"),
+                                             "offset is R_p^T (x_j - x_p), in the parent's frame"),
+    "the offset turned by the joint's own rotation": (lambda *a: _local_own(*a, offsets="own frame"),
+                                                      "case 1 differs: local_pos of joint"),
+    "the root's position zeroed": (lambda *a: _local_own(*a, root="zeroed"), "a root keeps its global position"),
+    "written for one pose": (lambda *a: _local_own(*a, one_pose=True), "case 2 "),
+    "the caller's arrays overwritten": (lambda *a: _local_own(*a, in_place=True),
+                                        "changed its input `global_rot` in place"),
 }, {
-    "the reference solution": FK,
-    "section 2's loop": _fk_own,
-    "in float32": lambda *a: _fk_own(*a, dtype=np.float32),
+    "the reference solution": LOCAL,
+    "its own loop": _local_own,
+    "in float32": lambda *a: _local_own(*a, dtype=np.float32),
+    "one pose at a time": lambda par, G, P: tuple(np.stack(x) for x in zip(*(
+        _local_own(par, g, p, one_pose=True) for g, p in zip(np.reshape(G, (-1,) + np.shape(G)[-3:]),
+                                                              np.reshape(P, (-1,) + np.shape(P)[-2:]))))),
 })
 BY_CHECKER["check_sixd_to_matrix"] = ({
     "rows, not columns": (lambda x: _sixd_own(x, columns=False), "columns must be b1, b2, b1 x b2"),
