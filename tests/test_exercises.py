@@ -307,7 +307,8 @@ CALLS_POSEKIT = {  # checker: (lesson, the reference solution, the posekit funct
     "check_local_from_global": ("00", "exercise_local_from_global", "posekit.kinematics:fk"),
     "check_sixd_to_matrix": ("00", "exercise_sixd_to_matrix", "posekit.rotations:sixd_to_matrix"),
     "check_bone_lengths": ("00", "exercise_bone_lengths", "posekit.kinematics:bone_lengths_of"),
-    "check_gpr_mean": ("02", "exercise_gpr_mean", "posekit.invrig.gpr:GPR.predict"),
+    "check_gpr_loo": ("02", "exercise_gpr_loo", "posekit.invrig.gpr:cross_validate"),
+    "check_dls_prior": ("02", "exercise_dls_prior", "posekit.invrig.jacobian:refine"),
     "check_tied_decoder": ("03", "exercise_tied_decoder", "posekit.models.pose_autoencoder.networks:PoseAutoencoder.decode"),
     "check_solver_loss": ("03", "exercise_solver_loss", "posekit.models.pose_autoencoder.train:solver_loss"),
     "check_spl_all": ("04", "exercise_spl_all", "posekit.models.aegan.numpy_nets:tree_levels"),
@@ -828,48 +829,73 @@ BY_CHECKER["check_bone_lengths"] = ({
     "in float32": lambda par, pos: BONES(par, pos).astype(np.float32),
 })
 
-GPR_MEAN, DLS = _sol("02", "exercise_gpr_mean"), _sol("02", "exercise_dls_step")
+LOO, DLS_PRIOR = _sol("02", "exercise_gpr_loo"), _sol("02", "exercise_dls_prior")
 
 
-def _gpr_own(X, Y, Xq, theta0, theta1, square_theta0=True, reg=True, inv=False, centre_x=False):
-    if centre_x:
-        X -= X.mean(axis=0)  # in the caller's array
+def _loo_own(X, Y, theta0, theta1, leave_out=True, divide=True, square_theta0=True, reg=True, brute=False,
+             centre_y=False, dtype=float):
+    """A student's own leave-one-out, with the slips below as options (``dtype=None``: the inputs' own)."""
+    if centre_y:
+        Y -= Y.mean(axis=0)  # in the caller's array
+    X, Y = np.asarray(X, dtype), np.asarray(Y, dtype)
+    dtype = X.dtype
     t0 = theta0**2 if square_theta0 else theta0
     k = lambda A, B: np.sqrt(((A[:, None, :] - B[None, :, :]) ** 2).sum(-1) + t0)  # noqa: E731
-    K = k(X, X) + (theta1 * np.eye(len(X)) if reg else 0)
-    return k(Xq, X) @ (np.linalg.inv(K) @ Y if inv else np.linalg.solve(K, Y))
+    if brute:  # N fits: the same numbers, slower
+        out = np.zeros_like(Y)
+        for i in range(len(X)):
+            r = np.arange(len(X)) != i
+            out[i] = k(X[i:i + 1], X[r]) @ np.linalg.solve(k(X[r], X[r]) + theta1 * np.eye(len(X) - 1, dtype=dtype),
+                                                         Y[r])
+        return out
+    G = k(X, X) + (theta1 * np.eye(len(X), dtype=dtype) if reg else 0)
+    Gi = np.linalg.inv(G)
+    alpha = Gi @ Y
+    if not leave_out:
+        return k(X, X) @ alpha
+    return Y - (alpha / np.diag(Gi)[:, None] if divide else alpha)
 
 
-def _dls_own(J, dx, damping, square=True, use_damping=True, lstsq=False, clip_dx=False, dtype=float):
-    if clip_dx:
-        np.clip(dx, -0.5, 0.5, out=dx)
-    J, dx = np.asarray(J, dtype), np.asarray(dx, dtype)
-    lam = (damping if use_damping else 0.0)
-    if lstsq:  # min |J dy - dx|^2 + lam^2 |dy|^2 as one least-squares problem
-        A = np.vstack([J, lam * np.eye(J.shape[1])])
-        return np.linalg.lstsq(A, np.concatenate([dx, np.zeros(J.shape[1])]), rcond=None)[0]
-    lam2 = lam**2 if square else lam
-    return np.linalg.solve(J.T @ J + lam2 * np.eye(J.shape[1], dtype=dtype), J.T @ dx)
+def _prior_own(J, dx, y, yp, lam, w, square_w=True, pull=1.0, square_lam=True, use_w=True, lstsq=False,
+               in_place=False, dtype=float):
+    """A student's own damped step with a prior, with the slips below as options."""
+    if in_place:
+        y -= yp  # "work relative to the prior", in the caller's array
+        y, yp = y, np.zeros_like(yp)
+    J, dx, y, yp, w = (np.asarray(a, dtype) for a in (J, dx, y, yp, w))
+    w = w if use_w else np.ones_like(w)
+    lam2 = lam**2 if square_lam else lam
+    if lstsq:  # one stacked least-squares problem: [J; lam W] dy = [dx; lam W (yp - y)]
+        A = np.vstack([J, lam * np.diag(w)])
+        return np.linalg.lstsq(A, np.concatenate([dx, lam * w * (yp - y)]), rcond=None)[0]
+    W2 = w**2 if square_w else w
+    return np.linalg.solve(J.T @ J + lam2 * np.diag(W2), J.T @ dx + pull * lam2 * W2 * (yp - y))
 
 
-BY_CHECKER["check_gpr_mean"] = ({
-    "theta0 not squared": (lambda *a: _gpr_own(*a, square_theta0=False), "theta0 = 0.5"),
-    "theta1 ignored": (lambda *a: _gpr_own(*a, reg=False), "differs"),
-    "the caller's X centred in place": (lambda *a: _gpr_own(*a, centre_x=True), "changed its input `X` in place"),
+BY_CHECKER["check_gpr_loo"] = ({
+    "the left-out pose kept in the fit": (lambda *a: _loo_own(*a, leave_out=False), "the left-out one included"),
+    "alpha_i not divided by (G^-1)_ii": (lambda *a: _loo_own(*a, divide=False), "the residual is alpha_i / (G^-1)_ii"),
+    "theta0 not squared": (lambda *a: _loo_own(*a, square_theta0=False), "theta0 = 0.5"),
+    "theta1 left off": (lambda *a: _loo_own(*a, reg=False), "theta1 left off G"),
+    "the caller's Y centred in place": (lambda *a: _loo_own(*a, centre_y=True), "changed its input `Y` in place"),
 }, {
-    "the reference solution": GPR_MEAN,
-    "its own kernel and solve": _gpr_own,
-    "through the inverse": lambda *a: _gpr_own(*a, inv=True),
+    "the reference solution": LOO,
+    "its own closed form": _loo_own,
+    "N fits": lambda *a: _loo_own(*a, brute=True),
+    "in the inputs' own dtype (float32 in, float32 out)": lambda *a: _loo_own(*a, dtype=None),
 })
-BY_CHECKER["check_dls_step"] = ({
-    "the damping not squared": (lambda *a: _dls_own(*a, square=False), "damping squared on the diagonal"),
-    "the damping ignored": (lambda *a: _dls_own(*a, use_damping=False), "damping 0.1"),
-    "the caller's dx clipped in place": (lambda *a: _dls_own(*a, clip_dx=True), "changed its input `dx` in place"),
+BY_CHECKER["check_dls_prior"] = ({
+    "the weights not squared": (lambda *a: _prior_own(*a, square_w=False), "the weights not squared"),
+    "no pull towards the prior": (lambda *a: _prior_own(*a, pull=0.0), "the pull towards y_prior missing"),
+    "the pull reversed": (lambda *a: _prior_own(*a, pull=-1.0), "the pull points away from y_prior"),
+    "the damping not squared": (lambda *a: _prior_own(*a, square_lam=False), "the damping not squared"),
+    "the weights ignored": (lambda *a: _prior_own(*a, use_w=False), "the weights ignored"),
+    "the caller's y moved in place": (lambda *a: _prior_own(*a, in_place=True), "changed its input `y` in place"),
 }, {
-    "the reference solution": DLS,
-    "the normal equations": _dls_own,
-    "one stacked least-squares problem": lambda *a: _dls_own(*a, lstsq=True),
-    "in float32": lambda *a: _dls_own(*a, dtype=np.float32),
+    "the reference solution": DLS_PRIOR,
+    "the normal equations": _prior_own,
+    "one stacked least-squares problem": lambda *a: _prior_own(*a, lstsq=True),
+    "in float32": lambda *a: _prior_own(*a, dtype=np.float32),
 })
 
 TIED, SOLVER_LOSS = _sol("03", "exercise_tied_decoder"), _sol("03", "exercise_solver_loss")
