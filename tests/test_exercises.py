@@ -309,8 +309,8 @@ CALLS_POSEKIT = {  # checker: (lesson, the reference solution, the posekit funct
     "check_bone_lengths": ("00", "exercise_bone_lengths", "posekit.kinematics:bone_lengths_of"),
     "check_gpr_loo": ("02", "exercise_gpr_loo", "posekit.invrig.gpr:cross_validate"),
     "check_dls_prior": ("02", "exercise_dls_prior", "posekit.invrig.jacobian:refine"),
-    "check_tied_decoder": ("03", "exercise_tied_decoder", "posekit.models.pose_autoencoder.networks:PoseAutoencoder.decode"),
-    "check_solver_loss": ("03", "exercise_solver_loss", "posekit.models.pose_autoencoder.train:solver_loss"),
+    "check_pose_from_vector": ("03", "exercise_pose_from_vector", "posekit.data.pose_vectors:poses_from_vectors"),
+    "check_authors_loss": ("03", "exercise_authors_loss", "posekit.models.pose_autoencoder.train:solver_loss"),
     "check_spl_all": ("04", "exercise_spl_all", "posekit.models.aegan.numpy_nets:tree_levels"),
     "check_latent_loss": ("04", "exercise_latent_loss", "posekit.models.aegan.latent_opt:Problem.loss"),
     "check_adversarial": ("04", "exercise_adversarial", "posekit.models.aegan.train:_bce"),
@@ -898,48 +898,78 @@ BY_CHECKER["check_dls_prior"] = ({
     "in float32": lambda *a: _prior_own(*a, dtype=np.float32),
 })
 
-TIED, SOLVER_LOSS = _sol("03", "exercise_tied_decoder"), _sol("03", "exercise_solver_loss")
+FROM_VECTOR, AUTHORS_LOSS = _sol("03", "exercise_pose_from_vector"), _sol("03", "exercise_authors_loss")
 
 
-def _tied_own(z, W1, W2, W3, last_relu=False, relus=True, in_place=False, dtype=float):
+def _from_vector_own(skeleton, x, origin, angle, sign=1.0, add_origin=True, helper="rest", shift_first=False,
+                     in_place=False):
+    """A student's own vector -> world pose (posekit's rotate_y convention), with the slips below as options."""
+    pel = int(skeleton.pelvis())
+    above = [] if pel == 0 else [0]  # the helper root of the two skeletons here is joint 0
+    body = [j for j in range(skeleton.n_joints) if j not in above]
     if in_place:
-        np.maximum(z, 0, out=z)
-    z, W1, W2, W3 = (np.asarray(a, dtype) for a in (z, W1, W2, W3))
-    act = (lambda v: np.maximum(v, 0)) if relus else (lambda v: v)  # noqa: E731
-    x = act(act(z @ W3) @ W2) @ W1
-    return np.maximum(x, 0) if last_relu else x
+        x *= 1.0
+        x.shape = (len(body), 3)  # reshaped in the caller's array
+    local = np.zeros((skeleton.n_joints, 3))
+    local[body] = np.reshape(x, (len(body), 3))
+    if above and helper == "rest":
+        local[0] = local[pel] - skeleton.offsets[pel]
+    a = sign * float(angle)
+    c, s_ = np.cos(a), np.sin(a)
+    turn = np.array([[c, 0.0, s_], [0.0, 1.0, 0.0], [-s_, 0.0, c]])
+    if shift_first:
+        return (local + origin) @ turn.T
+    return local @ turn.T + (np.asarray(origin, float) if add_origin else 0.0)
 
 
-def _loss_own(decoded, target, columns, k, use_k=True, use_columns=True, in_place=False):
-    if in_place:
-        decoded -= target
-        sq = decoded ** 2
+def _authors_own(decoded, target, columns, w, weight_others=False, two=True, mean=True, k_form="right",
+                 in_place=False, dtype=float):
+    """A student's own weighted loss, with the slips below as options."""
+    d = decoded if in_place else np.asarray(decoded, dtype)
+    t = np.asarray(target, dtype)
+    N, F = d.shape
+    m = np.ones(F, dtype)
+    if weight_others:
+        m[:] = w
+        m[list(columns)] = 1.0
     else:
-        sq = (np.asarray(decoded) - target) ** 2
-    if not use_columns:
-        return float(sq.mean())
-    mask = np.zeros(sq.shape[1], bool)
-    mask[np.asarray(columns)] = True
-    return float(sq[:, mask].mean() + (k if use_k else 1.0) * sq[:, ~mask].mean())
+        m[list(columns)] = w
+    if in_place:
+        d -= t
+        diff = d
+    else:
+        diff = d - t
+    T = len(columns)
+    loss = np.mean(m * diff**2) if mean else np.sum(m * diff**2)
+    grad = (2.0 if two else 1.0) * m * diff / (N * F if mean else 1)
+    k = {"right": (F - T) / (w * T), "1/w": 1.0 / w}[k_form]
+    return loss, grad.astype(dtype), k
 
 
-BY_CHECKER["check_tied_decoder"] = ({
-    "a relu on the output": (lambda *a: _tied_own(*a, last_relu=True), "ReLU after the first two"),
-    "no relu": (lambda *a: _tied_own(*a, relus=False), "case 1 differs"),
-    "the caller's codes rectified in place": (lambda *a: _tied_own(*a, in_place=True), "changed its input `z`"),
+BY_CHECKER["check_pose_from_vector"] = ({
+    "turned the wrong way": (lambda *a: _from_vector_own(*a, sign=-1.0), "turned the wrong way"),
+    "origin not added": (lambda *a: _from_vector_own(*a, add_origin=False), "not moved to origin"),
+    "moved before turning": (lambda *a: _from_vector_own(*a, shift_first=True), "moved before turning"),
+    "the helper root left at the origin": (lambda *a: _from_vector_own(*a, helper="zero"),
+                                           "put it back at its rest offset from the pelvis"),
+    "the caller's x reshaped in place": (lambda *a: _from_vector_own(*a, in_place=True),
+                                         "changed its input `x` in place"),
 }, {
-    "the reference solution": TIED,
-    "its own": _tied_own,
-    "in float32": lambda *a: _tied_own(*a, dtype=np.float32),
+    "the reference solution": FROM_VECTOR,
+    "its own": _from_vector_own,
+    "in float32": lambda *a: _from_vector_own(*a).astype(np.float32),
 })
-BY_CHECKER["check_solver_loss"] = ({
-    "k ignored": (lambda *a: _loss_own(*a, use_k=False), "case 1 differs"),
-    "columns ignored": (lambda *a: _loss_own(*a, use_columns=False), "case 1 differs"),
-    "the caller's decoded poses changed in place": (lambda *a: _loss_own(*a, in_place=True),
+BY_CHECKER["check_authors_loss"] = ({
+    "the weight on the other columns": (lambda *a: _authors_own(*a, weight_others=True), "the loss is"),
+    "a sum, not a mean": (lambda *a: _authors_own(*a, mean=False), "one mean over all N x F squared errors"),
+    "the gradient without its 2": (lambda *a: _authors_own(*a, two=False), "d(u^2)/du = 2u"),
+    "k = 1 / w": (lambda *a: _authors_own(*a, k_form="1/w"), "read k off"),
+    "the caller's decoded poses changed in place": (lambda *a: _authors_own(*a, in_place=True),
                                                      "changed its input `decoded` in place"),
 }, {
-    "the reference solution": SOLVER_LOSS,
-    "a mask": _loss_own,
+    "the reference solution": AUTHORS_LOSS,
+    "its own": _authors_own,
+    "in float32": lambda *a: _authors_own(*a, dtype=np.float32),
 })
 
 STEP, WEIGHT, CENTROID = _sol("05", "exercise_step"), _sol("05", "exercise_weight"), _sol("05", "exercise_centroid")
