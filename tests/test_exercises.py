@@ -314,8 +314,8 @@ CALLS_POSEKIT = {  # checker: (lesson, the reference solution, the posekit funct
     "check_spl_all": ("04", "exercise_spl_all", "posekit.models.aegan.numpy_nets:tree_levels"),
     "check_latent_loss": ("04", "exercise_latent_loss", "posekit.models.aegan.latent_opt:Problem.loss"),
     "check_adversarial": ("04", "exercise_adversarial", "posekit.models.aegan.train:_bce"),
-    "check_prototype_step": ("05", "exercise_step", "posekit.models.protores.networks:ProtoResEncoder.forward"),
-    "check_tolerance_weight": ("05", "exercise_weight", "posekit.models.protores.networks:tolerance_to_sigma"),
+    "check_look_at_angle": ("05", "exercise_look_at_angle", "posekit.exercises.nb05:look_at_angle_reference"),
+    "check_rotation_noise": ("05", "exercise_rotation_noise", "posekit.models.protores.data:axis_angle_matrix"),
     "check_centroid": ("05", "exercise_centroid", "posekit.models.protores.networks:centroid"),
     "check_drag_on_sphere": ("06", "exercise_drag_on_sphere", "posekit.exercises.nb06:sphere_drag_reference"),
     "check_slerp": ("06", "exercise_slerp", "posekit.ik.keyframes:slerp"),
@@ -972,26 +972,48 @@ BY_CHECKER["check_authors_loss"] = ({
     "in float32": lambda *a: _authors_own(*a, dtype=np.float32),
 })
 
-STEP, WEIGHT, CENTROID = _sol("05", "exercise_step"), _sol("05", "exercise_weight"), _sol("05", "exercise_centroid")
+LOOK_AT, ROT_NOISE, CENTROID = (_sol("05", "exercise_look_at_angle"), _sol("05", "exercise_rotation_noise"),
+                                _sol("05", "exercise_centroid"))
 
 
-def _step_own(b, f, e_prev, r, use_r=True, relu=True, in_place=False, axis=0):
-    e = e_prev if in_place else e_prev + 0
-    e += f
-    p = e.mean(axis)
-    x = b - p / (r if use_r else 1)
-    return e, p, (np.maximum(x, 0) if relu else x)
-
-
-def _weight_own(lam, cap=True, eta=13, in_place=False, dtype=float):
+def _look_own(R, v, t, p, form="atan2", transpose=False, from_origin=False, degrees=False, in_place=False,
+              dtype=float):
+    """A student's own look-at angle, with the slips below as options."""
     if in_place:
-        lam **= eta
-        sigma = 0.1 * lam
+        v /= np.linalg.norm(v, axis=-1, keepdims=True)  # normalised in the caller's array
+    R, v, t, p = (np.asarray(x, dtype) for x in (R, v, t, p))
+    a = np.einsum("nji,nj->ni" if transpose else "nij,nj->ni", R, v)
+    b = t if from_origin else t - p
+    if form == "atan2":
+        ang = np.arctan2(np.linalg.norm(np.cross(a, b), axis=-1), np.einsum("ni,ni->n", a, b))
+    elif form == "kahan":  # 2 atan2(|a^ - b^|, |a^ + b^|)
+        a_, b_ = a / np.linalg.norm(a, axis=-1, keepdims=True), b / np.linalg.norm(b, axis=-1, keepdims=True)
+        ang = 2 * np.arctan2(np.linalg.norm(a_ - b_, axis=-1), np.linalg.norm(a_ + b_, axis=-1))
     else:
-        sigma = 0.1 * np.asarray(lam, dtype) ** eta
-    with np.errstate(divide="ignore"):
-        w = 1.0 / sigma
-    return sigma, (np.minimum(1000.0, w) if cap else w).astype(dtype)
+        c = np.einsum("ni,ni->n", a, b) / (np.linalg.norm(a, axis=-1) * np.linalg.norm(b, axis=-1))
+        ang = np.arccos(np.clip(c, -1, 1) if form == "arccos clipped" else c)
+    return np.degrees(ang) if degrees else ang
+
+
+def _noise_own(R, n, lam, side="left", sign=1.0, eta=13, scale=True, guard=True, in_place=False, dtype=float):
+    """A student's own rotation noise, with the slips below as options."""
+    if in_place:
+        n *= 0.1 * np.asarray(lam)[:, None] ** 13  # scaled in the caller's array
+        lam = np.ones_like(lam)
+    R, n, lam = (np.asarray(x, dtype) for x in (R, n, lam))
+    w = sign * (0.1 * lam[:, None] ** eta if scale else 1.0) * n
+    out = []
+    for r, wi in zip(R, w):
+        theta = np.linalg.norm(wi)
+        if guard and theta == 0:
+            out.append(r)
+            continue
+        with np.errstate(invalid="ignore", divide="ignore"):
+            k = wi / theta
+        K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]], dtype)
+        E = np.eye(3, dtype=dtype) + np.sin(theta) * K + (1 - np.cos(theta)) * K @ K
+        out.append(E @ r if side == "left" else r @ E)
+    return np.stack(out)
 
 
 def _centroid_own(kind, value, lam, all_kinds=False, weight="1 - lam", dtype=float):
@@ -1002,23 +1024,30 @@ def _centroid_own(kind, value, lam, all_kinds=False, weight="1 - lam", dtype=flo
     return np.zeros(3, dtype) if not pos.any() and weight != "no 1e-3" else out.astype(dtype)
 
 
-BY_CHECKER["check_prototype_step"] = ({
-    "r ignored": (lambda *a: _step_own(*a, use_r=False), "case 2 differs"),
-    "no relu": (lambda *a: _step_own(*a, relu=False), "case 1 differs"),
-    "the mean over the features": (lambda *a: _step_own(*a, axis=1), "case 1"),
-    "the caller's encodings accumulated in place": (lambda *a: _step_own(*a, in_place=True),
-                                                     "changed its input `e_prev` in place"),
+BY_CHECKER["check_look_at_angle"] = ({
+    "arccos of the clipped cosine": (lambda *a: _look_own(*a, form="arccos clipped"), "arccos loses digits"),
+    "arccos unclipped": (lambda *a: _look_own(*a, form="arccos"), "case 2 differs"),
+    "R^T v": (lambda *a: _look_own(*a, transpose=True), "R turns it into the world's (R v)"),
+    "the target, not t - p": (lambda *a: _look_own(*a, from_origin=True), "the direction from the joint to it"),
+    "degrees": (lambda *a: _look_own(*a, degrees=True), "the loss is in radians"),
+    "the caller's v normalised in place": (lambda *a: _look_own(*a, in_place=True), "changed its input `v` in place"),
 }, {
-    "the reference solution": STEP,
-    "its own": _step_own,
+    "the reference solution": LOOK_AT,
+    "atan2 of the cross and dot products": _look_own,
+    "Kahan's 2 atan2(|a - b|, |a + b|)": lambda *a: _look_own(*a, form="kahan"),
+    "in float32": lambda *a: _look_own(*a, dtype=np.float32),
 })
-BY_CHECKER["check_tolerance_weight"] = ({
-    "1 / sigma not capped": (lambda lam: _weight_own(lam, cap=False), "min(W_M, 1/sigma)"),
-    "eta = 1": (lambda lam: _weight_own(lam, eta=1), "sigma_M * lam**eta"),
-    "the caller's lam raised in place": (lambda lam: _weight_own(lam, in_place=True), "changed its input `lam`"),
+BY_CHECKER["check_rotation_noise"] = ({
+    "turned in the joint's frame": (lambda *a: _noise_own(*a, side="right"), "the noise turns the world rotation"),
+    "turned the other way": (lambda *a: _noise_own(*a, sign=-1.0), "turned the other way"),
+    "eta forgotten": (lambda *a: _noise_own(*a, eta=1), "the power eta = 13 forgotten"),
+    "n not scaled": (lambda *a: _noise_own(*a, scale=False), "n not scaled by sigma"),
+    "no guard at sigma = 0": (lambda *a: _noise_own(*a, guard=False), "there is no axis"),
+    "the caller's n scaled in place": (lambda *a: _noise_own(*a, in_place=True), "changed its input `n` in place"),
 }, {
-    "the reference solution": WEIGHT,
-    "in float32": lambda lam: _weight_own(lam, dtype=np.float32),
+    "the reference solution": ROT_NOISE,
+    "its own Rodrigues": _noise_own,
+    "in float32": lambda *a: _noise_own(*a, dtype=np.float32),
 })
 BY_CHECKER["check_centroid"] = ({
     "every kind averaged": (lambda *a: _centroid_own(*a, all_kinds=True), "only kind 0"),
