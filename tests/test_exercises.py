@@ -306,17 +306,18 @@ def test_each_checker_refuses_the_wrong_answers_that_used_to_pass(slip, capsys):
 
 
 CALLS_POSEKIT = {  # checker: (lesson, the reference solution, the posekit function the answer calls, its name)
-    "check_fk": ("00", "exercise_fk", "posekit.kinematics:fk"),
+    "check_local_from_global": ("00", "exercise_local_from_global", "posekit.kinematics:fk"),
     "check_sixd_to_matrix": ("00", "exercise_sixd_to_matrix", "posekit.rotations:sixd_to_matrix"),
     "check_bone_lengths": ("00", "exercise_bone_lengths", "posekit.kinematics:bone_lengths_of"),
-    "check_gpr_mean": ("02", "exercise_gpr_mean", "posekit.invrig.gpr:GPR.predict"),
-    "check_tied_decoder": ("03", "exercise_tied_decoder", "posekit.models.pose_autoencoder.networks:PoseAutoencoder.decode"),
-    "check_solver_loss": ("03", "exercise_solver_loss", "posekit.models.pose_autoencoder.train:solver_loss"),
+    "check_gpr_loo": ("02", "exercise_gpr_loo", "posekit.invrig.gpr:cross_validate"),
+    "check_dls_prior": ("02", "exercise_dls_prior", "posekit.invrig.jacobian:refine"),
+    "check_pose_from_vector": ("03", "exercise_pose_from_vector", "posekit.data.pose_vectors:poses_from_vectors"),
+    "check_authors_loss": ("03", "exercise_authors_loss", "posekit.models.pose_autoencoder.train:solver_loss"),
     "check_spl_all": ("04", "exercise_spl_all", "posekit.models.aegan.numpy_nets:tree_levels"),
     "check_latent_loss": ("04", "exercise_latent_loss", "posekit.models.aegan.latent_opt:Problem.loss"),
     "check_adversarial": ("04", "exercise_adversarial", "posekit.models.aegan.train:_bce"),
-    "check_prototype_step": ("05", "exercise_step", "posekit.models.protores.networks:ProtoResEncoder.forward"),
-    "check_tolerance_weight": ("05", "exercise_weight", "posekit.models.protores.networks:tolerance_to_sigma"),
+    "check_look_at_angle": ("05", "exercise_look_at_angle", "posekit.exercises.nb05:look_at_angle_reference"),
+    "check_rotation_noise": ("05", "exercise_rotation_noise", "posekit.models.protores.data:axis_angle_matrix"),
     "check_centroid": ("05", "exercise_centroid", "posekit.models.protores.networks:centroid"),
     "check_drag_on_sphere": ("06", "exercise_drag_on_sphere", "posekit.exercises.nb06:sphere_drag_reference"),
     "check_slerp": ("06", "exercise_slerp", "posekit.ik.keyframes:slerp"),
@@ -737,23 +738,35 @@ def _sol(lesson, name):
     return solution_function(find_lesson(lesson), name)
 
 
-FK, SIXD, BONES = _sol("00", "exercise_fk"), _sol("00", "exercise_sixd_to_matrix"), _sol("00", "exercise_bone_lengths")
+LOCAL, SIXD, BONES = _sol("00", "exercise_local_from_global"), _sol("00", "exercise_sixd_to_matrix"), _sol("00", "exercise_bone_lengths")
 
 
-def _fk_own(skeleton, local_rot, root_pos, root=True, order="parent first", offset_by="parent", dtype=float):
-    J = skeleton.n_joints
-    R, x = np.zeros((J, 3, 3), dtype), np.zeros((J, 3), dtype)
-    R[0], x[0] = local_rot[0], (root_pos if root else 0.0)
-    for j in range(1, J):
-        p = skeleton.parents[j]
-        R[j] = R[p] @ local_rot[j] if order == "parent first" else local_rot[j] @ R[p]
-        x[j] = x[p] + (R[p] if offset_by == "parent" else R[j]) @ skeleton.offsets[j]
-    return x
-
-
-def _fk_resets_root(skeleton, local_rot, root_pos):
-    local_rot[0] = np.eye(3)  # "the root's rotation is applied later", in the caller's array
-    return FK(skeleton, local_rot, root_pos)
+def _local_own(parents, global_rot, global_pos, order="parent first", offsets="parent frame", root="kept",
+               one_pose=False, in_place=False, dtype=float):
+    """A student's own FK undone, with the slips below as options."""
+    Rg, Pg = (global_rot, global_pos) if in_place else (np.array(global_rot, dtype), np.array(global_pos, dtype))
+    if one_pose:  # written for (J, 3, 3): the first axis taken for the joints
+        L, O = Rg.copy(), Pg.copy()
+        for j, p in enumerate(parents):
+            if p >= 0:
+                L[j], O[j] = Rg[p].T @ Rg[j], Rg[p].T @ (Pg[j] - Pg[p])
+        return L, O
+    L, O = (Rg, Pg) if in_place else (Rg.copy(), Pg.copy())
+    for j in sorted(range(len(parents)), key=lambda j: -j if in_place else j):
+        p = parents[j]
+        if p < 0:
+            if root == "zeroed":
+                O[..., j, :] = 0.0
+            continue
+        Rp = Rg[..., p, :, :]
+        RpT = np.swapaxes(Rp, -1, -2)
+        Rj = Rg[..., j, :, :]
+        L[..., j, :, :] = {"parent first": RpT @ Rj, "child first": Rj @ RpT,
+                           "transposed": np.swapaxes(Rj, -1, -2) @ Rp}[order]
+        d = Pg[..., j, :] - Pg[..., p, :]
+        O[..., j, :] = {"parent frame": np.einsum("...ba,...b->...a", Rp, d), "world": d,
+                        "own frame": np.einsum("...ba,...b->...a", Rj, d)}[offsets]
+    return L, O
 
 
 def _sixd_own(x, columns=True, normalise=True, order=1.0, in_place=False):
@@ -780,15 +793,25 @@ def _bones_sorts(parents, global_pos):
     return out
 
 
-BY_CHECKER["check_fk"] = ({
-    "root_pos ignored": (lambda *a: _fk_own(*a, root=False), "case 1 differs"),
-    "rotations composed child first": (lambda *a: _fk_own(*a, order="child first"), "case 1 differs"),
-    "the offset turned by the joint's own rotation": (lambda *a: _fk_own(*a, offset_by="own"), "case 1 differs"),
-    "the caller's root rotation reset": (_fk_resets_root, "changed its input `local_rot` in place"),
+BY_CHECKER["check_local_from_global"] = ({
+    "rotations undone on the wrong side": (lambda *a: _local_own(*a, order="child first"),
+                                           "R_loc = R_p^T R_j (the parent's inverse on the left)"),
+    "the transposed local rotation": (lambda *a: _local_own(*a, order="transposed"), "is the transpose"),
+    "the offset left in the world's frame": (lambda *a: _local_own(*a, offsets="world"),
+                                             "offset is R_p^T (x_j - x_p), in the parent's frame"),
+    "the offset turned by the joint's own rotation": (lambda *a: _local_own(*a, offsets="own frame"),
+                                                      "case 1 differs: local_pos of joint"),
+    "the root's position zeroed": (lambda *a: _local_own(*a, root="zeroed"), "a root keeps its global position"),
+    "written for one pose": (lambda *a: _local_own(*a, one_pose=True), "case 2 "),
+    "the caller's arrays overwritten": (lambda *a: _local_own(*a, in_place=True),
+                                        "changed its input `global_rot` in place"),
 }, {
-    "the reference solution": FK,
-    "section 2's loop": _fk_own,
-    "in float32": lambda *a: _fk_own(*a, dtype=np.float32),
+    "the reference solution": LOCAL,
+    "its own loop": _local_own,
+    "in float32": lambda *a: _local_own(*a, dtype=np.float32),
+    "one pose at a time": lambda par, G, P: tuple(np.stack(x) for x in zip(*(
+        _local_own(par, g, p, one_pose=True) for g, p in zip(np.reshape(G, (-1,) + np.shape(G)[-3:]),
+                                                              np.reshape(P, (-1,) + np.shape(P)[-2:]))))),
 })
 BY_CHECKER["check_sixd_to_matrix"] = ({
     "rows, not columns": (lambda x: _sixd_own(x, columns=False), "columns must be b1, b2, b1 x b2"),
@@ -808,114 +831,192 @@ BY_CHECKER["check_bone_lengths"] = ({
     "in float32": lambda par, pos: BONES(par, pos).astype(np.float32),
 })
 
-GPR_MEAN, DLS = _sol("02", "exercise_gpr_mean"), _sol("02", "exercise_dls_step")
+LOO, DLS_PRIOR = _sol("02", "exercise_gpr_loo"), _sol("02", "exercise_dls_prior")
 
 
-def _gpr_own(X, Y, Xq, theta0, theta1, square_theta0=True, reg=True, inv=False, centre_x=False):
-    if centre_x:
-        X -= X.mean(axis=0)  # in the caller's array
+def _loo_own(X, Y, theta0, theta1, leave_out=True, divide=True, square_theta0=True, reg=True, brute=False,
+             centre_y=False, dtype=float):
+    """A student's own leave-one-out, with the slips below as options (``dtype=None``: the inputs' own)."""
+    if centre_y:
+        Y -= Y.mean(axis=0)  # in the caller's array
+    X, Y = np.asarray(X, dtype), np.asarray(Y, dtype)
+    dtype = X.dtype
     t0 = theta0**2 if square_theta0 else theta0
     k = lambda A, B: np.sqrt(((A[:, None, :] - B[None, :, :]) ** 2).sum(-1) + t0)  # noqa: E731
-    K = k(X, X) + (theta1 * np.eye(len(X)) if reg else 0)
-    return k(Xq, X) @ (np.linalg.inv(K) @ Y if inv else np.linalg.solve(K, Y))
+    if brute:  # N fits: the same numbers, slower
+        out = np.zeros_like(Y)
+        for i in range(len(X)):
+            r = np.arange(len(X)) != i
+            out[i] = k(X[i:i + 1], X[r]) @ np.linalg.solve(k(X[r], X[r]) + theta1 * np.eye(len(X) - 1, dtype=dtype),
+                                                         Y[r])
+        return out
+    G = k(X, X) + (theta1 * np.eye(len(X), dtype=dtype) if reg else 0)
+    Gi = np.linalg.inv(G)
+    alpha = Gi @ Y
+    if not leave_out:
+        return k(X, X) @ alpha
+    return Y - (alpha / np.diag(Gi)[:, None] if divide else alpha)
 
 
-def _dls_own(J, dx, damping, square=True, use_damping=True, lstsq=False, clip_dx=False, dtype=float):
-    if clip_dx:
-        np.clip(dx, -0.5, 0.5, out=dx)
-    J, dx = np.asarray(J, dtype), np.asarray(dx, dtype)
-    lam = (damping if use_damping else 0.0)
-    if lstsq:  # min |J dy - dx|^2 + lam^2 |dy|^2 as one least-squares problem
-        A = np.vstack([J, lam * np.eye(J.shape[1])])
-        return np.linalg.lstsq(A, np.concatenate([dx, np.zeros(J.shape[1])]), rcond=None)[0]
-    lam2 = lam**2 if square else lam
-    return np.linalg.solve(J.T @ J + lam2 * np.eye(J.shape[1], dtype=dtype), J.T @ dx)
-
-
-BY_CHECKER["check_gpr_mean"] = ({
-    "theta0 not squared": (lambda *a: _gpr_own(*a, square_theta0=False), "theta0 = 0.5"),
-    "theta1 ignored": (lambda *a: _gpr_own(*a, reg=False), "differs"),
-    "the caller's X centred in place": (lambda *a: _gpr_own(*a, centre_x=True), "changed its input `X` in place"),
-}, {
-    "the reference solution": GPR_MEAN,
-    "its own kernel and solve": _gpr_own,
-    "through the inverse": lambda *a: _gpr_own(*a, inv=True),
-})
-BY_CHECKER["check_dls_step"] = ({
-    "the damping not squared": (lambda *a: _dls_own(*a, square=False), "damping squared on the diagonal"),
-    "the damping ignored": (lambda *a: _dls_own(*a, use_damping=False), "damping 0.1"),
-    "the caller's dx clipped in place": (lambda *a: _dls_own(*a, clip_dx=True), "changed its input `dx` in place"),
-}, {
-    "the reference solution": DLS,
-    "the normal equations": _dls_own,
-    "one stacked least-squares problem": lambda *a: _dls_own(*a, lstsq=True),
-    "in float32": lambda *a: _dls_own(*a, dtype=np.float32),
-})
-
-TIED, SOLVER_LOSS = _sol("03", "exercise_tied_decoder"), _sol("03", "exercise_solver_loss")
-
-
-def _tied_own(z, W1, W2, W3, last_relu=False, relus=True, in_place=False, dtype=float):
+def _prior_own(J, dx, y, yp, lam, w, square_w=True, pull=1.0, square_lam=True, use_w=True, lstsq=False,
+               in_place=False, dtype=float):
+    """A student's own damped step with a prior, with the slips below as options."""
     if in_place:
-        np.maximum(z, 0, out=z)
-    z, W1, W2, W3 = (np.asarray(a, dtype) for a in (z, W1, W2, W3))
-    act = (lambda v: np.maximum(v, 0)) if relus else (lambda v: v)  # noqa: E731
-    x = act(act(z @ W3) @ W2) @ W1
-    return np.maximum(x, 0) if last_relu else x
+        y -= yp  # "work relative to the prior", in the caller's array
+        y, yp = y, np.zeros_like(yp)
+    J, dx, y, yp, w = (np.asarray(a, dtype) for a in (J, dx, y, yp, w))
+    w = w if use_w else np.ones_like(w)
+    lam2 = lam**2 if square_lam else lam
+    if lstsq:  # one stacked least-squares problem: [J; lam W] dy = [dx; lam W (yp - y)]
+        A = np.vstack([J, lam * np.diag(w)])
+        return np.linalg.lstsq(A, np.concatenate([dx, lam * w * (yp - y)]), rcond=None)[0]
+    W2 = w**2 if square_w else w
+    return np.linalg.solve(J.T @ J + lam2 * np.diag(W2), J.T @ dx + pull * lam2 * W2 * (yp - y))
 
 
-def _loss_own(decoded, target, columns, k, use_k=True, use_columns=True, in_place=False):
+BY_CHECKER["check_gpr_loo"] = ({
+    "the left-out pose kept in the fit": (lambda *a: _loo_own(*a, leave_out=False), "the left-out one included"),
+    "alpha_i not divided by (G^-1)_ii": (lambda *a: _loo_own(*a, divide=False), "the residual is alpha_i / (G^-1)_ii"),
+    "theta0 not squared": (lambda *a: _loo_own(*a, square_theta0=False), "theta0 = 0.5"),
+    "theta1 left off": (lambda *a: _loo_own(*a, reg=False), "theta1 left off G"),
+    "the caller's Y centred in place": (lambda *a: _loo_own(*a, centre_y=True), "changed its input `Y` in place"),
+}, {
+    "the reference solution": LOO,
+    "its own closed form": _loo_own,
+    "N fits": lambda *a: _loo_own(*a, brute=True),
+    "in the inputs' own dtype (float32 in, float32 out)": lambda *a: _loo_own(*a, dtype=None),
+})
+BY_CHECKER["check_dls_prior"] = ({
+    "the weights not squared": (lambda *a: _prior_own(*a, square_w=False), "the weights not squared"),
+    "no pull towards the prior": (lambda *a: _prior_own(*a, pull=0.0), "the pull towards y_prior missing"),
+    "the pull reversed": (lambda *a: _prior_own(*a, pull=-1.0), "the pull points away from y_prior"),
+    "the damping not squared": (lambda *a: _prior_own(*a, square_lam=False), "the damping not squared"),
+    "the weights ignored": (lambda *a: _prior_own(*a, use_w=False), "the weights ignored"),
+    "the caller's y moved in place": (lambda *a: _prior_own(*a, in_place=True), "changed its input `y` in place"),
+}, {
+    "the reference solution": DLS_PRIOR,
+    "the normal equations": _prior_own,
+    "one stacked least-squares problem": lambda *a: _prior_own(*a, lstsq=True),
+    "in float32": lambda *a: _prior_own(*a, dtype=np.float32),
+})
+
+FROM_VECTOR, AUTHORS_LOSS = _sol("03", "exercise_pose_from_vector"), _sol("03", "exercise_authors_loss")
+
+
+def _from_vector_own(skeleton, x, origin, angle, sign=1.0, add_origin=True, helper="rest", shift_first=False,
+                     in_place=False):
+    """A student's own vector -> world pose (posekit's rotate_y convention), with the slips below as options."""
+    pel = int(skeleton.pelvis())
+    above = [] if pel == 0 else [0]  # the helper root of the two skeletons here is joint 0
+    body = [j for j in range(skeleton.n_joints) if j not in above]
     if in_place:
-        decoded -= target
-        sq = decoded ** 2
+        x *= 1.0
+        x.shape = (len(body), 3)  # reshaped in the caller's array
+    local = np.zeros((skeleton.n_joints, 3))
+    local[body] = np.reshape(x, (len(body), 3))
+    if above and helper == "rest":
+        local[0] = local[pel] - skeleton.offsets[pel]
+    a = sign * float(angle)
+    c, s_ = np.cos(a), np.sin(a)
+    turn = np.array([[c, 0.0, s_], [0.0, 1.0, 0.0], [-s_, 0.0, c]])
+    if shift_first:
+        return (local + origin) @ turn.T
+    return local @ turn.T + (np.asarray(origin, float) if add_origin else 0.0)
+
+
+def _authors_own(decoded, target, columns, w, weight_others=False, two=True, mean=True, k_form="right",
+                 in_place=False, dtype=float):
+    """A student's own weighted loss, with the slips below as options."""
+    d = decoded if in_place else np.asarray(decoded, dtype)
+    t = np.asarray(target, dtype)
+    N, F = d.shape
+    m = np.ones(F, dtype)
+    if weight_others:
+        m[:] = w
+        m[list(columns)] = 1.0
     else:
-        sq = (np.asarray(decoded) - target) ** 2
-    if not use_columns:
-        return float(sq.mean())
-    mask = np.zeros(sq.shape[1], bool)
-    mask[np.asarray(columns)] = True
-    return float(sq[:, mask].mean() + (k if use_k else 1.0) * sq[:, ~mask].mean())
+        m[list(columns)] = w
+    if in_place:
+        d -= t
+        diff = d
+    else:
+        diff = d - t
+    T = len(columns)
+    loss = np.mean(m * diff**2) if mean else np.sum(m * diff**2)
+    grad = (2.0 if two else 1.0) * m * diff / (N * F if mean else 1)
+    k = {"right": (F - T) / (w * T), "1/w": 1.0 / w}[k_form]
+    return loss, grad.astype(dtype), k
 
 
-BY_CHECKER["check_tied_decoder"] = ({
-    "a relu on the output": (lambda *a: _tied_own(*a, last_relu=True), "ReLU after the first two"),
-    "no relu": (lambda *a: _tied_own(*a, relus=False), "case 1 differs"),
-    "the caller's codes rectified in place": (lambda *a: _tied_own(*a, in_place=True), "changed its input `z`"),
+BY_CHECKER["check_pose_from_vector"] = ({
+    "turned the wrong way": (lambda *a: _from_vector_own(*a, sign=-1.0), "turned the wrong way"),
+    "origin not added": (lambda *a: _from_vector_own(*a, add_origin=False), "not moved to origin"),
+    "moved before turning": (lambda *a: _from_vector_own(*a, shift_first=True), "moved before turning"),
+    "the helper root left at the origin": (lambda *a: _from_vector_own(*a, helper="zero"),
+                                           "put it back at its rest offset from the pelvis"),
+    "the caller's x reshaped in place": (lambda *a: _from_vector_own(*a, in_place=True),
+                                         "changed its input `x` in place"),
 }, {
-    "the reference solution": TIED,
-    "its own": _tied_own,
-    "in float32": lambda *a: _tied_own(*a, dtype=np.float32),
+    "the reference solution": FROM_VECTOR,
+    "its own": _from_vector_own,
+    "in float32": lambda *a: _from_vector_own(*a).astype(np.float32),
 })
-BY_CHECKER["check_solver_loss"] = ({
-    "k ignored": (lambda *a: _loss_own(*a, use_k=False), "case 1 differs"),
-    "columns ignored": (lambda *a: _loss_own(*a, use_columns=False), "case 1 differs"),
-    "the caller's decoded poses changed in place": (lambda *a: _loss_own(*a, in_place=True),
+BY_CHECKER["check_authors_loss"] = ({
+    "the weight on the other columns": (lambda *a: _authors_own(*a, weight_others=True), "the loss is"),
+    "a sum, not a mean": (lambda *a: _authors_own(*a, mean=False), "one mean over all N x F squared errors"),
+    "the gradient without its 2": (lambda *a: _authors_own(*a, two=False), "d(u^2)/du = 2u"),
+    "k = 1 / w": (lambda *a: _authors_own(*a, k_form="1/w"), "read k off"),
+    "the caller's decoded poses changed in place": (lambda *a: _authors_own(*a, in_place=True),
                                                      "changed its input `decoded` in place"),
 }, {
-    "the reference solution": SOLVER_LOSS,
-    "a mask": _loss_own,
+    "the reference solution": AUTHORS_LOSS,
+    "its own": _authors_own,
+    "in float32": lambda *a: _authors_own(*a, dtype=np.float32),
 })
 
-STEP, WEIGHT, CENTROID = _sol("05", "exercise_step"), _sol("05", "exercise_weight"), _sol("05", "exercise_centroid")
+LOOK_AT, ROT_NOISE, CENTROID = (_sol("05", "exercise_look_at_angle"), _sol("05", "exercise_rotation_noise"),
+                                _sol("05", "exercise_centroid"))
 
 
-def _step_own(b, f, e_prev, r, use_r=True, relu=True, in_place=False, axis=0):
-    e = e_prev if in_place else e_prev + 0
-    e += f
-    p = e.mean(axis)
-    x = b - p / (r if use_r else 1)
-    return e, p, (np.maximum(x, 0) if relu else x)
-
-
-def _weight_own(lam, cap=True, eta=13, in_place=False, dtype=float):
+def _look_own(R, v, t, p, form="atan2", transpose=False, from_origin=False, degrees=False, in_place=False,
+              dtype=float):
+    """A student's own look-at angle, with the slips below as options."""
     if in_place:
-        lam **= eta
-        sigma = 0.1 * lam
+        v /= np.linalg.norm(v, axis=-1, keepdims=True)  # normalised in the caller's array
+    R, v, t, p = (np.asarray(x, dtype) for x in (R, v, t, p))
+    a = np.einsum("nji,nj->ni" if transpose else "nij,nj->ni", R, v)
+    b = t if from_origin else t - p
+    if form == "atan2":
+        ang = np.arctan2(np.linalg.norm(np.cross(a, b), axis=-1), np.einsum("ni,ni->n", a, b))
+    elif form == "kahan":  # 2 atan2(|a^ - b^|, |a^ + b^|)
+        a_, b_ = a / np.linalg.norm(a, axis=-1, keepdims=True), b / np.linalg.norm(b, axis=-1, keepdims=True)
+        ang = 2 * np.arctan2(np.linalg.norm(a_ - b_, axis=-1), np.linalg.norm(a_ + b_, axis=-1))
     else:
-        sigma = 0.1 * np.asarray(lam, dtype) ** eta
-    with np.errstate(divide="ignore"):
-        w = 1.0 / sigma
-    return sigma, (np.minimum(1000.0, w) if cap else w).astype(dtype)
+        c = np.einsum("ni,ni->n", a, b) / (np.linalg.norm(a, axis=-1) * np.linalg.norm(b, axis=-1))
+        with np.errstate(invalid="ignore"):  # a cosine rounded past 1: NaN, the slip the checker names
+            ang = np.arccos(np.clip(c, -1, 1) if form == "arccos clipped" else c)
+    return np.degrees(ang) if degrees else ang
+
+
+def _noise_own(R, n, lam, side="left", sign=1.0, eta=13, scale=True, guard=True, in_place=False, dtype=float):
+    """A student's own rotation noise, with the slips below as options."""
+    if in_place:
+        n *= 0.1 * np.asarray(lam)[:, None] ** 13  # scaled in the caller's array
+        lam = np.ones_like(lam)
+    R, n, lam = (np.asarray(x, dtype) for x in (R, n, lam))
+    w = sign * (0.1 * lam[:, None] ** eta if scale else 1.0) * n
+    out = []
+    for r, wi in zip(R, w):
+        theta = np.linalg.norm(wi)
+        if guard and theta == 0:
+            out.append(r)
+            continue
+        with np.errstate(invalid="ignore", divide="ignore"):
+            k = wi / theta
+        K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]], dtype)
+        E = np.eye(3, dtype=dtype) + np.sin(theta) * K + (1 - np.cos(theta)) * K @ K
+        out.append(E @ r if side == "left" else r @ E)
+    return np.stack(out)
 
 
 def _centroid_own(kind, value, lam, all_kinds=False, weight="1 - lam", dtype=float):
@@ -926,23 +1027,30 @@ def _centroid_own(kind, value, lam, all_kinds=False, weight="1 - lam", dtype=flo
     return np.zeros(3, dtype) if not pos.any() and weight != "no 1e-3" else out.astype(dtype)
 
 
-BY_CHECKER["check_prototype_step"] = ({
-    "r ignored": (lambda *a: _step_own(*a, use_r=False), "case 2 differs"),
-    "no relu": (lambda *a: _step_own(*a, relu=False), "case 1 differs"),
-    "the mean over the features": (lambda *a: _step_own(*a, axis=1), "case 1"),
-    "the caller's encodings accumulated in place": (lambda *a: _step_own(*a, in_place=True),
-                                                     "changed its input `e_prev` in place"),
+BY_CHECKER["check_look_at_angle"] = ({
+    "arccos of the clipped cosine": (lambda *a: _look_own(*a, form="arccos clipped"), "arccos loses digits"),
+    "arccos unclipped": (lambda *a: _look_own(*a, form="arccos"), "case 2 differs"),
+    "R^T v": (lambda *a: _look_own(*a, transpose=True), "R turns it into the world's (R v)"),
+    "the target, not t - p": (lambda *a: _look_own(*a, from_origin=True), "the direction from the joint to it"),
+    "degrees": (lambda *a: _look_own(*a, degrees=True), "the loss is in radians"),
+    "the caller's v normalised in place": (lambda *a: _look_own(*a, in_place=True), "changed its input `v` in place"),
 }, {
-    "the reference solution": STEP,
-    "its own": _step_own,
+    "the reference solution": LOOK_AT,
+    "atan2 of the cross and dot products": _look_own,
+    "Kahan's 2 atan2(|a - b|, |a + b|)": lambda *a: _look_own(*a, form="kahan"),
+    "in float32": lambda *a: _look_own(*a, dtype=np.float32),
 })
-BY_CHECKER["check_tolerance_weight"] = ({
-    "1 / sigma not capped": (lambda lam: _weight_own(lam, cap=False), "min(W_M, 1/sigma)"),
-    "eta = 1": (lambda lam: _weight_own(lam, eta=1), "sigma_M * lam**eta"),
-    "the caller's lam raised in place": (lambda lam: _weight_own(lam, in_place=True), "changed its input `lam`"),
+BY_CHECKER["check_rotation_noise"] = ({
+    "turned in the joint's frame": (lambda *a: _noise_own(*a, side="right"), "the noise turns the world rotation"),
+    "turned the other way": (lambda *a: _noise_own(*a, sign=-1.0), "turned the other way"),
+    "eta forgotten": (lambda *a: _noise_own(*a, eta=1), "the power eta = 13 forgotten"),
+    "n not scaled": (lambda *a: _noise_own(*a, scale=False), "n not scaled by sigma"),
+    "no guard at sigma = 0": (lambda *a: _noise_own(*a, guard=False), "there is no axis"),
+    "the caller's n scaled in place": (lambda *a: _noise_own(*a, in_place=True), "changed its input `n` in place"),
 }, {
-    "the reference solution": WEIGHT,
-    "in float32": lambda lam: _weight_own(lam, dtype=np.float32),
+    "the reference solution": ROT_NOISE,
+    "its own Rodrigues": _noise_own,
+    "in float32": lambda *a: _noise_own(*a, dtype=np.float32),
 })
 BY_CHECKER["check_centroid"] = ({
     "every kind averaged": (lambda *a: _centroid_own(*a, all_kinds=True), "only kind 0"),

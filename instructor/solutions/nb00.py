@@ -3,43 +3,43 @@ them into the lesson)."""
 
 from __future__ import annotations
 
-__all__ = ["exercise_fk", "exercise_sixd_to_matrix", "exercise_bone_lengths"]
+__all__ = ["exercise_local_from_global", "exercise_sixd_to_matrix", "exercise_bone_lengths"]
 
 
-def exercise_fk(skeleton, local_rot, root_pos):
-    """Forward kinematics of one pose, one joint at a time in index order (parents come first).
+def exercise_local_from_global(parents, global_rot, global_pos):
+    """Forward kinematics undone: the local rotations and translations of posed skeletons.
 
-    For joint ``j`` with parent ``p`` (lesson 00, section 2):
-    ``R_j = R_p R_loc_j`` and ``x_j = x_p + R_p o_j``; the root takes ``root_pos`` and its own local rotation.
+    FK (lesson 00, section 2) composes ``R_j = R_p R_loc_j`` and ``x_j = x_p + R_p o_j``. Solved for the local
+    quantities: ``R_loc_j = R_p^T R_j`` (a rotation's inverse is its transpose, and it multiplies from the left)
+    and ``o_j = R_p^T (x_j - x_p)``, the bone seen from the parent's frame. A root keeps its global rotation and
+    position. Each joint needs only its parent, so the joints may come in any order; the ``...`` batch axes ride
+    along in ``@`` and ``einsum``. ``posekit.fk(skeleton, local_rot, local_pos=local_pos)`` gives the pose back.
 
     Parameters
     ----------
-    skeleton : Skeleton
-        ``parents`` (J,), -1 for the root, and rest ``offsets`` (J, 3), metres.
-    local_rot : ndarray, shape (J, 3, 3)
-        Local rotation matrices, each relative to the joint's parent.
-    root_pos : ndarray, shape (3,), metres
+    parents : sequence of int, length J
+        Parent of each joint, -1 for a root.
+    global_rot : ndarray, shape (..., J, 3, 3)
+    global_pos : ndarray, shape (..., J, 3), metres
 
     Returns
     -------
-    ndarray, shape (J, 3), metres
-        Global joint positions.
+    local_rot : ndarray, shape (..., J, 3, 3)
+    local_pos : ndarray, shape (..., J, 3), metres
+        The offsets of the pose (a root's row: its position).
     """
     import numpy as np
 
-    J = skeleton.n_joints
-    R = np.zeros((J, 3, 3))  # global rotations
-    x = np.zeros((J, 3))     # global positions
-    for j in range(J):
-        p = skeleton.parents[j]
-        if p < 0:  # the root
-            R[j] = local_rot[j]
-            x[j] = root_pos
-        else:
-            R[j] = R[p] @ local_rot[j]
-            # the offset lives in the parent's frame, so the parent's rotation turns it
-            x[j] = x[p] + R[p] @ skeleton.offsets[j]
-    return x
+    Rg = np.asarray(global_rot, dtype=float)
+    Pg = np.asarray(global_pos, dtype=float)
+    local_rot, local_pos = Rg.copy(), Pg.copy()  # copies: a root keeps its own, the caller's arrays stay
+    for j, p in enumerate(parents):
+        if p < 0:
+            continue
+        Rp_T = np.swapaxes(Rg[..., p, :, :], -1, -2)  # the parent's inverse, for every pose of the batch
+        local_rot[..., j, :, :] = Rp_T @ Rg[..., j, :, :]
+        local_pos[..., j, :] = (Rp_T @ (Pg[..., j, :] - Pg[..., p, :])[..., None])[..., 0]
+    return local_rot, local_pos
 
 
 def exercise_sixd_to_matrix(x):

@@ -3,60 +3,63 @@ them into the lesson)."""
 
 from __future__ import annotations
 
-__all__ = ["exercise_gpr_mean", "exercise_dls_step"]
+__all__ = ["exercise_gpr_loo", "exercise_dls_prior"]
 
 
-def exercise_gpr_mean(X, Y, Xq, theta0, theta1):
-    """Posterior mean of Gaussian-process regression with the multiquadric kernel (Holden et al. 2017, Eqs. 2-3).
+def exercise_gpr_loo(X, Y, theta0, theta1):
+    """Leave-one-out predictions of the multiquadric GP mean (Holden et al. 2017, Eqs. 2-3), from one solve.
 
-    ``y(Xq) = k(Xq, X) (K + theta1 I)^-1 Y`` with ``K_ij = k(x_i, x_j) = sqrt(|x_i - x_j|^2 + theta0^2)``. No
-    normalisation here (the caller z-scores). The system is solved once, never inverted; the multiquadric
-    kernel is not positive definite, so it is solved as symmetric indefinite (LDL^T), not by Cholesky.
+    With ``G = K + theta1 I`` and ``alpha = G^-1 Y``, the mean fitted without pose ``i``, at ``x_i``, is
+    ``y_i - alpha_i / (G^-1)_ii`` (Rasmussen & Williams 2006, Eq. 5.12; block inversion of ``G``, which needs ``G``
+    symmetric and invertible, not positive definite: the multiquadric's ``G`` qualifies). One factorisation
+    replaces N fits.
 
     Parameters
     ----------
     X : ndarray, shape (N, D)
-        Training inputs.
+        Training inputs (already normalised, or not: no normalisation here).
     Y : ndarray, shape (N, O)
         Training outputs.
-    Xq : ndarray, shape (M, D)
-        Query inputs.
     theta0 : float
-        Kernel parameter (in the inputs' units).
+        The kernel's offset, ``k(a, b) = sqrt(|a - b|^2 + theta0^2)``.
     theta1 : float
-        Regularisation added to the diagonal.
+        The regulariser on the diagonal.
 
     Returns
     -------
-    ndarray, shape (M, O)
+    ndarray, shape (N, O)
+        Row ``i``: the prediction at ``X[i]`` of the GP fitted on every other row.
     """
     import numpy as np
     import scipy.linalg
 
-    def multiquadric(A, B):
-        # all pairwise squared distances between the rows of A (n, D) and of B (m, D): shape (n, m)
-        sq = ((A[:, None, :] - B[None, :, :]) ** 2).sum(axis=-1)
-        return np.sqrt(sq + theta0**2)
-
-    K = multiquadric(X, X) + theta1 * np.eye(len(X))
-    alpha = scipy.linalg.solve(K, Y, assume_a="sym")  # alpha = (K + theta1 I)^-1 Y
-    return multiquadric(Xq, X) @ alpha
+    X, Y = np.asarray(X, dtype=float), np.asarray(Y, dtype=float)
+    d2 = ((X[:, None, :] - X[None, :, :]) ** 2).sum(-1)
+    G = np.sqrt(d2 + theta0**2) + theta1 * np.eye(len(X))
+    G_inv = scipy.linalg.inv(G)   # the diagonal of the inverse is needed, so here the inverse is the tool
+    alpha = G_inv @ Y
+    return Y - alpha / np.diag(G_inv)[:, None]
 
 
-def exercise_dls_step(J, dx, damping):
-    """One damped-least-squares step (Holden et al. 2017, Sec. 5; Buss 2004).
+def exercise_dls_prior(J, dx, y, y_prior, damping, weights):
+    """A damped-least-squares step with each control's own scale and a pull towards a prior (a learned guess).
 
-    ``dy = (J^T J + lambda^2 I)^-1 J^T dx``: the control change that best explains the joint-position
-    change ``dx``, with the damping keeping the step finite where ``J^T J`` is (nearly) singular.
+    Minimises ``|J dy - dx|^2 + damping^2 |W (y + dy - y_prior)|^2`` with ``W = diag(weights)``. Setting the
+    gradient to zero gives ``(J^T J + damping^2 W^2) dy = J^T dx + damping^2 W^2 (y_prior - y)``: section 5's step
+    when every weight is 1 and ``y`` is already ``y_prior``. A control that moves no joint goes all the way to its
+    prior; a redundant pair is split as the prior splits it.
 
     Parameters
     ----------
-    J : ndarray, shape (X, C)
-        Jacobian of the rig's joint coordinates with respect to its controls.
-    dx : ndarray, shape (X,)
-        Wanted change of the joint coordinates, ``x* - f(y)``.
+    J : ndarray, shape (M, C)
+        The rig's Jacobian at ``y``.
+    dx : ndarray, shape (M,)
+        The joint error ``x_* - f(y)``.
+    y, y_prior : ndarray, shape (C,)
+        The current controls and the prior (the regression's guess).
     damping : float
-        ``lambda``; it is squared on the diagonal.
+    weights : ndarray, shape (C,)
+        Each control's weight (e.g. 1 / its training standard deviation).
 
     Returns
     -------
@@ -64,6 +67,6 @@ def exercise_dls_step(J, dx, damping):
     """
     import numpy as np
 
-    C = J.shape[1]
-    A = J.T @ J + damping**2 * np.eye(C)
-    return np.linalg.solve(A, J.T @ dx)  # solve the linear system rather than inverting A
+    J, dx, y, y_prior, w = (np.asarray(a, dtype=float) for a in (J, dx, y, y_prior, weights))
+    W2 = np.diag(w**2)
+    return np.linalg.solve(J.T @ J + damping**2 * W2, J.T @ dx + damping**2 * W2 @ (y_prior - y))

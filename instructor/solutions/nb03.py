@@ -3,7 +3,7 @@ them into the lesson)."""
 
 from __future__ import annotations
 
-__all__ = ["exercise_pose_vector", "exercise_tied_decoder", "exercise_solver_loss"]
+__all__ = ["exercise_pose_vector", "exercise_pose_from_vector", "exercise_authors_loss"]
 
 
 def exercise_pose_vector(skeleton, global_pos):
@@ -46,59 +46,75 @@ def exercise_pose_vector(skeleton, global_pos):
     return local[body].ravel()
 
 
-def exercise_tied_decoder(z, W1, W2, W3):
-    """The tied decoder of the authors' code (Victor et al. 2021, Sec. 3.3.1): ``D(z) = W1^T relu(W2^T relu(W3^T z))``.
+def exercise_pose_from_vector(skeleton, x, origin, angle):
+    """A pose vector back to a pose in the world: exercise 1 undone (Victor et al. 2021, Sec. 3.2).
 
-    The decoder reuses the encoder's weight matrices transposed and has no biases. With codes as rows,
-    ``W^T z`` for every code is ``z @ W``.
+    The vector holds the B body joints in the root frame, joint by joint. Put them in their rows, place a helper
+    root (a joint above the pelvis, Bandai's ``joint_Root``) at its rest offset from the pelvis — the joints above
+    the pelvis do not rotate — then turn everything back by ``+angle`` about +Y and add the root frame's origin.
 
     Parameters
     ----------
-    z : ndarray, shape (N, d)
-        Latent codes.
-    W1 : ndarray, shape (H, F)
-        First encoder layer's weight, torch's (out, in) layout.
-    W2 : ndarray, shape (H, H)
-    W3 : ndarray, shape (d, H)
+    skeleton : Skeleton
+    x : ndarray, shape (3 B,), metres
+    origin : ndarray, shape (3,), metres
+        The pelvis on the floor, where the root frame was taken.
+    angle : float
+        The facing angle, radians about +Y, from +Z to the facing direction.
 
     Returns
     -------
-    ndarray, shape (N, F)
-        Decoded (z-scored) poses.
+    ndarray, shape (J, 3), metres
     """
     import numpy as np
 
-    h2 = np.maximum(z @ W3, 0.0)   # relu(W3^T z), (N, H)
-    h1 = np.maximum(h2 @ W2, 0.0)  # relu(W2^T h2), (N, H)
-    return h1 @ W1                 # W1^T h1, linear, (N, F)
+    pelvis = int(skeleton.pelvis())
+    above = []                                   # the joints above the pelvis, nearest first
+    j = pelvis
+    while j != 0:
+        j = int(skeleton.parents[j])
+        above.append(j)
+    body = [j for j in range(skeleton.n_joints) if j not in above]
+    local = np.zeros((skeleton.n_joints, 3))
+    local[body] = np.asarray(x, dtype=float).reshape(len(body), 3)
+    child = pelvis
+    for j in above:                              # each helper at its child's rest offset below the child
+        local[j] = local[child] - skeleton.offsets[child]
+        child = j
+    c, s = np.cos(float(angle)), np.sin(float(angle))
+    turn = np.array([[c, 0.0, s],                # rotation by +angle about +Y: +Z goes to (sin a, 0, cos a)
+                     [0.0, 1.0, 0.0],
+                     [-s, 0.0, c]])
+    return local @ turn.T + np.asarray(origin, dtype=float)
 
 
-def exercise_solver_loss(decoded, target, columns, k):
-    """Eq. (1) of Victor et al. 2021: ``MSE_t(D(z'), x_target) + k MSE_not_t(D(z'), x_target)``.
+def exercise_authors_loss(decoded, target, columns, w):
+    """The authors' code's solver loss: one weighted mean over all features, its gradient, and its ``k``.
 
-    The mean squared error over the target joints' feature columns, plus ``k`` times the mean squared
-    error over all other features (z-scored units).
+    ``L = mean_{n,c} m_c (decoded_nc - target_nc)^2`` with ``m_c = w`` on the ``T`` target columns and 1 on the
+    ``F - T`` others; ``dL/d decoded = 2 m (decoded - target) / (N F)``. Splitting the mean,
+    ``L = (w T / F) MSE_t + ((F - T) / F) MSE_others = (w T / F) (MSE_t + k MSE_others)`` with
+    ``k = (F - T) / (w T)``: Eq. (1) times a constant, which moves no minimiser (for the lesson's hands,
+    F = 63, T = 6, w = 100: k = 0.095).
 
     Parameters
     ----------
-    decoded : ndarray, shape (N, F)
-        Decoded poses ``D(z')``.
-    target : ndarray, shape (N, F)
-        The true target poses.
-    columns : sequence of int, length 3 K
-        Feature columns of the target joints.
+    decoded, target : ndarray, shape (N, F)
+    columns : sequence of int, length T
+    w : float
+
+    Returns
+    -------
+    loss : float
+    grad : ndarray, shape (N, F)
     k : float
-        Weight of the other features (0.01 in the lesson).
-
-    Returns
-    -------
-    float
     """
     import numpy as np
 
-    se = (np.asarray(decoded) - np.asarray(target)) ** 2  # squared error of every feature, (N, F)
-    on = np.zeros(se.shape[1], dtype=bool)
-    on[list(columns)] = True                                # True on the target joints' columns
-    mse_targets = se[:, on].mean()
-    mse_others = se[:, ~on].mean() if np.any(~on) else 0.0  # a mean per group, not over all features
-    return float(mse_targets + k * mse_others)
+    d, t = np.asarray(decoded, dtype=float), np.asarray(target, dtype=float)
+    N, F = d.shape
+    m = np.ones(F)
+    m[list(columns)] = w                         # the weight of each feature
+    diff = d - t
+    T = len(set(int(c) for c in columns))
+    return float(np.mean(m * diff**2)), 2.0 * m * diff / (N * F), (F - T) / (w * T)

@@ -3,65 +3,78 @@ them into the lesson)."""
 
 from __future__ import annotations
 
-__all__ = ["exercise_step", "exercise_weight", "exercise_centroid"]
+__all__ = ["exercise_look_at_angle", "exercise_rotation_noise", "exercise_centroid"]
 
 
-def exercise_step(b, f, e_prev, r):
-    """One proto-residual step of ProtoRes's encoder (Oreshkin et al. 2022, Eq. 2), after the block's layers.
+def exercise_look_at_angle(R, v, t, p):
+    """The look-at loss's angle (Oreshkin et al. 2022, Sec. 2.2): between the joint's world direction ``R v`` and
+    the direction to its target ``t - p``, in radians, accurate at every angle.
 
-    The forecasts accumulate into each effector's encoding, ``e = e_prev + f``; the prototype is the mean
-    encoding over the effectors, ``p = mean_i e_i``; the next block reads each effector minus what the set
-    already explains, ``x_next = relu(b - p / r)``.
-
-    Parameters
-    ----------
-    b : ndarray, shape (N, d)
-        The block's backcast, one row per effector.
-    f : ndarray, shape (N, d)
-        The block's forecast.
-    e_prev : ndarray, shape (N, d)
-        Encodings accumulated by the earlier blocks.
-    r : int
-        Number of the block just run, from 1 (the authors' code divides by it).
-
-    Returns
-    -------
-    e : ndarray, shape (N, d)
-    p : ndarray, shape (d,)
-    x_next : ndarray, shape (N, d)
-    """
-    import numpy as np
-
-    e = e_prev + f
-    p = e.mean(axis=0)                   # mean over the effectors: independent of their order
-    x_next = np.maximum(b - p / r, 0.0)  # p is broadcast to every effector's row
-    return e, p, x_next
-
-
-def exercise_weight(lam):
-    """ProtoRes's tolerance: training noise scale and loss weight of each effector (Oreshkin et al. 2022,
-    Sec. 2.2-2.3, Appendix B).
-
-    ``sigma = sigma_M Lambda^eta`` with ``sigma_M = 0.1`` (metres or radians) and ``eta = 13``; the loss
-    weight ``min(W_M, 1 / sigma)`` with ``W_M = 1000``. An exact effector (``sigma = 0``) gets ``W_M``.
+    ``arccos`` of the normalised dot product loses digits near 0 and pi (its slope is infinite there: a cosine
+    rounded by 1e-16 moves the angle by 1e-8) and has no value for a cosine rounded past +-1.
+    ``atan2(|a x b|, a . b)`` reads the angle from its sine and cosine together, unnormalised: both scale with
+    ``|a| |b|``, which cancels.
 
     Parameters
     ----------
-    lam : ndarray, shape (K,)
-        Tolerances ``Lambda`` in [0, 1].
+    R : ndarray, shape (N, 3, 3)
+        The joints' world rotations.
+    v : ndarray, shape (N, 3)
+        Each joint's local direction that should face its target (any length).
+    t, p : ndarray, shape (N, 3), metres
+        The targets and the joints' positions.
 
     Returns
     -------
-    sigma : ndarray, shape (K,)
-    weight : ndarray, shape (K,)
+    ndarray, shape (N,), radians in [0, pi]
     """
     import numpy as np
 
-    sigma_m, eta, w_m = 0.1, 13.0, 1000.0
-    sigma = sigma_m * np.asarray(lam, dtype=float) ** eta
-    # 1 / sigma is at least W_M wherever sigma <= 1 / W_M, so flooring sigma there avoids dividing by 0
-    weight = np.minimum(w_m, 1.0 / np.maximum(sigma, 1.0 / w_m))
-    return sigma, weight
+    a = np.einsum("nij,nj->ni", np.asarray(R, dtype=float), np.asarray(v, dtype=float))  # R v, row by row
+    b = np.asarray(t, dtype=float) - np.asarray(p, dtype=float)
+    sin_part = np.linalg.norm(np.cross(a, b), axis=-1)
+    cos_part = np.einsum("ni,ni->n", a, b)
+    return np.arctan2(sin_part, cos_part)
+
+
+def exercise_rotation_noise(R, n, lam):
+    """A rotation effector's noise model (Oreshkin et al. 2022, Appendix B; posekit turns a rotation vector, the
+    authors' code Euler angles): ``exp(sigma n) R`` with ``sigma = sigma_M Lambda^eta``.
+
+    The rotation vector ``w = sigma n`` (axis times angle) becomes a matrix by Rodrigues' formula,
+    ``exp(w) = I + sin(theta) K + (1 - cos(theta)) K^2`` with ``theta = |w|`` and ``K`` the cross-product matrix of
+    the axis ``w / theta``; it multiplies on the left, turning the rotation in the world frame. At ``w = 0`` (an
+    exact effector, Lambda = 0) there is no axis: the answer is ``R`` itself.
+
+    Parameters
+    ----------
+    R : ndarray, shape (N, 3, 3)
+        The effectors' target world rotations.
+    n : ndarray, shape (N, 3)
+        Standard normal draws.
+    lam : ndarray, shape (N,)
+        Tolerances Lambda in [0, 1].
+
+    Returns
+    -------
+    ndarray, shape (N, 3, 3)
+    """
+    import numpy as np
+
+    sigma_m, eta = 0.1, 13
+    R, n, lam = (np.asarray(x, dtype=float) for x in (R, n, lam))
+    w = sigma_m * lam[:, None] ** eta * n
+    out = R.copy()
+    for i, wi in enumerate(w):
+        theta = np.linalg.norm(wi)
+        if theta == 0.0:          # no noise: the rotation as it is
+            continue
+        k = wi / theta
+        K = np.array([[0.0, -k[2], k[1]],
+                      [k[2], 0.0, -k[0]],
+                      [-k[1], k[0], 0.0]])
+        out[i] = (np.eye(3) + np.sin(theta) * K + (1 - np.cos(theta)) * K @ K) @ R[i]
+    return out
 
 
 def exercise_centroid(kind, value, lam):

@@ -1,4 +1,12 @@
-"""Checkers for ``notebooks/05_protores.ipynb``."""
+"""Checkers for ``notebooks/05_protores.ipynb``.
+
+Section 2 writes the proto-residual step and section 1 states the tolerance's noise scale; the exercises build what
+section 4 only names: the look-at loss's angle, accurate at 0 and pi where the training loss clamps its arccos
+(exercise 1), and the noise model of a rotation effector, a rotation vector turned into a matrix by Rodrigues'
+formula, finite at sigma = 0 (exercise 2). Exercise 3 (the centroid) is kept. Each checker starts with a generic
+case, accepts float32 answers, and refuses an answer that calls the posekit function it is compared against or
+changes its inputs.
+"""
 
 from __future__ import annotations
 
@@ -8,54 +16,163 @@ from ._check import flat, report
 from ._judge import judged
 
 
+# -- exercise 1: the look-at angle, accurate at 0 and pi ------------------------------------------------------------
+
+def look_at_angle_reference(R, v, t, p):
+    """What :func:`check_look_at_angle` expects: the angle (radians, (N,)) between the joint's world direction
+    ``R v`` and the direction to the target ``t - p``, as ``atan2(|a x b|, a . b)`` (accurate at every angle)."""
+    R, v, t, p = (np.asarray(x, dtype=float) for x in (R, v, t, p))
+    a = np.einsum("nij,nj->ni", R, v)
+    b = t - p
+    return np.arctan2(np.linalg.norm(np.cross(a, b), axis=-1), np.einsum("ni,ni->n", a, b))
+
+
+def _turned(a, angle, rng):
+    """``a`` turned by ``angle`` about an axis perpendicular to it."""
+    axis = np.cross(a, rng.normal(size=3))
+    axis /= np.linalg.norm(axis)
+    return np.cos(angle) * a + np.sin(angle) * np.cross(axis, a) + (1 - np.cos(angle)) * (axis @ a) * axis
+
+
 @judged
-def check_prototype_step(my_step) -> bool:
-    """Check ``my_step(b (N, d), f (N, d), e_prev (N, d), r) -> (e (N, d), p (d,), x_next (N, d))``: one block of
-    Eq. 2 after its layers — ``e = e_prev + f``, the prototype ``p = mean_i e_i``, ``x_next = relu(b - p / r)``
-    (:class:`posekit.models.protores.networks.ProtoResEncoder`)."""
-    rng = np.random.default_rng(6)
+def check_look_at_angle(my_angle) -> bool:
+    """Check ``my_angle(R (N, 3, 3), v (N, 3), t (N, 3), p (N, 3)) -> (N,)``: the look-at loss's angle of section 4
+    between ``R v`` (the joint's local direction ``v`` turned by its world rotation ``R``) and ``t - p``, in
+    radians, accurate to 1e-9 rad also at angles near 0 and pi (:func:`look_at_angle_reference`)."""
+    from ..rotations import quat_to_matrix, random_rotations
+
+    rng = np.random.default_rng(8)
     cases = []
 
-    def describe(got, exp):
-        i = int(np.argmax(np.abs(got - exp)))
-        return f"entry {i}: got {got.ravel()[i]:.4g}, expected {exp.ravel()[i]:.4g}; p / r, mean over effectors?"
-    for N, d, r, dtype in ((3, 4, 1, float), (7, 5, 2, float), (1, 6, 3, float), (4, 3, 5, np.float32)):
-        b, f, e0 = (rng.normal(size=(N, d)).astype(dtype) for _ in range(3))
-        e = e0.astype(float) + f
-        p = e.mean(0)
-        cases.append(((b, f, e0, r), np.concatenate([e.ravel(), p, np.maximum(b - p / r, 0).ravel()]), describe))
+    def describe_for(R, v, t, p, what=""):
+        R, v, t, p = (np.asarray(x, dtype=float) for x in (R, v, t, p))
+        a, b = np.einsum("nij,nj->ni", R, v), t - p
+        cos = np.einsum("ni,ni->n", a, b) / (np.linalg.norm(a, axis=-1) * np.linalg.norm(b, axis=-1))
+        slips = {
+            "R^T v: v is in the joint's frame, R turns it into the world's (R v)":
+                look_at_angle_reference(np.swapaxes(R, -1, -2), v, t, p),
+            "the target itself, not the direction from the joint to it (t - p)":
+                look_at_angle_reference(R, v, t, np.zeros_like(p)),
+            "degrees: the loss is in radians": np.degrees(look_at_angle_reference(R, v, t, p)),
+        }
 
-    def both(*a):
-        e, p, x = my_step(*a)
-        return flat(e, p, x)
-    from ..models.protores.networks import ProtoResEncoder
+        def describe(got, exp):
+            i = int(np.argmax(np.where(np.isfinite(got), np.abs(got - exp), np.inf)))
+            said = f"effector {i}: got {got[i]:.6g} rad, expected {exp[i]:.6g}{what}"
+            if not np.isfinite(got[i]):
+                return said + ": not finite — a cosine a hair above 1 (or below -1) has no arccos"
+            for why, wrong in slips.items():
+                if np.allclose(got, wrong, atol=1e-6):
+                    return said + ": " + why
+            if np.isclose(got[i], np.arccos(np.clip(cos[i], -1, 1)), atol=1e-12, rtol=0) or exp[i] < 1e-6 \
+                    or np.pi - exp[i] < 1e-6:
+                return (said + ": near 0 and pi arccos loses digits (its slope is infinite there); "
+                        "atan2(|a x b|, a . b) keeps them")
+            return said + ": the angle between R v and t - p, both of any length?"
+        return describe
 
-    return report("check_prototype_step", both, cases, atol=1e-9, forbid=(ProtoResEncoder.forward,),
-                  arg_names=("b", "f", "e_prev", "r"))
+    def case(R, v, t, p, what=""):
+        cases.append(((R, v, t, p), look_at_angle_reference(R, v, t, p), describe_for(R, v, t, p, what)))
+    N = 6  # generic: any directions, v of any length, targets metres away
+    R, v, p = quat_to_matrix(random_rotations(N, rng)), rng.normal(size=(N, 3)), rng.normal(size=(N, 3))
+    case(R, v, p + rng.normal(size=(N, 3)) * 2.0, p)
+    R = quat_to_matrix(random_rotations(5, rng))   # angles of 0, 3e-8, 2e-6, pi - 3e-8 and pi
+    v = rng.normal(size=(5, 3)) * np.array([[1.0], [0.3], [2.0], [1.0], [0.5]])
+    a = np.einsum("nij,nj->ni", R, v)
+    p = rng.normal(size=(5, 3))
+    d = np.stack([a[0] * 4.0, _turned(a[1], 3e-8, rng) * 10.0, _turned(a[2], 2e-6, rng) * 0.2,
+                  _turned(a[3], np.pi - 3e-8, rng) * 3.0, -a[4] * 7.0])
+    case(R, v, p + d, p, " (angles near 0 and pi)")
+    R, v, p = quat_to_matrix(random_rotations(1, rng)), rng.normal(size=(1, 3)), rng.normal(size=(1, 3))
+    case(R, v, p + rng.normal(size=(1, 3)), p, " (one effector)")
+    R, v, p = quat_to_matrix(random_rotations(4, rng)), rng.normal(size=(4, 3)), rng.normal(size=(4, 3))
+    t = p + rng.normal(size=(4, 3))
+    case(*(x.astype(np.float32) for x in (R, v, t, p)), " (float32)")
+    return report("check_look_at_angle", my_angle, cases, atol=1e-9, forbid=(look_at_angle_reference,),
+                  arg_names=("R", "v", "t", "p"))
+
+
+# -- exercise 2: a rotation effector's noise ----------------------------------------------------------------------
+
+def rotation_noise_reference(R, n, lam):
+    """What :func:`check_rotation_noise` expects: ``exp([sigma n]_x) R`` with ``sigma = sigma_M lam^eta`` (Rodrigues'
+    formula, the rotation vector applied in the world frame, on the left), ``R`` itself where ``sigma n = 0``."""
+    from ..models.protores.networks import ETA, SIGMA_M
+
+    R, n, lam = (np.asarray(x, dtype=float) for x in (R, n, lam))
+    w = SIGMA_M * lam[:, None] ** ETA * n
+    theta = np.linalg.norm(w, axis=-1)
+    out = R.copy()
+    for i in np.nonzero(theta > 0)[0]:
+        k = w[i] / theta[i]
+        K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+        E = np.eye(3) + np.sin(theta[i]) * K + (1 - np.cos(theta[i])) * K @ K
+        out[i] = E @ R[i]
+    return out
 
 
 @judged
-def check_tolerance_weight(my_weight) -> bool:
-    """Check ``my_weight(lam (K,)) -> (sigma (K,), weight (K,))``: the noise scale ``sigma = sigma_M Lambda^eta``
-    (sigma_M = 0.1, eta = 13) and the loss weight ``min(W_M, 1 / sigma)`` (W_M = 1000; an exact effector,
-    sigma = 0, gets W_M)."""
+def check_rotation_noise(my_noise) -> bool:
+    """Check ``my_noise(R (N, 3, 3), n (N, 3), lam (N,)) -> (N, 3, 3)``: section 4's noise model of a rotation
+    effector, ``exp(sigma n) R`` with ``sigma = sigma_M Lambda^eta`` (sigma_M = 0.1, eta = 13) and ``exp`` the
+    rotation by the vector ``sigma n`` (axis times angle, radians) in the world frame
+    (:func:`rotation_noise_reference`)."""
+    from ..models.protores.data import add_noise, axis_angle_matrix
     from ..models.protores.networks import ETA, SIGMA_M, tolerance_to_sigma
+    from ..rotations import axis_angle_to_quat, quat_to_matrix, random_rotations
 
-    def describe(got, exp):
-        i = int(np.argmax(np.abs(got - exp) / (np.abs(exp) + 1e-12)))
-        return f"entry {i}: got {got[i]:.6g}, expected {exp[i]:.6g}; sigma_M * lam**eta, and min(W_M, 1/sigma)?"
+    rng = np.random.default_rng(9)
     cases = []
-    for lam in (np.array([0.0, 0.5, 1.0]), np.linspace(0, 1, 11), np.array([0.7, 0.75, 0.9]),
-                np.array([0.0, 0.0]), np.array([0.6, 0.95], np.float32)):  # exact effectors only; float32
-        s = SIGMA_M * lam.astype(float) ** ETA
-        with np.errstate(divide="ignore"):
-            w = np.minimum(1000.0, 1.0 / s)
-        cases.append(((lam,), np.concatenate([s, w]), describe))
 
-    def both(lam):
-        s, w = my_weight(lam)
-        return flat(s, w)
-    return report("check_tolerance_weight", both, cases, atol=1e-9, forbid=(tolerance_to_sigma,), arg_names=("lam",))
+    def describe_for(R, n, lam, what=""):
+        R, n, lam = (np.asarray(x, dtype=float) for x in (R, n, lam))
+        slips = {
+            "turned in the joint's frame (R exp): the noise turns the world rotation, exp(sigma n) R":
+                R @ rotation_noise_reference(np.broadcast_to(np.eye(3), R.shape), n, lam),
+            "turned the other way: [k]_x is the cross-product matrix, [k]_x u = k x u":
+                rotation_noise_reference(R, -n, lam),
+            "sigma = sigma_M Lambda, the power eta = 13 forgotten": _noise_with_sigma(R, n, SIGMA_M * lam),
+            "n not scaled by sigma": _noise_with_sigma(R, n, np.ones_like(lam)),
+        }
+
+        def describe(got, exp):
+            err = np.abs(got - exp).max(axis=(1, 2))
+            i = int(np.argmax(np.where(np.isfinite(err), err, np.inf)))
+            sigma = SIGMA_M * lam[i] ** ETA
+            said = f"effector {i} (Lambda {lam[i]:g}, sigma {sigma:.3g}) is off by {err[i]:.3g}{what}"
+            if not np.all(np.isfinite(got[i])):
+                return said + ": not finite — at sigma n = 0 there is no axis; the rotation is R itself"
+            for why, wrong in slips.items():
+                if np.allclose(got, wrong, atol=1e-7) and not np.allclose(wrong, exp, atol=1e-7):
+                    return said + ": " + why
+            return said + ": exp(sigma n) = I + sin(theta) K + (1 - cos(theta)) K^2, K = [n / |n|]_x, theta = sigma |n|?"
+        return describe
+
+    def case(R, n, lam, what=""):
+        cases.append(((R, n, lam), rotation_noise_reference(R, n, lam), describe_for(R, n, lam, what)))
+    N = 6  # generic: loose effectors, noise of a few degrees
+    case(quat_to_matrix(random_rotations(N, rng)), rng.normal(size=(N, 3)), rng.uniform(0.9, 1.0, N))
+    case(quat_to_matrix(random_rotations(3, rng)), rng.normal(size=(3, 3)), np.array([0.0, 0.0, 0.95]),
+         " (Lambda = 0: exact, no noise)")
+    case(quat_to_matrix(random_rotations(2, rng)), rng.normal(size=(2, 3)), np.array([0.5, 0.7]),
+         " (tiny sigma)")
+    n = rng.normal(size=(2, 3))
+    n *= (np.array([3.0, 3.1]) / SIGMA_M / np.linalg.norm(n, axis=-1))[:, None]  # turns of 3 and 3.1 rad
+    case(quat_to_matrix(random_rotations(2, rng)), n, np.ones(2), " (Lambda = 1, turns near pi)")
+    case(quat_to_matrix(random_rotations(3, rng)).astype(np.float32), rng.normal(size=(3, 3)).astype(np.float32),
+         rng.uniform(0.9, 1.0, 3).astype(np.float32), " (float32)")
+    return report("check_rotation_noise", my_noise, cases, atol=1e-9,
+                  forbid=(axis_angle_matrix, add_noise, tolerance_to_sigma, axis_angle_to_quat,
+                          rotation_noise_reference),
+                  arg_names=("R", "n", "lam"))
+
+
+def _noise_with_sigma(R, n, sigma):
+    """``exp(sigma n) R`` for a given ``sigma`` (the describe's slips)."""
+    from ..models.protores.networks import ETA, SIGMA_M
+
+    lam = (np.asarray(sigma, float) / SIGMA_M) ** (1.0 / ETA)
+    return rotation_noise_reference(R, n, lam)
 
 
 @judged
@@ -82,3 +199,6 @@ def check_centroid(my_centroid) -> bool:
         cases.append(((kind, value, lam), exp, describe))
     return report("check_centroid", lambda *a: flat(my_centroid(*a)), cases, atol=1e-9,
                   forbid=(centroid,), arg_names=("kind", "value", "lam"))
+
+
+__all__ = ["check_look_at_angle", "check_rotation_noise", "check_centroid"]

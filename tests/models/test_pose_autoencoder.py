@@ -194,7 +194,7 @@ def test_shipped_weights_are_marked_and_beat_fabrik_from_another_clip(mini):
 
 
 def test_exercise_checkers_accept_right_and_refuse_wrong_answers(capsys):
-    from posekit.exercises import check_pose_vector, check_solver_loss, check_tied_decoder
+    from posekit.exercises import check_authors_loss, check_pose_from_vector, check_pose_vector
     from posekit.transforms import to_root_space
 
     from posekit.data.metrics import body_joints
@@ -208,15 +208,19 @@ def test_exercise_checkers_accept_right_and_refuse_wrong_answers(capsys):
     def bandai_only(s, p):  # "the helper root is joint 0": true of Bandai's skeleton, not of another one
         return to_root_space(s, p[None])[0][0][1:].reshape(-1)
 
-    relu = lambda a: np.maximum(a, 0)  # noqa: E731
+    from posekit.data.pose_vectors import poses_from_vectors
+
     assert check_pose_vector(right_vector) and not check_pose_vector(wrong_vector)
     assert not check_pose_vector(bandai_only)
-    assert check_tied_decoder(lambda z, w1, w2, w3: relu(relu(z @ w3) @ w2) @ w1)
-    assert not check_tied_decoder(lambda z, w1, w2, w3: relu(relu(relu(z @ w3) @ w2) @ w1))
-    cols_mse = lambda d, t, c, k: (((d - t)[:, c]) ** 2).mean() + k * (np.delete(d - t, c, axis=1) ** 2).mean()  # noqa
-    assert check_solver_loss(cols_mse) and not check_solver_loss(lambda d, t, c, k: ((d - t) ** 2).mean())
+    assert not check_pose_from_vector(lambda s, x, o, a: poses_from_vectors(s, x[None], o[None], np.array([a]))[0])
+
+    def weighted(d, t, c, w):
+        m = np.ones(d.shape[1])
+        m[list(c)] = w
+        return (m * (d - t) ** 2).mean(), 2 * m * (d - t) / d.size, (d.shape[1] - len(c)) / (w * len(c))
+    assert check_authors_loss(weighted) and not check_authors_loss(lambda d, t, c, w: weighted(d, t, c, 1.0))
     out = capsys.readouterr().out
-    assert out.count("✓") == 3 and out.count("✗") == 4
+    assert out.count("✓") == 2 and out.count("✗") == 4
 
 
 def test_solver_panel_shows_a_refusal_and_keeps_the_other_views(mini):
