@@ -10,6 +10,10 @@ writes ``data_samples/results/protores_ablation.json`` (read by ``posekit bench 
   the shipped benchmarks, with the shipped ProtoRes (a user's hour of two cores) beside them.
 * **Width** — ProtoRes of widths 64, 128 (the ablations' reference run) and 256, the same :data:`STEPS`
   steps: parameters, seconds per step, one-pose time on one thread, and the benchmarks' errors.
+* **Seeds** (``--seeds``, :func:`run_seeds`) — the ablations' reference setting (width 128, :data:`STEPS` steps)
+  trained with :data:`SEEDS` seeds and nothing else changed, written to ``data_samples/results/protores_seeds.json``:
+  how far two training runs of one setting differ, the yardstick lesson 05 reads every ordering against
+  (:func:`seed_spread`).
 * **Scaling** (``--scaling``, :func:`run_scaling`) — the widths × step counts of :data:`SCALING_GRID`, each a
   full run with its own schedule (warm-up, cosine decay over its own steps), plus the shipped network
   (width 256, 20,000 steps on two processes): error against training compute (parameters × poses seen),
@@ -32,12 +36,14 @@ from ...learn.trainers import register_trainer
 from ...plugins import arg
 from ...provenance import machine, today
 
-__all__ = ["ABLATIONS", "WIDTHS", "STEPS", "SCALING_GRID", "run_studies", "run_scaling", "studies_path",
-           "scaling_path", "score_net", "refresh_shipped"]
+__all__ = ["ABLATIONS", "WIDTHS", "STEPS", "SEEDS", "SCALING_GRID", "run_studies", "run_scaling", "run_seeds",
+           "seed_spread", "studies_path", "scaling_path", "seeds_path", "score_net", "refresh_shipped"]
 
 ABLATIONS = {"no GPD": {"gpd": False}, "fixed weights": {"weighted": False}}
 WIDTHS = (64, 128, 256)
 STEPS = 2000
+SEEDS = (0, 1, 2)
+"""The seeds of the seed study: three runs, three pairs."""
 SCALING_GRID = tuple((w, s) for w in (64, 128) for s in (500, 1000, 2000, 4000)) + ((128, 8000),) + tuple(
     (256, s) for s in (500, 1000, 2000))
 """(width, steps) of the scaling study, each one process of one thread; width 128 goes on to 8,000 steps (the
@@ -55,6 +61,13 @@ def scaling_path():
     from ...paths import samples_dir
 
     return samples_dir() / "results" / "protores_scaling.json"
+
+
+def seeds_path():
+    """``data_samples/results/protores_seeds.json``: the seed study (:func:`run_seeds`)."""
+    from ...paths import samples_dir
+
+    return samples_dir() / "results" / "protores_seeds.json"
 
 
 def score_net(net, motions=None) -> dict:
@@ -205,6 +218,35 @@ def run_studies(seed: int = 0, out=None, workers: int = 2, progress: bool = True
     return res
 
 
+def run_seeds(seeds=SEEDS, out=None, workers: int = 2, width: int = 128, steps: int = STEPS) -> dict:
+    """Train and score the reference setting once per seed (see the module docstring); write the JSON
+    (``out=False``: none)."""
+    from ...learn.distributed import current
+
+    t0 = time.perf_counter()
+    rows = _pool_map([(f"width {width}, seed {s}", {"width": width}, {"steps": steps}, s) for s in seeds], workers)
+    for r, s in zip(rows, seeds):
+        r["seed"] = s
+    res = {"rows": rows, "width": width, "steps": steps, "seeds": list(seeds), "seconds": round(time.perf_counter() - t0),
+           "command": f"posekit train protores-studies --seeds {','.join(map(str, seeds))}", "date": today(),
+           "machine": machine()}
+    if out is not False and current().main:
+        path = seeds_path() if out is None else out
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(res, indent=1) + "\n")
+    return res
+
+
+def seed_spread(rows, key: str) -> float:
+    """The largest relative difference of ``key`` (a lower-is-better error) between two of the seed study's runs:
+    ``max |a - b| / min(a, b)`` over every pair (:func:`posekit.evaluation.measures.run_spread`)."""
+    from itertools import combinations
+
+    from ...evaluation.measures import run_spread
+
+    return run_spread(*((a[key], b[key]) for a, b in combinations(rows, 2)))
+
+
 def _cli(args) -> int:
     """``posekit train protores-studies``."""
     from pathlib import Path
@@ -213,6 +255,16 @@ def _cli(args) -> int:
         row = refresh_shipped()
         print(f"the shipped ProtoRes ({row['command']}): random L_ikd-L2 {row['random_ikd_l2_e3']:.3f}e-3 m^2, "
               f"5-point {row['5point_ikd_l2_e3']:.3f}e-3; wrote {studies_path()} and {scaling_path()}")
+        return 0
+    if args.seeds:
+        seeds = tuple(int(s) for s in args.seeds.split(",") if s.strip())
+        out = Path(args.out) if args.out else seeds_path()
+        res = run_seeds(seeds, out=out, workers=args.workers)
+        for r in res["rows"]:
+            print(f"{r['method']:<22} random L_ikd-L2 {r['random_ikd_l2_e3']:.3f}e-3 m^2, 5-point "
+                  f"{r['5point_ikd_l2_e3']:.3f}e-3; world joint {r['random_mpjpe_mm']:.1f} / {r['5point_mpjpe_mm']:.1f} mm; "
+                  f"{r['train_min']} min")
+        print(f"wrote {out} in {res['seconds']} s")
         return 0
     if args.scaling:
         out = Path(args.out) if args.out else scaling_path()
@@ -245,6 +297,10 @@ register_trainer(
           arg("--scaling", action="store_true",
               help="the scaling study instead: widths x step counts, the longest study (its time is the file's "
                    "seconds), written to data_samples/results/protores_scaling.json"),
+          arg("--seeds", default=None, metavar="S,S,...",
+              help="the seed study instead: the reference setting (width 128, 2,000 steps) once per seed, "
+                   "written to data_samples/results/protores_seeds.json (lesson 05's yardstick; about 15 minutes "
+                   "on 2 cores for 0,1,2)"),
           arg("--shipped", action="store_true",
               help="no training: score the shipped ProtoRes again into both files' shipped row (after new weights)"),
           arg("--out", default=None, help="JSON file (default data_samples/results/protores_ablation.json, or "
