@@ -196,13 +196,16 @@ PROTORES_COLUMNS = ["method", "width", "steps", "5point_ikd_l2_e3", "5point_loc_
 
 
 def _protores(name: str, d: dict) -> str:
-    what = ("ProtoRes and its ablations (Table 2 of Oreshkin et al. 2022), short runs at CPU scale, scored on "
-            "lesson 05's 5-point and random benchmarks" if "scaling" not in name else
-            "ProtoRes's scaling curve: widths and step counts, scored on lesson 05's benchmarks")
+    what = ("ProtoRes's scaling curve: widths and step counts, scored on lesson 05's benchmarks" if "scaling" in name
+            else "ProtoRes's reference setting of the studies (width 128, 2,000 steps) once per seed, nothing else "
+            "changed: how far runs that differ only in their seed differ, the yardstick lesson 05 reads every "
+            "ordering of a network against" if "seeds" in name else
+            "ProtoRes and its ablations (Table 2 of Oreshkin et al. 2022), short runs at CPU scale, scored on "
+            "lesson 05's 5-point and random benchmarks")
     parts = [what + ". Column names are the file's keys; lesson 05 defines each measure.", _provenance(name, d),
              _table(*_indexed(d, "rows")[:1], PROTORES_COLUMNS + (["compute"] if "scaling" in name else []), None,
                     name, _indexed(d, "rows")[1])]
-    if d.get("width"):
+    if isinstance(d.get("width"), list):  # the seed study's "width" is its one width, not a study
         parts += ["The width study:", _table(d["width"], PROTORES_COLUMNS, None, name, _indexed(d, "width")[1])]
     return "\n\n".join(parts)
 
@@ -269,6 +272,7 @@ SECTIONS = [
     ("bench_protores.json", "ProtoRes: speed against the roofline", _protores_speed),
     ("protores_ablation.json", "ProtoRes: ablations and width", _protores),
     ("protores_scaling.json", "ProtoRes: scaling", _protores),
+    ("protores_seeds.json", "ProtoRes: runs that differ only in their seed", _protores),
     ("ae_scale_full.json", "Lesson 03 at full scale", _ae_scale),
     ("ae_scale_cross.json", "Lesson 03 across datasets", _ae_scale),
     ("nbgrader_autograde.json", "Autograding one submission of each lesson", _nbgrader),
