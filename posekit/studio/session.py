@@ -66,6 +66,10 @@ class StudioEffector:
         A rotation effector's world rotation as added.
     euler : ndarray, shape (3,), degrees
         Yaw, pitch, roll on top of ``base`` (rotation effectors).
+    tolerance : float or None
+        A tolerance of its own (metres or radians; an effector a lesson gave with one), else ``tolerance_of(lam)``.
+    weight : float
+        The :class:`~posekit.ik.api.Effector`'s weight.
     """
 
     joint: str
@@ -75,15 +79,21 @@ class StudioEffector:
     axis: np.ndarray | None = None
     base: np.ndarray | None = None
     euler: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    tolerance: float | None = None
+    weight: float = 1.0
+
+    def __getitem__(self, key):
+        """``e["target"]``: the field (the editor's rows were dicts)."""
+        return getattr(self, key)
 
     def effector(self, tolerance_of) -> Effector:
         """The :class:`~posekit.ik.api.Effector` a solver gets."""
-        tol = float(tolerance_of(self.lam, self.kind))
+        tol = float(tolerance_of(self.lam, self.kind) if self.tolerance is None else self.tolerance)
         if self.kind == "rotation":
-            return Effector(self.joint, self.rotation, "rotation", tolerance=tol)
+            return Effector(self.joint, self.rotation, "rotation", tolerance=tol, weight=self.weight)
         if self.kind == "look_at":
-            return Effector(self.joint, self.target, "look_at", tolerance=tol, axis=self.axis)
-        return Effector(self.joint, self.target, "position", tolerance=tol)
+            return Effector(self.joint, self.target, "look_at", tolerance=tol, weight=self.weight, axis=self.axis)
+        return Effector(self.joint, self.target, "position", tolerance=tol, weight=self.weight)
 
     @property
     def rotation(self) -> np.ndarray:
@@ -98,6 +108,10 @@ class StudioEffector:
                 d[key] = np.asarray(getattr(self, key), float).tolist()
         if self.kind == "rotation":
             d["euler"] = np.asarray(self.euler, float).tolist()
+        if self.tolerance is not None:
+            d["tolerance"] = float(self.tolerance)
+        if self.weight != 1.0:
+            d["weight"] = float(self.weight)
         return d
 
 
@@ -172,7 +186,9 @@ class PosingSession:
         self.history, self.notes, self.position = [self.setup()], [{}], 0
 
     def _row_of(self, e: Effector) -> dict:
-        row = {"joint": e.joint, "kind": e.kind, "target": e.target}
+        row = {"joint": e.joint, "kind": e.kind, "target": e.target, "weight": e.weight}
+        if e.tolerance is not None and tolerance_given(e):
+            row["tolerance"] = e.tolerance
         if e.axis is not None:
             row["axis"] = e.axis
         return row
@@ -411,6 +427,18 @@ class PosingSession:
         self._restore("redo")
         return True
 
+    def revert_to(self, position: int):
+        """Go back to step ``position`` and forget the steps after it (a drag cancelled with Escape: nothing of it is
+        left to redo); solve."""
+        if not 0 <= position <= self.position:
+            raise ValueError(f"no step {position} to go back to (at step {self.position})")
+        if position == self.position and self.setup() == self.history[position]:
+            return
+        self.position = position
+        del self.history[position + 1:]
+        del self.notes[position + 1:]
+        self._restore("cancel")
+
     def _restore(self, what):
         self._set_rows(self._checked(self.history[self.position]))
         self._last_move = (None, -np.inf)
@@ -488,6 +516,15 @@ class PosingSession:
                 raise ValueError(f"effector {k + 1}: {err}") from None
             if kind == "rotation" and r.get("euler") is not None:
                 e.euler = np.asarray(r["euler"], float)
+            for key in ("tolerance", "weight"):
+                if r.get(key) is not None:
+                    try:
+                        v = float(r[key])
+                    except (TypeError, ValueError):
+                        v = np.nan
+                    if not (np.isfinite(v) and v >= 0):
+                        raise ValueError(f"effector {k + 1} on {j}: {key!r} must be a number >= 0, got {r[key]!r}")
+                    setattr(e, key, v)
             out.append(e)
         return out
 
@@ -525,6 +562,13 @@ class PosingSession:
         """The summary table's rows (:func:`~posekit.studio.status.summary_rows`): with no effectors each solver's
         row says nothing was solved."""
         return summary_rows({n: self.solved.get(n, Solved()) for n in self.solvers}, self.effectors)
+
+
+def tolerance_given(e: Effector) -> bool:
+    """Whether ``e`` carries a tolerance of its own, not the kind's default (:data:`~posekit.ik.api.DEFAULT_TOLERANCE`)."""
+    from ..ik.api import DEFAULT_TOLERANCE
+
+    return e.tolerance != DEFAULT_TOLERANCE.get(e.kind.replace("-", "_"))
 
 
 def _body(skeleton) -> list:

@@ -20,6 +20,11 @@ view — the elements that carry the CSS class :attr:`PageWatch.scope` (its canv
    Home, End) are held back and then given to that handle, in order. A handle with no successor within 5 s (its
    view was closed, not swapped) is forgotten, and the page's keys are the page's again.
 
+3. **Keys of the view.** Escape while a drag is held sends ``{"event": "cancel"}`` (the drag goes back to where it
+   started); Ctrl+Z and Ctrl+Shift+Z (or Ctrl+Y) with the focus inside :attr:`PageWatch.keys_scope` (the studio),
+   outside a text box, send ``undo`` and ``redo``; arrow keys in the view's joint list stay in the list (in
+   JupyterLab they would also move to the next cell).
+
 A page without the script (a front end without anywidget) still ends a drag with the canvas' ``mouseup`` picker.
 """
 
@@ -99,7 +104,34 @@ function initialize({ model }) {
                                                           bubbles: true, cancelable: true }));
     }
   };
+  // 3. keys of the view: Escape cancels a held drag; Ctrl+Z / Ctrl+Shift+Z (Ctrl+Y) undo and redo with the focus
+  // anywhere in the keys' scope (the studio), but not in a text box; the joint list's keys stay in the list
+  const typing = (node) => node instanceof Element && node.closest("input[type=text], input:not([type]), textarea");
+  const inKeysScope = (node) => model.get("keys_scope") !== "" && node instanceof Element
+    && node.closest("." + model.get("keys_scope")) !== null;
+  const viewKey = (e) => {
+    if (e.key === "Escape" && held) {
+      e.preventDefault();
+      e.stopPropagation();
+      held = false;
+      model.send({ event: "cancel" });
+      return true;
+    }
+    const z = e.key === "z" || e.key === "Z", y = e.key === "y" || e.key === "Y";
+    if ((e.ctrlKey || e.metaKey) && !e.altKey && (z || y) && inKeysScope(e.target) && !typing(e.target)) {
+      e.preventDefault();
+      e.stopPropagation();
+      model.send({ event: (e.shiftKey || y) ? "redo" : "undo" });
+      return true;
+    }
+    if (SLIDER_KEYS.has(e.key) && e.target instanceof Element && e.target.tagName === "SELECT" && inScope(e.target)) {
+      e.stopPropagation();  // the list's arrows are the list's: never the notebook's (JupyterLab's next cell)
+      return true;
+    }
+    return false;
+  };
   const key = (e) => {
+    if (viewKey(e)) return;
     if (!SLIDER_KEYS.has(e.key) || e.altKey || e.ctrlKey || e.metaKey || !lost()) return;
     e.preventDefault();
     e.stopPropagation();
@@ -138,17 +170,27 @@ class PageWatch(anywidget.AnyWidget):
         Set by the kernel: *drag in 3D* is on, so a press on the canvas may start a drag.
     holding : bool
         Set by the kernel: it holds a drag (``DragTargets.dragging``).
+    keys_scope : str
+        A CSS class (the studio's ``posekit-studio``): with the focus inside it, Ctrl+Z and Ctrl+Shift+Z are sent
+        as ``undo`` and ``redo`` (:meth:`on_key`); empty: not watched.
     """
 
     _esm = _ESM
     scope = traitlets.Unicode("").tag(sync=True)
     armed = traitlets.Bool(False).tag(sync=True)
     holding = traitlets.Bool(False).tag(sync=True)
+    keys_scope = traitlets.Unicode("").tag(sync=True)
 
     def __init__(self, scope: str, **kwargs):
         super().__init__(scope=scope, **kwargs)
         self._release_callbacks = []
+        self._key_callbacks = {"cancel": [], "undo": [], "redo": []}
         self.on_msg(self._on_page_message)
+
+    def on_key(self, event: str, callback):
+        """Call ``callback()`` when the page says ``event``: ``"cancel"`` (Escape during a held drag), ``"undo"``
+        (Ctrl+Z) or ``"redo"`` (Ctrl+Shift+Z, Ctrl+Y) with the focus inside :attr:`keys_scope`."""
+        self._key_callbacks[event].append(callback)
 
     def on_release(self, callback):
         """Call ``callback()`` whenever the page says the mouse button was let go (or the window lost focus) after a
@@ -156,6 +198,9 @@ class PageWatch(anywidget.AnyWidget):
         self._release_callbacks.append(callback)
 
     def _on_page_message(self, _, content, buffers):
-        if isinstance(content, dict) and content.get("event") == "release":
+        event = content.get("event") if isinstance(content, dict) else None
+        if event == "release":
             for callback in self._release_callbacks:
                 callback()
+        for callback in self._key_callbacks.get(event, ()):
+            callback()

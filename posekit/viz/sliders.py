@@ -76,9 +76,9 @@ class TargetSliders:
                                     layout=w.Layout(display="none"))
         self.handle_choice.observe(lambda ch: self._sync_sliders(recentre=True), names="value")
 
-    def _forget_replaced_sliders(self):
+    def settle(self):
         """Close the replaced slider sets at once, for a view that no browser has shown yet (an editor or a studio
-        just built): no press can be on its way from them."""
+        just built, :class:`~posekit.viz.EffectorEditor`): no press can be on its way from them."""
         for old in self._old_sliders if self._controls_made else ():
             for s in old:
                 self._browser_value.pop(s.model_id, None)

@@ -134,11 +134,10 @@ def app_studio(data: str | None = None, solvers=None, export_dir=None):
         first = ["fabrik", "dls"]
     studio = PosingStudio(skeleton, start, first, effectors, available=available,
                           tolerance_of=tolerance_of, own_folder=True,
-                          export_dir=session_folder() if export_dir is None else export_dir)
+                          export_dir=session_folder() if export_dir is None else export_dir,
+                          selected=skeleton.names[skeleton.index(effectors[0].joint)])
     for v in studio.editor.viewers.values():
         v.set_ghost(goal)
-    studio.editor.first.select(skeleton.names[skeleton.index(effectors[0].joint)])
-    studio.editor.first._forget_replaced_sliders()  # not shown yet: no press can come from the sliders replaced
     return studio, refused
 
 
@@ -233,20 +232,23 @@ def kept_label(editor):
     label = widget(HTML)
     label.counts = {}
 
-    def count(*_):
-        for name, res in editor.results.items():
+    def count():
+        if not editor.session.effectors:  # nothing was solved: nothing to count
+            return
+        for name, res in editor.session.results.items():
             info = getattr(res, "info", None) or {}
             if "learned_ms" not in info:  # not an exact finish (or the solver refused)
                 continue
             kept, total = label.counts.setdefault(name, [0, 0])
             label.counts[name] = [kept + (info.get("kept") != "start"), total + 1]
         parts = [f"{n} kept the learned pose in {k} of {t} solves" for n, (k, t) in label.counts.items()]
-        unjudged = [n for n in label.counts if getattr(editor.solvers.get(n), "choose", "natural") != "natural"]
+        unjudged = [n for n in label.counts if getattr(editor.session.solvers.get(n), "choose", "natural") != "natural"]
         why = ("the more natural answer" if not unjudged else "the answer kept (" + ", ".join(unjudged)
                + ": no naturalness comparison, no training poses of this skeleton)")
         label.value = ("<small>Exact finish: " + html.escape("; ".join(parts) + f" (in the others DLS from the "
                        f"start pose gave {why}: the learned pose was discarded)") + "</small>") if parts else ""
 
     count()
-    editor.on_change(count)
+    # the session's changes, which outlive the editor a solver change replaces; a selection solves nothing
+    editor.session.on_change(lambda what, _: what != "select" and count())
     return label
