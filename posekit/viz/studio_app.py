@@ -32,8 +32,15 @@ from pathlib import Path
 
 from ..paths import EXPORTS as _EXPORTS, exports_dir
 
-__all__ = ["SOLVERS", "VOILA_PATH", "VOILA_TEMPLATE", "EXPORTS", "studio_case", "usable_solvers", "session_folder",
-           "app_studio", "refused_note", "app_page", "data_line", "kept_label"]
+__all__ = ["SOLVERS", "STUDIO_POOL", "VOILA_PATH", "VOILA_TEMPLATE", "EXPORTS", "studio_case", "usable_solvers",
+           "session_folder", "app_studio", "refused_note", "app_page", "data_line", "kept_label"]
+
+STUDIO_POOL = 3
+"""Kernels ``make studio`` keeps preheated (Voila's pool: each has already run the page, so a visitor's first view
+waits for no kernel to start): sized for a class arriving at once, a small group at a time. Each costs its memory
+while it waits, about 0.25 GB (``posekit bench studio --sessions``: a kernel's RSS, docs/studio.md), so the default
+holds about 0.75 GB; ``make studio STUDIO_POOL=N`` sizes it for N (e.g. the class's size). ``posekit bench studio
+--visitors 3`` measures every visitor's first view with three at once."""
 
 VOILA_PATH = Path(__file__).parent / "voila"
 """A Jupyter data folder (for ``JUPYTER_PATH``) holding the studio's Voila page template, :data:`VOILA_TEMPLATE`."""
