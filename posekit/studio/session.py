@@ -378,6 +378,7 @@ class PosingSession:
         """Pose with these solvers (name -> solver) from now on; solve. Not an undo step."""
         self.solvers = dict(solvers)
         self.results, self.times, self.solved = {}, {}, {}
+        self._last_move = (None, -np.inf)  # a move after new solvers is a step of its own
         self.solve()
         self._tell("solvers", None)
 

@@ -44,7 +44,7 @@ def solver_views(skeleton, names, pose, truth=None, width: int = 300, height: in
         title = widget(w.HTML, f"<b>{html.escape(str(name))}</b>")
         title.add_class("posekit-view-title")
         boxes.append(widget(w.VBox, [title, v.renderer, labels[name]],
-                            layout=view_box_layout(width)))
+                            layout=view_box_layout(width, height)))
         boxes[-1].add_class("posekit-view")
     return viewers, labels, boxes
 

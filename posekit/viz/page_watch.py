@@ -141,6 +141,22 @@ function initialize({ model }) {
   const watcher = new MutationObserver(() => { if (last !== null && !last.isConnected) restore(); });
   watcher.observe(document.body, { childList: true, subtree: true });
 
+  // 4. shown after a change the page asked for (the studio's *compare*): the view's row scrolled into sight
+  if (model.get("reveal")) {
+    const started = performance.now();
+    const reveal = () => {
+      const here = document.querySelector(scope());
+      if (here === null || here.getBoundingClientRect().height === 0) {
+        if (performance.now() - started < GIVE_UP_MS) setTimeout(reveal, 50);
+        return;
+      }
+      const row = here.closest(".posekit-views") ?? here;
+      const box = row.getBoundingClientRect();
+      if (box.top < 0 || box.top > window.innerHeight - 100) row.scrollIntoView({ block: "start" });
+    };
+    reveal();
+  }
+
   const listeners = [["pointerdown", down, true], ["pointerup", end, true], ["pointercancel", end, true],
                      ["pointermove", end, true], ["blur", end, false], ["focusin", focusIn, true],
                      ["keydown", key, true]];
@@ -173,6 +189,9 @@ class PageWatch(anywidget.AnyWidget):
     keys_scope : str
         A CSS class (the studio's ``posekit-studio``): with the focus inside it, Ctrl+Z and Ctrl+Shift+Z are sent
         as ``undo`` and ``redo`` (:meth:`on_key`); empty: not watched.
+    reveal : bool
+        Set before the page shows the view: once shown, its row of views (``.posekit-views``, else the view) is
+        scrolled into sight if it is off the screen (the studio's new views after *compare*).
     """
 
     _esm = _ESM
@@ -180,6 +199,7 @@ class PageWatch(anywidget.AnyWidget):
     armed = traitlets.Bool(False).tag(sync=True)
     holding = traitlets.Bool(False).tag(sync=True)
     keys_scope = traitlets.Unicode("").tag(sync=True)
+    reveal = traitlets.Bool(False).tag(sync=True)
 
     def __init__(self, scope: str, **kwargs):
         super().__init__(scope=scope, **kwargs)

@@ -259,11 +259,13 @@ class PosingStudio(StudioExport, StudioTimeline):
         if self.session is None:
             self.session = PosingSession(self.skeleton, self.start, built, effectors, tolerance_of=self.tolerance_of)
             self.session.on_before_change(self._before_change)
-        if self.editor is not None:
+        replacing = self.editor is not None
+        if replacing:
             selected = self.editor.first.selected  # keep the joint the sliders move
             self.editor.close()
         editor = EffectorEditor(self.skeleton, built, self.start, session=self.session, width=w, height=h,
                                 selected=selected)
+        editor.first.page_watch.reveal = replacing  # after compare: the new views scrolled into sight
         editor.on_change(self._on_change)
         editor.keys_undo, editor.keys_redo = self.undo, self.redo  # Ctrl+Z anywhere in the studio: its undo
         editor.first.page_watch.keys_scope = "posekit-studio"
