@@ -548,3 +548,37 @@ def test_voila_shuts_its_kernel_down(page, server):
     assert alive == [], f"kernels still running after Voila stopped: {alive}"
     assert all(not k.is_running() or k.status() == "zombie" for k in kernels)
 
+
+
+def test_keyboard_only_the_list_passes_over_joints_and_ctrl_z_undoes_a_press(page):
+    """Issue 65, item 4: with the keyboard alone, arrow keys in the *selected* list pass over joints without adding
+    an effector or solving; a press on the selected joint's Y slider moves its target one step, Ctrl+Z (focus in
+    the studio) takes it back and Ctrl+Shift+Z does it again."""
+    joints = _joint_list(page)
+    joints.select_option("Hand_L")
+    kernel_round_trip(page, VIEWS)
+    n0, texts = update_number(page), _texts(page)
+    joints.focus()
+    for key in ("ArrowDown", "ArrowDown", "ArrowDown"):  # over the next joints
+        page.keyboard.press(key)
+        kernel_round_trip(page, VIEWS)
+    assert update_number(page) == n0 and _texts(page) == texts, "passing over joints solved: an effector was added"
+    joints.select_option("Hand_L")  # chosen: the sliders are the hand's
+    kernel_round_trip(page, VIEWS)
+    assert update_number(page) == n0
+    y0 = _status_rows(page)["target"][1]
+    handle = page.locator(VIEWS).locator(".posekit-target-y .noUi-handle").last
+    handle.focus()
+    page.keyboard.press("ArrowUp")
+    _wait_update(page, n0, "the press's solve")
+    wait_for(lambda: abs(_status_rows(page)["target"][1] - (y0 + 0.001)) < 2e-4 or None, 60, "the target one step up")
+    n1 = update_number(page)
+    page.locator(VIEWS).locator(".posekit-target-y .noUi-handle").last.focus()
+    page.keyboard.press("Control+z")
+    _wait_update(page, n1, "the undo's solve")
+    wait_for(lambda: abs(_status_rows(page)["target"][1] - y0) < 2e-4 or None, 60, "the target back where it was")
+    n2 = update_number(page)
+    page.locator(VIEWS).locator(".posekit-target-y .noUi-handle").last.focus()
+    page.keyboard.press("Control+Shift+z")
+    _wait_update(page, n2, "the redo's solve")
+    wait_for(lambda: abs(_status_rows(page)["target"][1] - (y0 + 0.001)) < 2e-4 or None, 60, "the step redone")
