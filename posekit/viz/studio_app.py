@@ -250,17 +250,19 @@ def kept_label(editor):
     label = widget(HTML)
     label.counts = {}
 
+    session = getattr(editor, "session", editor)  # the editor's session (or anything with results and solvers)
+
     def count():
-        if not editor.session.effectors:  # nothing was solved: nothing to count
+        if not getattr(session, "effectors", [None]):  # nothing was solved: nothing to count
             return
-        for name, res in editor.session.results.items():
+        for name, res in session.results.items():
             info = getattr(res, "info", None) or {}
             if "learned_ms" not in info:  # not an exact finish (or the solver refused)
                 continue
             kept, total = label.counts.setdefault(name, [0, 0])
             label.counts[name] = [kept + (info.get("kept") != "start"), total + 1]
         parts = [f"{n} kept the learned pose in {k} of {t} solves" for n, (k, t) in label.counts.items()]
-        unjudged = [n for n in label.counts if getattr(editor.session.solvers.get(n), "choose", "natural") != "natural"]
+        unjudged = [n for n in label.counts if getattr(session.solvers.get(n), "choose", "natural") != "natural"]
         why = ("the more natural answer" if not unjudged else "the answer kept (" + ", ".join(unjudged)
                + ": no naturalness comparison, no training poses of this skeleton)")
         label.value = ("<small>Exact finish: " + html.escape("; ".join(parts) + f" (in the others DLS from the "
@@ -268,5 +270,5 @@ def kept_label(editor):
 
     count()
     # the session's changes, which outlive the editor a solver change replaces; a selection solves nothing
-    editor.session.on_change(lambda what, _: what != "select" and count())
+    session.on_change(lambda what, _=None: what != "select" and count())
     return label

@@ -625,15 +625,18 @@ def test_antialiasing_is_on_unless_posekit_antialias_is_0(sample, monkeypatch):
     assert "POSEKIT_ANTIALIAS" not in dry.stdout
 
 
-def test_make_studio_keeps_one_kernel_preheated_or_studio_pool_of_them():
-    """make studio: Voila keeps one kernel with the page already run for the next visitor; STUDIO_POOL=N keeps N,
-    for a class arriving at once."""
+def test_make_studio_keeps_studio_pool_kernels_preheated():
+    """make studio: Voila keeps STUDIO_POOL kernels with the page already run for the next visitors (default
+    posekit.viz.studio_app.STUDIO_POOL, issue 65: three arriving at once); STUDIO_POOL=N keeps N, for a class."""
     import subprocess
     from pathlib import Path
 
+    from posekit.viz.studio_app import STUDIO_POOL
+
     root = Path(__file__).resolve().parents[2]
     dry = subprocess.run(["make", "-n", "-C", str(root), "studio"], capture_output=True, text=True)
-    assert dry.returncode == 0 and "--preheat_kernel=True --pool_size=1 " in dry.stdout, dry.stdout + dry.stderr
+    assert dry.returncode == 0 and f"--preheat_kernel=True --pool_size={STUDIO_POOL} " in dry.stdout, \
+        dry.stdout + dry.stderr
     dry = subprocess.run(["make", "-n", "-C", str(root), "studio", "STUDIO_POOL=30"], capture_output=True, text=True)
     assert "--preheat_kernel=True --pool_size=30 " in dry.stdout, dry.stdout
 
