@@ -43,13 +43,16 @@ holds about 0.75 GB; ``make studio STUDIO_POOL=N`` sizes it for N (e.g. the clas
 --visitors 3`` measures every visitor's first view with three at once."""
 
 COMPACT_HEADER = (
-    ".jp-MarkdownCell h1 { font-size: 1.15em; margin: 0 0 2px 0; padding: 0; }"
-    ".jp-MarkdownCell .jp-RenderedMarkdown p { font-size: 11px; line-height: 1.3; margin: 0; }"
+    ".jp-MarkdownCell h1 { font-size: 18px; line-height: 22px; margin: 0 0 2px 0 !important; padding: 0; }"
+    ".jp-MarkdownCell .jp-RenderedMarkdown p { font-size: 11px; line-height: 14px; margin: 0; }"
+    ".jp-MarkdownCell .jp-RenderedMarkdown p code { line-height: 14px; vertical-align: top; }"
+    ".posekit-data-line { font-size: 11px; line-height: 14px; margin: 0 0 6px 0 !important; }"
     ".jp-MarkdownCell .jp-RenderedMarkdown { padding-top: 0; padding-bottom: 0; }"
     ".jp-Cell { padding-top: 2px; padding-bottom: 2px; }")
 """The app page's rules for its header (the notebook's title and paragraph, about 185 px at full size): small, so the
 views, the *selected* list, the X/Y/Z sliders and the readout lie on the first screen of a 1280 x 800 or a
-1366 x 768 display when the page opens."""
+1366 x 768 display when the page opens. Sizes and line heights in whole pixels: the views below then lie on whole
+pixels (a fractional offset blurs a screenshot of a canvas by half a pixel)."""
 
 VOILA_PATH = Path(__file__).parent / "voila"
 """A Jupyter data folder (for ``JUPYTER_PATH``) holding the studio's Voila page template, :data:`VOILA_TEMPLATE`."""
@@ -216,7 +219,7 @@ def app_page():
 
     # the page's header (the notebook's title and its paragraph) compact, so that the views, the selected list, the
     # X/Y/Z sliders and the readout are on the first screen on arrival at 1280 x 800 and 1366 x 768
-    display(HTML(f"<style>{COMPACT_HEADER}</style><small>{html.escape(data_line())}</small>"))
+    display(HTML(f"<style>{COMPACT_HEADER}</style><div class='posekit-data-line'>{html.escape(data_line())}</div>"))
     try:
         studio, refused = app_studio()
     except (ValueError, OSError) as e:  # bad input: a missing path, a broken file, an unknown solver name
