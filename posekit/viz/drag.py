@@ -159,10 +159,20 @@ class DragTargets:
             self.select(name)
         had = self.look_targets.get(name) if self.dragging_look else self.targets.get(name)
         anchor = np.array(had if had is not None else self.pose[self.skeleton.index(name)], float)
-        self._drag_start = ("look_at" if self.dragging_look else "position", None if had is None else anchor.copy(),
-                            getattr(self.source, "position", None))
+        if self.dragging_look and not self._moves_look():
+            # a lone view's orange marker: the drag moves the joint's position target, from the marker's plane
+            self.dragging_look, had = False, self.targets.get(name)
+        self._drag_start = ("look_at" if self.dragging_look else "position",
+                            None if had is None else np.array(had, float), getattr(self.source, "position", None))
         camera = np.asarray(self.camera.position, float) + self._offset  # world frame
         self._drag_plane = (anchor.copy(), (camera - anchor) / max(np.linalg.norm(camera - anchor), 1e-9))
+
+    def _moves_look(self) -> bool:
+        """Whether a drag on an orange marker moves the point the joint looks at: when a session holds the markers
+        (:meth:`~posekit.viz.SkeletonViewer.attach`) or someone listens to look-at moves
+        (``on_look_target_change``). A lone view's (lesson 00's) drags the joint's position target, as its
+        :meth:`~posekit.viz.SkeletonViewer.move_look_target` tells its target listeners."""
+        return bool(self._look_callbacks) or hasattr(self.source, "revert_to")
 
     def _show_held(self, held: bool):
         """Tell the page whether a drag is held: its watcher then ends it on any release, and the switch carries

@@ -19,6 +19,12 @@ view — the elements that carry the CSS class :attr:`PageWatch.scope` (its canv
    newest handle of the same axis as soon as it is shown, and keys pressed in between (arrows, Page Up/Down,
    Home, End) are held back and then given to that handle, in order. A handle with no successor within 5 s (its
    view was closed, not swapped) is forgotten, and the page's keys are the page's again.
+   **The page knows which joint a slider belongs to**: each slider carries the CSS class ``posekit-for-<joint>``
+   (:mod:`posekit.viz.sliders`, the joint's name URI-encoded). A key pressed on a handle whose joint is not the one
+   the view's *selected* list shows now (a joint just chosen: the kernel has not yet made its sliders) is held back
+   the same way and given to that joint's handle of the same axis once it is shown, which then has the focus: the
+   press leaves for the kernel on the selected joint's own slider, whatever the order in which the list's and the
+   sliders' messages reach it (none lost, none on the joint chosen before).
 
 3. **Keys of the view.** Escape while a drag is held sends ``{"event": "cancel"}`` (the drag goes back to where it
    started); Ctrl+Z and Ctrl+Shift+Z (or Ctrl+Y) with the focus inside :attr:`PageWatch.keys_scope` (the studio),
@@ -67,6 +73,28 @@ function initialize({ model }) {
 
   // 2. the handle that had the keyboard: its axis, and keys pressed while its successor is not yet shown
   let last = null, lastAxis = null, queued = [];
+  // the joint a slider belongs to (its class posekit-for-<joint>), and the joint the view's list shows now
+  const jointOf = (handle) => {
+    const box = handle instanceof Element ? handle.closest("[class*='posekit-for-']") : null;
+    const found = box && [...box.classList].find((c) => c.startsWith("posekit-for-"));
+    return found ? decodeURIComponent(found.slice("posekit-for-".length)) : null;
+  };
+  const listed = () => {
+    for (const root of document.querySelectorAll(scope())) {
+      for (const d of root.querySelectorAll(".widget-dropdown")) {
+        const label = d.querySelector("label"), list = d.querySelector("select");
+        if (label && list && label.textContent.trim() === "selected") return list.value;
+      }
+    }
+    return null;
+  };
+  // a handle of another joint than the list's (a new choice whose sliders the kernel has not made yet)
+  const stale = (handle) => {
+    if (handle === null || !handle.isConnected) return false;
+    const joint = jointOf(handle), chosen = listed();
+    return joint !== null && chosen !== null && chosen !== "(none)" && joint !== chosen;
+  };
+  let staleSince = null;
   const focusIn = (e) => {
     lastAxis = axisOf(e.target);
     last = lastAxis ? e.target : null;
@@ -74,6 +102,14 @@ function initialize({ model }) {
   };
   let goneAt = null;  // when the remembered handle was first seen gone
   const lost = () => {
+    if (last !== null && stale(last) && document.activeElement === last) {  // its joint is no longer the list's
+      staleSince = staleSince ?? performance.now();
+      if (performance.now() - staleSince <= GIVE_UP_MS) return true;
+      last = null;  // the chosen joint's sliders never came: let the keys be
+      queued = [];
+      return false;
+    }
+    staleSince = null;
     if (last === null || last.isConnected) { goneAt = null; return false; }
     goneAt = goneAt ?? performance.now();
     if (performance.now() - goneAt > GIVE_UP_MS) {  // no successor came (the view was closed): let the keys be
@@ -85,9 +121,12 @@ function initialize({ model }) {
     // the focus fell to the body, or to a box around the view (JupyterLab's output area): nothing else took it
     return !now || now === document.body || now === document.documentElement || (here !== null && now.contains(here));
   };
-  const newest = () => {
+  const newest = () => {  // the newest handle of the axis, of the joint the list shows
     let best = null;
+    const chosen = listed();
     for (const h of document.querySelectorAll(`${scope()} .posekit-target-${lastAxis} .noUi-handle`)) {
+      const joint = jointOf(h);
+      if (joint !== null && chosen !== null && chosen !== "(none)" && joint !== chosen) continue;
       if (best === null || generation(h) > generation(best)) best = h;
     }
     return best;
@@ -95,7 +134,7 @@ function initialize({ model }) {
   const restore = () => {
     if (!lost()) return;
     const handle = newest();
-    if (handle === null) return;
+    if (handle === null || handle === last) return;
     const keys = queued;
     handle.focus({ preventScroll: true });  // focusin: the new handle is the one remembered
     last = handle;
@@ -132,13 +171,18 @@ function initialize({ model }) {
   };
   const key = (e) => {
     if (viewKey(e)) return;
-    if (!SLIDER_KEYS.has(e.key) || e.altKey || e.ctrlKey || e.metaKey || !lost()) return;
+    if (!SLIDER_KEYS.has(e.key) || e.altKey || e.ctrlKey || e.metaKey) return;
+    if (axisOf(e.target) !== null && e.target !== last) {  // (a handle focused without a focusin seen)
+      last = e.target;
+      lastAxis = axisOf(e.target);
+    }
+    if (!lost()) return;
     e.preventDefault();
     e.stopPropagation();
     queued.push({ key: e.key, code: e.code, shiftKey: e.shiftKey });
     restore();
   };
-  const watcher = new MutationObserver(() => { if (last !== null && !last.isConnected) restore(); });
+  const watcher = new MutationObserver(() => { if (last !== null && (!last.isConnected || stale(last))) restore(); });
   watcher.observe(document.body, { childList: true, subtree: true });
 
   // 4. shown after a change the page asked for (the studio's *compare*): the view's row scrolled into sight

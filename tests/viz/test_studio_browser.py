@@ -400,6 +400,71 @@ def test_key_presses_right_after_a_selection_all_reach_the_new_joint(page):
         wait_for(lambda j=j: target_mm(scope, j) == expected[j], 30, f"{j}'s target at {expected[j]} mm")
 
 
+_SELECT_THEN_FOCUS = """([scope, joint]) => {
+  // a person's choice in the *selected* list (the list has the focus, its value changes), then at once the X
+  // slider's handle focused: the handle on the page now, the outgoing joint's until the kernel's new sliders come
+  const list = [...scope.querySelectorAll('.widget-dropdown')].find(d => d.textContent.includes('selected'))
+    .querySelector('select');
+  list.focus();
+  list.value = joint;
+  list.dispatchEvent(new Event('input', {bubbles: true}));
+  list.dispatchEvent(new Event('change', {bubbles: true}));
+  const handle = scope.querySelector('.posekit-target-x .noUi-handle');
+  handle.focus();
+  window.__focused = handle;
+  return document.activeElement === handle;
+}"""
+
+
+def test_presses_right_after_choosing_in_the_list_all_land_on_the_new_joint(page):
+    """Issue 65, item 3: choose a joint in the *selected* list, at once focus the X slider's handle (still the
+    outgoing joint's: the kernel has not yet made the new joint's sliders) and press ArrowRight 5 times, 30 ms apart,
+    10 times over four joints, a second process keeping a core busy: every trial moves the newly chosen joint's
+    target +5 mm on X, and the joint chosen before never moves (before, some trials lost all five presses)."""
+    import subprocess
+    import sys
+
+    from tests.viz.browser_helpers import target_mm
+
+    scope = page.locator(VIEWS)
+    joints = RACE_JOINTS
+    where = {}
+    for j in joints:
+        _joint_list(page).select_option(j)
+        where[j] = wait_for(lambda j=j: target_mm(scope, j), 30, f"{j}'s target in the status table")
+    kernel_round_trip(page, VIEWS)
+    expected, moved, on_old = dict(where), [], 0
+    root = scope.element_handle()
+    busy = subprocess.Popen([sys.executable, "-c", "while True: pass"])
+    try:
+        for i in range(10):
+            old, new = joints[(i - 1) % len(joints)], joints[i % len(joints)]
+            wait_for(lambda: target_mm(scope, old) == expected[old], 30, f"{old}'s sliders and target")
+            kernel_round_trip(page, VIEWS)  # the old joint's sliders are the ones on the page
+            assert page.evaluate(_SELECT_THEN_FOCUS, [root, new]), "the X slider's handle did not take the focus"
+            for _ in range(5):
+                page.keyboard.press("ArrowRight")
+                time.sleep(0.03)
+            goal = (expected[new][0] + 5, *expected[new][1:])
+            try:
+                wait_for(lambda: target_mm(scope, new) == goal, 15, f"{new}'s target +5 mm", every=0.2)
+            except pytest.fail.Exception:
+                pass
+            now = wait_for(lambda: target_mm(scope, new), 30, f"{new}'s target")
+            moved.append(now[0] - expected[new][0])
+            expected[new] = now
+            on_old += page.evaluate("() => !window.__focused.isConnected")  # the handle focused was replaced
+    finally:
+        busy.kill()
+        busy.wait()
+    print(f"\nX moved per trial (mm): {moved}; {on_old} of 10 focused the outgoing joint's handle")
+    assert moved == [5] * 10, f"{sum(m == 5 for m in moved)} of 10 trials moved +5 mm: {moved}"
+    for j in joints:  # every target moved by its own presses only: none landed on a joint chosen before
+        _joint_list(page).select_option(j)
+        wait_for(lambda j=j: target_mm(scope, j) == expected[j], 30, f"{j}'s target at {expected[j]} mm")
+    assert on_old >= 1, "no trial focused the outgoing joint's handle: the test did not race"
+
+
 def _changed_fraction(a, b):
     """The share of pixels whose colour differs by more than 30 in a channel."""
     return float((np.abs(a.astype(int) - b.astype(int)).max(axis=-1) > 30).mean())
@@ -582,3 +647,61 @@ def test_keyboard_only_the_list_passes_over_joints_and_ctrl_z_undoes_a_press(pag
     page.keyboard.press("Control+Shift+z")
     _wait_update(page, n2, "the redo's solve")
     wait_for(lambda: abs(_status_rows(page)["target"][1] - (y0 + 0.001)) < 2e-4 or None, 60, "the step redone")
+
+
+def test_escape_during_a_drag_puts_the_target_back_where_it_started(page):
+    """Issue 65: press on the selected hand with *drag in 3D* on and drag its target up (the readout follows it);
+    Escape with the button still held puts the target back where it was at the press and ends the drag: moving on
+    and letting go moves nothing (before, Escape did nothing and the drag went on)."""
+    from posekit.viz.drag import DRAG_HELD_CLASS
+    from tests.viz.browser_helpers import target_mm
+
+    scope = page.locator(VIEWS)
+    _joint_list(page).select_option("Hand_L")
+    start = wait_for(lambda: target_mm(scope, "Hand_L"), 30, "the hand's target in the status table")
+    kernel_round_trip(page, VIEWS)
+    first = _canvases(page)[0]
+    first.scroll_into_view_if_needed()
+    toggle = page.locator(VIEWS).get_by_role("button", name="drag in 3D").first
+    x, y = press_in_3d(page, first, selected_joint(wait_still(first, 30, "the view to stand still")), VIEWS)
+    try:
+        wait_for(lambda: DRAG_HELD_CLASS in (toggle.get_attribute("class") or "").split() or None, 30,
+                 "the kernel to hold the drag")
+        page.mouse.move(x + 10, y - 40, steps=8)
+        moved = wait_for(lambda: (lambda t: t if t not in (None, start) else None)(target_mm(scope, "Hand_L")), 30,
+                         "the target to follow the drag")
+        page.keyboard.press("Escape")
+        wait_for(lambda: target_mm(scope, "Hand_L") == start, 30, f"the target back at {start} mm (it was at {moved})")
+        wait_for(lambda: DRAG_HELD_CLASS not in (toggle.get_attribute("class") or "").split() or None, 30,
+                 "the drag to end")
+        page.mouse.move(x + 30, y - 70, steps=6)  # the button still down: the drag has ended, nothing follows
+    finally:
+        page.mouse.up()
+    kernel_round_trip(page, VIEWS)
+    assert target_mm(scope, "Hand_L") == start
+    drag_in_3d(page, VIEWS, False)
+
+
+def test_after_compare_the_new_views_are_in_sight(server, chromium):
+    """Issue 65: in a 1280 x 800 window, scroll down to the solver check boxes (the views above, out of sight),
+    tick two others and press *compare*: the new views are scrolled into sight, every canvas wholly in the window
+    (before, the page stayed where it was, the new views above it)."""
+    tab = open_studio(chromium, server.url, page=blank_tab(chromium, (1280, 800)))
+    try:
+        wait_for(lambda: tab.locator(f"{VIEWS} canvas").count() == 4 or None, 120, "four views")
+        tab.locator(".posekit-compare").scroll_into_view_if_needed()
+        tops = [c.bounding_box()["y"] for c in tab.locator(f"{VIEWS} canvas").all()]
+        assert max(tops) < 0, f"the views' tops at {tops} px: the test did not scroll them out of sight"
+        choose_solvers(tab, ["fabrik", "ccd"])
+        canvases = tab.locator(f"{VIEWS} canvas")
+
+        def in_sight():
+            boxes = [c.bounding_box() for c in canvases.all()]
+            return all(b is not None and b["y"] >= -0.5 and b["y"] + b["height"] <= 800.5 for b in boxes) or None
+
+        try:
+            wait_for(in_sight, 10, "the new views in sight")
+        except pytest.fail.Exception:
+            pytest.fail(f"after compare the views are out of sight: {[c.bounding_box() for c in canvases.all()]}")
+    finally:
+        tab.close()
