@@ -400,15 +400,18 @@ def test_key_presses_right_after_a_selection_all_reach_the_new_joint(page):
         wait_for(lambda j=j: target_mm(scope, j) == expected[j], 30, f"{j}'s target at {expected[j]} mm")
 
 
-_SELECT_THEN_FOCUS = """([scope, joint]) => {
-  // a person's choice in the *selected* list (the list has the focus, its value changes), then at once the X
-  // slider's handle focused: the handle on the page now, the outgoing joint's until the kernel's new sliders come
+_SELECT_THEN_FOCUS = """([scope, joints]) => {
+  // a person's choice in the *selected* list (the list has the focus, its value changes; two choices at once when
+  // the arrow keys pass over a joint), then at once the X slider's handle focused: the handle on the page now, the
+  // outgoing joint's until the kernel's new sliders come
   const list = [...scope.querySelectorAll('.widget-dropdown')].find(d => d.textContent.includes('selected'))
     .querySelector('select');
   list.focus();
-  list.value = joint;
-  list.dispatchEvent(new Event('input', {bubbles: true}));
-  list.dispatchEvent(new Event('change', {bubbles: true}));
+  for (const joint of joints) {
+    list.value = joint;
+    list.dispatchEvent(new Event('input', {bubbles: true}));
+    list.dispatchEvent(new Event('change', {bubbles: true}));
+  }
   const handle = scope.querySelector('.posekit-target-x .noUi-handle');
   handle.focus();
   window.__focused = handle;
@@ -419,8 +422,11 @@ _SELECT_THEN_FOCUS = """([scope, joint]) => {
 def test_presses_right_after_choosing_in_the_list_all_land_on_the_new_joint(page):
     """Issue 65, item 3: choose a joint in the *selected* list, at once focus the X slider's handle (still the
     outgoing joint's: the kernel has not yet made the new joint's sliders) and press ArrowRight 5 times, 30 ms apart,
-    10 times over four joints, a second process keeping a core busy: every trial moves the newly chosen joint's
-    target +5 mm on X, and the joint chosen before never moves (before, some trials lost all five presses)."""
+    10 times over four joints, a second process keeping a core busy; every other trial passes over another joint on
+    the way (two choices at once: the list's second message waits in the page for the kernel's answer to the first,
+    while the slider's leave at once). Every trial moves the joint chosen last +5 mm on X, and no other target moves:
+    not the joint chosen before, not the one passed over (a press on the outgoing handle used to reach the kernel
+    before the second choice and move the joint passed over; before issue 57 some trials lost all five presses)."""
     import subprocess
     import sys
 
@@ -439,9 +445,10 @@ def test_presses_right_after_choosing_in_the_list_all_land_on_the_new_joint(page
     try:
         for i in range(10):
             old, new = joints[(i - 1) % len(joints)], joints[i % len(joints)]
+            chosen = [new] if i % 2 == 0 else [joints[(i + 1) % len(joints)], new]
             wait_for(lambda: target_mm(scope, old) == expected[old], 30, f"{old}'s sliders and target")
             kernel_round_trip(page, VIEWS)  # the old joint's sliders are the ones on the page
-            assert page.evaluate(_SELECT_THEN_FOCUS, [root, new]), "the X slider's handle did not take the focus"
+            assert page.evaluate(_SELECT_THEN_FOCUS, [root, chosen]), "the X slider's handle did not take the focus"
             for _ in range(5):
                 page.keyboard.press("ArrowRight")
                 time.sleep(0.03)
