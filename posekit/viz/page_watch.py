@@ -95,12 +95,13 @@ function initialize({ model }) {
     return joint !== null && chosen !== null && chosen !== "(none)" && joint !== chosen;
   };
   let staleSince = null;
+  let goneAt = null;  // when the remembered handle was first seen gone
   const focusIn = (e) => {
     lastAxis = axisOf(e.target);
     last = lastAxis ? e.target : null;
     queued = [];
+    goneAt = staleSince = null;  // a new handle remembered: no wait of an earlier one counts against it
   };
-  let goneAt = null;  // when the remembered handle was first seen gone
   const lost = () => {
     if (last !== null && stale(last) && document.activeElement === last) {  // its joint is no longer the list's
       staleSince = staleSince ?? performance.now();
@@ -185,22 +186,6 @@ function initialize({ model }) {
   const watcher = new MutationObserver(() => { if (last !== null && (!last.isConnected || stale(last))) restore(); });
   watcher.observe(document.body, { childList: true, subtree: true });
 
-  // 4. shown after a change the page asked for (the studio's *compare*): the view's row scrolled into sight
-  if (model.get("reveal")) {
-    const started = performance.now();
-    const reveal = () => {
-      const here = document.querySelector(scope());
-      if (here === null || here.getBoundingClientRect().height === 0) {
-        if (performance.now() - started < GIVE_UP_MS) setTimeout(reveal, 50);
-        return;
-      }
-      const row = here.closest(".posekit-views") ?? here;
-      const box = row.getBoundingClientRect();
-      if (box.top < 0 || box.top > window.innerHeight - 100) row.scrollIntoView({ block: "start" });
-    };
-    reveal();
-  }
-
   const listeners = [["pointerdown", down, true], ["pointerup", end, true], ["pointercancel", end, true],
                      ["pointermove", end, true], ["blur", end, false], ["focusin", focusIn, true],
                      ["keydown", key, true]];
@@ -212,7 +197,27 @@ function initialize({ model }) {
   };
 }
 
-export default { initialize };
+// 4. shown after a change the page asked for (the studio's *compare*): once the page shows the view (this widget is
+// rendered with its controls), the view's row is scrolled into sight if it is off the screen
+const revealed = new WeakSet();  // the models whose view was scrolled into sight already (once per view)
+function render({ model }) {
+  if (!model.get("reveal") || revealed.has(model)) return;
+  revealed.add(model);
+  const started = performance.now();
+  const reveal = () => {
+    const here = document.querySelector("." + model.get("scope"));
+    if (here === null || here.getBoundingClientRect().height === 0) {
+      if (performance.now() - started < GIVE_UP_MS) requestAnimationFrame(reveal);
+      return;
+    }
+    const row = here.closest(".posekit-views") ?? here;
+    const box = row.getBoundingClientRect();
+    if (box.top < 0 || box.top > window.innerHeight - 100) row.scrollIntoView({ block: "start" });
+  };
+  reveal();
+}
+
+export default { initialize, render };
 """
 
 

@@ -612,16 +612,6 @@ def test_1000_rapid_updates_keep_the_kernel_alive_and_small(page, server):
     _wait_update(page, n0, "an update after the 1,000")
 
 
-def test_voila_shuts_its_kernel_down(page, server):
-    kernels = server.note_kernels()
-    assert kernels and all(k.is_running() for k in kernels)
-    page.close()
-    alive = server.stop()
-    assert alive == [], f"kernels still running after Voila stopped: {alive}"
-    assert all(not k.is_running() or k.status() == "zombie" for k in kernels)
-
-
-
 def test_keyboard_only_the_list_passes_over_joints_and_ctrl_z_undoes_a_press(page):
     """Issue 65, item 4: with the keyboard alone, arrow keys in the *selected* list pass over joints without adding
     an effector or solving; a press on the selected joint's Y slider moves its target one step, Ctrl+Z (focus in
@@ -656,13 +646,25 @@ def test_keyboard_only_the_list_passes_over_joints_and_ctrl_z_undoes_a_press(pag
     wait_for(lambda: abs(_status_rows(page)["target"][1] - (y0 + 0.001)) < 2e-4 or None, 60, "the step redone")
 
 
-def test_escape_during_a_drag_puts_the_target_back_where_it_started(page):
+@pytest.fixture(scope="module")
+def small_page(server, chromium):
+    """A fresh studio (a kernel of its own: the set-up the app opens with) in a 1280 x 800 tab."""
+    tab = open_studio(chromium, server.url, page=blank_tab(chromium, (1280, 800)))
+    try:
+        wait_for(lambda: tab.locator(f"{VIEWS} canvas").count() == 4 or None, 120, "four views")
+        yield tab
+    finally:
+        tab.close()
+
+
+def test_escape_during_a_drag_puts_the_target_back_where_it_started(small_page):
     """Issue 65: press on the selected hand with *drag in 3D* on and drag its target up (the readout follows it);
     Escape with the button still held puts the target back where it was at the press and ends the drag: moving on
     and letting go moves nothing (before, Escape did nothing and the drag went on)."""
     from posekit.viz.drag import DRAG_HELD_CLASS
     from tests.viz.browser_helpers import target_mm
 
+    page = small_page
     scope = page.locator(VIEWS)
     _joint_list(page).select_option("Hand_L")
     start = wait_for(lambda: target_mm(scope, "Hand_L"), 30, "the hand's target in the status table")
@@ -689,26 +691,32 @@ def test_escape_during_a_drag_puts_the_target_back_where_it_started(page):
     drag_in_3d(page, VIEWS, False)
 
 
-def test_after_compare_the_new_views_are_in_sight(server, chromium):
+def test_after_compare_the_new_views_are_in_sight(small_page):
     """Issue 65: in a 1280 x 800 window, scroll down to the solver check boxes (the views above, out of sight),
     tick two others and press *compare*: the new views are scrolled into sight, every canvas wholly in the window
     (before, the page stayed where it was, the new views above it)."""
-    tab = open_studio(chromium, server.url, page=blank_tab(chromium, (1280, 800)))
+    tab = small_page
+    tab.locator(".posekit-compare").scroll_into_view_if_needed()
+    tops = [c.bounding_box()["y"] for c in tab.locator(f"{VIEWS} canvas").all()]
+    assert max(tops) < 0, f"the views' tops at {tops} px: the test did not scroll them out of sight"
+    choose_solvers(tab, ["fabrik", "ccd"])
+    canvases = tab.locator(f"{VIEWS} canvas")
+
+    def in_sight():
+        boxes = [c.bounding_box() for c in canvases.all()]
+        return all(b is not None and b["y"] >= -0.5 and b["y"] + b["height"] <= 800.5 for b in boxes) or None
+
     try:
-        wait_for(lambda: tab.locator(f"{VIEWS} canvas").count() == 4 or None, 120, "four views")
-        tab.locator(".posekit-compare").scroll_into_view_if_needed()
-        tops = [c.bounding_box()["y"] for c in tab.locator(f"{VIEWS} canvas").all()]
-        assert max(tops) < 0, f"the views' tops at {tops} px: the test did not scroll them out of sight"
-        choose_solvers(tab, ["fabrik", "ccd"])
-        canvases = tab.locator(f"{VIEWS} canvas")
+        wait_for(in_sight, 10, "the new views in sight")
+    except pytest.fail.Exception:
+        pytest.fail(f"after compare the views are out of sight: {[c.bounding_box() for c in canvases.all()]}")
 
-        def in_sight():
-            boxes = [c.bounding_box() for c in canvases.all()]
-            return all(b is not None and b["y"] >= -0.5 and b["y"] + b["height"] <= 800.5 for b in boxes) or None
 
-        try:
-            wait_for(in_sight, 10, "the new views in sight")
-        except pytest.fail.Exception:
-            pytest.fail(f"after compare the views are out of sight: {[c.bounding_box() for c in canvases.all()]}")
-    finally:
-        tab.close()
+def test_voila_shuts_its_kernel_down(page, server):
+    """Last in this file: it closes the page and stops the server the tests above share."""
+    kernels = server.note_kernels()
+    assert kernels and all(k.is_running() for k in kernels)
+    page.close()
+    alive = server.stop()
+    assert alive == [], f"kernels still running after Voila stopped: {alive}"
+    assert all(not k.is_running() or k.status() == "zombie" for k in kernels)
