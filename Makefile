@@ -89,7 +89,8 @@ lab: setup warm
 	  --LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate $(NODELAY:%=--ServerApp.%) $(LAB_ARGS)
 
 # the posing studio alone as a browser app (Voila, notebooks/studio.ipynb; lesson 06 teaches it), one kernel kept
-# preheated for the next visitor (STUDIO_POOL=N keeps N, for a class arriving at once: about 0.25 GB each); Ctrl-C
+# preheated for the next visitors (STUDIO_POOL=N keeps N, default 3 as posekit.viz.studio_app.STUDIO_POOL: about
+# 0.25 GB each, so 0.75 GB waiting; set the class's size for a class arriving at once); Ctrl-C
 # stops it and its kernels. STUDIO_DATA (a data set or BVH folder), STUDIO_WEIGHTS (your trained models),
 # STUDIO_SOLVERS (2-4 names) choose what it poses, STUDIO_LICENCE (your data's licence) is shown with it; STUDIO_ANTIALIAS=0 draws the views without antialiasing, for
 # browsers without a GPU (software WebGL). The page is Voila's lab page less its CDN stylesheets
@@ -105,7 +106,7 @@ studio: setup warm
 	  $(if $(STUDIO_ANTIALIAS),POSEKIT_ANTIALIAS="$(STUDIO_ANTIALIAS)") \
 	  JUPYTER_PATH="../posekit/viz/voila$(if $(JUPYTER_PATH),:$(JUPYTER_PATH))" \
 	  ../$(VENV)/bin/voila studio.ipynb --port=$(or $(STUDIO_PORT),8866) --template=posekit \
-	  --preheat_kernel=True --pool_size=$(or $(STUDIO_POOL),1) \
+	  --preheat_kernel=True --pool_size=$(or $(STUDIO_POOL),3) \
 	  --MappingKernelManager.cull_idle_timeout=600 --MappingKernelManager.cull_interval=60 $(NODELAY:%=--Voila.%) \
 	  $(STUDIO_ARGS)
 

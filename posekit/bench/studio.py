@@ -29,7 +29,9 @@ Introduced in ``notebooks/06_posing_studio.ipynb``. One run:
    update counter and first view, in the page's own clock (:func:`_drawn_seconds`; the time Playwright took to
    see them, which adds its polling, is printed beside it); the fresh server's first page (its kernel cold),
    and the median of ``--first-views`` pages served from a preheated kernel (Voila's pool, as ``make studio``
-   runs it), with the same for the floor page (:func:`preheated_first_views`).
+   runs it), with the same for the floor page (:func:`preheated_first_views`); and ``--visitors`` pages asking at
+   once, every visitor's first view, from a server keeping :data:`~posekit.viz.studio_app.STUDIO_POOL` kernels
+   preheated (:func:`together_first_views`: a class arriving).
 
 ``--sessions 1,2,4,8`` measures a class instead (:func:`class_sessions`): that many sessions against one server,
 moving their targets at once — latency per session, lost updates, every kernel's memory, and that the cull
@@ -59,7 +61,7 @@ from .browser import STUDIO_NOTEBOOK as NOTEBOOK, blank_tab, kernel_processes, l
 from .plugin import arg, register_benchmark
 
 __all__ = ["update_number", "open_studio", "open_floor", "floor_notebook", "choose_solvers", "rapid_updates",
-           "class_sessions", "preheated_first_views", "run", "GOALS", "RSS_GOALS", "FIRST_VIEW_GOALS", "NOTEBOOK"]
+           "class_sessions", "preheated_first_views", "together_first_views", "run", "GOALS", "RSS_GOALS", "FIRST_VIEW_GOALS", "NOTEBOOK"]
 
 GOALS = {"fabrik": 100.0, "learned": 150.0}
 """p95 goals, milliseconds: a configuration with a learned solver gets the learned goal."""
@@ -338,13 +340,14 @@ def _views(antialias: bool) -> dict:
 
 
 def run(updates: int = 1000, configs=("fabrik,dls", "protores,neural"), progress: bool = True,
-        antialias: bool = False, first_views: int = 3) -> list[dict]:
+        antialias: bool = False, first_views: int = 3, visitors: int = 3) -> list[dict]:
     """Serve the studio, measure every configuration (see the module docstring); one row per configuration.
 
     ``antialias``: draw the views with antialiasing. Off by default: this bench's Chromium draws WebGL in software
     (no GPU), where multisampling costs the most, and a class on such machines serves the studio without it
     (``make studio STUDIO_ANTIALIAS=0``). ``first_views``: preheated pages timed, of the studio and of the floor
-    (:func:`preheated_first_views`; the median is reported)."""
+    (:func:`preheated_first_views`; the median is reported). ``visitors``: that many pages asking at once, each
+    one's first view timed (:func:`together_first_views`; the slowest is reported; 0: not measured)."""
     from playwright.sync_api import sync_playwright
 
     configs = [tuple(n.strip() for n in c.split(",") if n.strip()) if isinstance(c, str) else tuple(c) for c in configs]
@@ -409,6 +412,15 @@ def run(updates: int = 1000, configs=("fabrik,dls", "protores,neural"), progress
                                     preheated_first_views(first_views, antialias, floor=True), None))
         rows.append(_first_view_row("a preheated kernel (make studio)", preheated_first_views(first_views, antialias),
                                     FIRST_VIEW_GOALS["preheated"]))
+        if visitors:
+            from ..viz.studio_app import STUDIO_POOL
+
+            views = together_first_views(visitors, STUDIO_POOL, antialias)
+            row = _first_view_row(f"{visitors} visitors at once, a pool of {STUDIO_POOL} (make studio)", views,
+                                  FIRST_VIEW_GOALS["preheated"])
+            row["seconds"] = round(max(views["page_s"]), 2)  # every visitor's: the slowest is the one judged
+            row["met"] = bool(row["seconds"] <= FIRST_VIEW_GOALS["preheated"])
+            rows.append(row)
     finally:
         shutil.rmtree(floor_dir, ignore_errors=True)
     return rows
@@ -494,6 +506,60 @@ def preheated_first_views(pages: int = 3, antialias: bool = False, floor: bool =
     return out
 
 
+def _wait_quiet(server, ready_s: float) -> None:
+    """Wait until the server's kernels' CPU has been quiet for 3 s (the pool has run the page), ``ready_s`` at most."""
+    t0, quiet = time.time(), 0
+    while time.time() - t0 < ready_s and quiet < 3:
+        time.sleep(1)
+        ks = kernel_processes(server.process.pid)
+        try:
+            busy = not ks or any(k.cpu_percent(interval=None) > 5 for k in ks)
+        except Exception:  # noqa: BLE001 - psutil: a kernel starting or gone
+            busy = True
+        quiet = 0 if busy else quiet + 1
+
+
+def together_first_views(visitors: int = 3, pool: int | None = None, antialias: bool = False,
+                         ready_s: float = 300.0, timeout_s: float = 300.0) -> dict:
+    """Every visitor's first view when ``visitors`` pages ask for the studio at once, from a fresh server keeping
+    ``pool`` kernels preheated (default :data:`~posekit.viz.studio_app.STUDIO_POOL`, ``make studio``'s): the pool is
+    given time to run the page, then each visitor's tab starts its request in turn without waiting for the others,
+    and each page's first frame with the studio is timed in its own clock (:func:`_drawn_seconds`). Returns
+    ``{"page_s": [...], "wall_s": [...]}``, one per visitor (``wall_s``: from the first request to each page seen
+    drawn, through Playwright)."""
+    from playwright.sync_api import sync_playwright
+
+    from ..viz.studio_app import STUDIO_POOL
+
+    pool = STUDIO_POOL if pool is None else int(pool)
+    folder = Path(tempfile.mkdtemp(prefix="posekit-visitors-"))
+    out = {"page_s": [], "wall_s": []}
+    try:
+        with serve_voila(NOTEBOOK, folder=folder / "served", preheat=pool, env=_views(antialias)) as server, \
+                sync_playwright() as p:
+            browser = launch_chromium(p)
+            try:
+                _wait_quiet(server, ready_s)
+                tabs = []
+                for _ in range(visitors):
+                    tab = blank_tab(browser)
+                    _drawn_probe(tab, STUDIO_DRAWN)
+                    tabs.append(tab)
+                t0 = time.perf_counter()
+                for tab in tabs:  # every request under way before any page is waited for
+                    tab.goto(server.url, timeout=timeout_s * 1000, wait_until="commit")
+                for tab in tabs:
+                    out["page_s"].append(_drawn_seconds(tab, timeout_s))
+                    out["wall_s"].append(time.perf_counter() - t0)
+                for tab in tabs:
+                    tab.close()
+            finally:
+                browser.close()
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+    return out
+
+
 def _first_view_row(what: str, views: dict, goal: float | None) -> dict:
     page_s = float(np.median(views["page_s"]))
     return {"first_view": what, "pages": len(views["page_s"]), "seconds": round(page_s, 2),
@@ -508,7 +574,7 @@ def _command(args) -> str:
     if args.sessions:
         parts.append(f"--sessions {args.sessions}")
     else:
-        parts.append(f"--configs '{args.configs}' --first-views {args.first_views}")
+        parts.append(f"--configs '{args.configs}' --first-views {args.first_views} --visitors {args.visitors}")
     if args.updates:
         parts.append(f"--updates {args.updates}")
     if args.antialias:
@@ -542,7 +608,7 @@ def _measure(args) -> list[dict]:
             rows += class_sessions(k, args.updates or 100, progress=not args.json, antialias=args.antialias)
         return rows
     return run(updates=args.updates or 1000, configs=args.configs.split(";"), progress=not args.json,
-               antialias=args.antialias, first_views=args.first_views)
+               antialias=args.antialias, first_views=args.first_views, visitors=args.visitors)
 
 
 register_benchmark(
@@ -558,6 +624,9 @@ register_benchmark(
                    "latency per session, lost updates, kernel memory, and the cull after they leave"),
           arg("--first-views", type=int, default=3,
               help="pages timed from a preheated kernel, of the studio and of the floor (default 3; the median)"),
+          arg("--visitors", type=int, default=3,
+              help="pages asking for the studio at once, each one's first view timed, from a server keeping "
+                   "STUDIO_POOL kernels preheated (default 3; 0: not measured)"),
           arg("--out", default=None,
               help="also write the rows, with the command, machine and date, to this JSON file (the class-sizing "
                    "table of docs/benchmarks.md: data_samples/results/bench_studio_sessions.json; default: none)"),

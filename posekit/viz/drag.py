@@ -9,7 +9,8 @@ pickers report mouse events to the kernel:
 * *mouse move*: the browser reports where the mouse ray meets a large invisible sphere around the scene;
   the kernel draws the line from the camera through that point and moves the target to where it crosses
   the drag plane (:func:`drag_point`, :meth:`DragTargets.drag_to`);
-* *mouse up* — wherever it happens: the target is let go (:meth:`DragTargets._let_go`).
+* *mouse up* — wherever it happens: the target is let go (:meth:`DragTargets._let_go`);
+* *Escape* while the drag is held: the target goes back to where it started (:meth:`DragTargets.cancel_drag`).
 
 The pickers see the mouse on the canvas only: a button let go over another part of the page, or outside the
 window, never reaches the *mouse up* picker, and the drag went on with no button down (hovering moved the target).
@@ -80,6 +81,7 @@ class DragTargets:
     def _init_drag(self):
         self.dragging, self.dragging_look = None, False
         self._drag_plane = None
+        self._drag_start = None  # (joint, kind, point or None, the source's undo position or None) at the grab
 
     def _drag_surface(self):
         """The invisible sphere (seen from inside) that every mouse ray meets."""
@@ -155,10 +157,22 @@ class DragTargets:
         self._show_held(True)
         if self.selected != name:
             self.select(name)
-        anchor = (self.look_targets[name] if self.dragging_look
-                  else self.targets.get(name, self.pose[self.skeleton.index(name)]))
+        had = self.look_targets.get(name) if self.dragging_look else self.targets.get(name)
+        anchor = np.array(had if had is not None else self.pose[self.skeleton.index(name)], float)
+        if self.dragging_look and not self._moves_look():
+            # a lone view's orange marker: the drag moves the joint's position target, from the marker's plane
+            self.dragging_look, had = False, self.targets.get(name)
+        self._drag_start = ("look_at" if self.dragging_look else "position",
+                            None if had is None else np.array(had, float), getattr(self.source, "position", None))
         camera = np.asarray(self.camera.position, float) + self._offset  # world frame
         self._drag_plane = (anchor.copy(), (camera - anchor) / max(np.linalg.norm(camera - anchor), 1e-9))
+
+    def _moves_look(self) -> bool:
+        """Whether a drag on an orange marker moves the point the joint looks at: when a session holds the markers
+        (:meth:`~posekit.viz.SkeletonViewer.attach`) or someone listens to look-at moves
+        (``on_look_target_change``). A lone view's (lesson 00's) drags the joint's position target, as its
+        :meth:`~posekit.viz.SkeletonViewer.move_look_target` tells its target listeners."""
+        return bool(self._look_callbacks) or hasattr(self.source, "revert_to")
 
     def _show_held(self, held: bool):
         """Tell the page whether a drag is held: its watcher then ends it on any release, and the switch carries
@@ -176,10 +190,27 @@ class DragTargets:
         camera = np.asarray(self.camera.position, float) + self._offset
         p = drag_point(camera, through, *self._drag_plane)
         if p is not None and np.linalg.norm(p - self._drag_plane[0]) < 10.0:  # not off towards the horizon
-            if self.dragging_look and self._look_callbacks:
+            if self.dragging_look:
                 self.move_look_target(self.dragging, p)
             else:
                 self.move_target(self.dragging, p)
+
+    def cancel_drag(self):
+        """Escape during a drag: the target goes back to where it was at the grab (a session steps back to where it
+        was, :meth:`~posekit.studio.PosingSession.revert_to`: a target the drag created goes again), and the drag
+        ends."""
+        if self.dragging is None:
+            return
+        name, (kind, point, position) = self.dragging, self._drag_start
+        if position is not None:
+            self.source.revert_to(position)
+            self.show()
+        elif point is not None:
+            (self.move_look_target if kind == "look_at" else self.move_target)(name, point)
+        else:  # a lone view's target made by this drag
+            self.source.positions.pop(name, None)
+            self.show()
+        self._let_go()
 
     def _on_grab(self, change):
         if self.drag_mode.value and self._grab.distance is not None:

@@ -17,7 +17,7 @@ browser open (``tests/viz/test_one_screen_browser.py`` measures them).
 
 from __future__ import annotations
 
-__all__ = ["FIT_CSS", "MIN_VIEW_WIDTH", "stylesheet", "view_box_layout", "VIEWER_LAYOUT", "WRAP_ROW"]
+__all__ = ["FIT_CSS", "MIN_VIEW_WIDTH", "ROOM_UNDER_VIEWS", "stylesheet", "view_box_layout", "VIEWER_LAYOUT", "WRAP_ROW"]
 
 MIN_VIEW_WIDTH = 160
 """A view's box never gets narrower than this (pixels): below it the row wraps."""
@@ -42,11 +42,20 @@ rig's sliders): it gives way before its neighbours (a flex shrink of 1,000 again
 down, so the neighbours keep their width and their text."""
 
 
-def view_box_layout(width: int) -> dict:
-    """The layout of one view's box (title, canvas, status) in a row of views: it grows up to ``width`` pixels (the
-    canvas's own width) and shrinks to :data:`MIN_VIEW_WIDTH`, so the views share the row's width evenly."""
-    return {"flex": f"1 1 {MIN_VIEW_WIDTH}px", "min_width": f"{MIN_VIEW_WIDTH}px", "max_width": f"{int(width)}px",
+def view_box_layout(width: int, height: int | None = None) -> dict:
+    """The layout of one view's box (title, canvas, status) in a row of views: the views share the row's width
+    evenly, each at least :data:`MIN_VIEW_WIDTH` wide; they grow with the window (a canvas drawn ``width`` pixels
+    wide is scaled up beyond it), as wide as the canvas's height still fits the window's height with room for the
+    controls under it (``height``: the canvas's; without it, no wider than ``width``)."""
+    most = (f"max({int(width)}px, calc((100vh - {ROOM_UNDER_VIEWS}px) * {width / height:.4f}))" if height
+            else f"{int(width)}px")
+    return {"flex": f"1 1 {MIN_VIEW_WIDTH}px", "min_width": f"{MIN_VIEW_WIDTH}px", "max_width": most,
             "margin": "0 8px 8px 0"}
+
+
+ROOM_UNDER_VIEWS = 400
+"""Pixels of the window's height kept for what a view grown with the window must leave on the first screen: its
+title and status, the *selected* list, the X/Y/Z sliders and the readout."""
 
 
 def stylesheet():

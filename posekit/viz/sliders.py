@@ -20,10 +20,15 @@ the step grid) is zero steps and moves nothing. The last :attr:`TargetSliders.KE
 for presses still on their way; older ones are closed. The page keeps the keyboard across the swap: when the
 handle that had the focus is replaced, its view's :class:`~posekit.viz.page_watch.PageWatch` gives the focus to the
 new handle of the same axis, and keys pressed in between to it (before, the focus fell to the page's body and those
-presses went nowhere). Units: metres, world frame (:mod:`posekit.conventions`).
+presses went nowhere). Each slider carries the joint it belongs to (the CSS class ``posekit-for-<joint>``), so the
+page also holds back a press on a handle of the joint chosen before and gives it to the newly chosen joint's handle
+once the kernel has made it: such a press leaves on the selected joint's own slider. Units: metres, world frame
+(:mod:`posekit.conventions`).
 """
 
 from __future__ import annotations
+
+from urllib.parse import quote
 
 import numpy as np
 
@@ -76,9 +81,9 @@ class TargetSliders:
                                     layout=w.Layout(display="none"))
         self.handle_choice.observe(lambda ch: self._sync_sliders(recentre=True), names="value")
 
-    def _forget_replaced_sliders(self):
+    def settle(self):
         """Close the replaced slider sets at once, for a view that no browser has shown yet (an editor or a studio
-        just built): no press can be on its way from them."""
+        just built, :class:`~posekit.viz.EffectorEditor`): no press can be on its way from them."""
         for old in self._old_sliders if self._controls_made else ():
             for s in old:
                 self._browser_value.pop(s.model_id, None)
@@ -122,6 +127,8 @@ class TargetSliders:
                        readout=point is not None, layout={"width": "480px"})
             s.add_class(f"posekit-target-{a}")
             s.add_class(f"posekit-sliders-{self.slider_generation}")
+            if point is not None:  # the joint it belongs to, for the page (posekit.viz.page_watch)
+                s.add_class(f"posekit-for-{quote(self.selected, safe='')}")
             self._browser_value[s.model_id] = (axis, value)
             s.observe(self._on_slider, names="value")
             new.append(s)

@@ -25,7 +25,6 @@ notebook, or ``$POSEKIT_EXPORTS_DIR``).
 from __future__ import annotations
 
 import html
-import time
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -34,7 +33,8 @@ import numpy as np
 from ..ik.api import Effector, Pose
 from ..ik.registry import make_solver, solver_names
 from ..paths import exports_dir
-from .compare import ignored_effectors, reached_mark, status_table, worst_errors
+from ..studio import PosingSession, solve_honoured
+from ..studio.status import status_table
 from .canvas_capture import CanvasCapture
 from .effector_editor import EffectorEditor
 from .studio_export import StudioExport, link
@@ -47,8 +47,6 @@ from .viewer import show_widget
 __all__ = ["PosingStudio", "MIN_SOLVERS", "MAX_SOLVERS"]
 
 MIN_SOLVERS, MAX_SOLVERS = 2, 4
-COALESCE_S = 1.0
-"""Moves of one effector less than this many seconds apart are one undo step (a drag, a slider)."""
 
 
 def _error(text: str) -> str:
@@ -83,17 +81,24 @@ class PosingStudio(StudioExport, StudioTimeline):
         Each view's canvas, pixels (default width: the views share about 1,250 px, 300-560 px each). The page scales
         a canvas down to the width it has (:mod:`posekit.viz.screen_fit`), never up.
 
+    selected : str, optional
+        The joint the first view's sliders move at the start.
+
     Attributes
     ----------
+    session : PosingSession
+        The one owner of the effectors, the results, the undo steps and the timeline keys
+        (:class:`~posekit.studio.PosingSession`): a cell can drive the studio through it
+        (``studio.session.move("Hand_L", [0.3, 1.2, 0.2])``) and the views follow.
     editor : EffectorEditor
-        The current views and effector rows (rebuilt when the solvers change).
+        The current views and effector rows (rebuilt when the solvers change), showing :attr:`session`.
     history : list of list of dict
-        Setups (:meth:`EffectorEditor.setup`), one per undo step; ``history[position]`` is the current one.
+        Setups, one per undo step (the session's); ``history[position]`` is the current one.
     cameras : list of dict
         Each step's cameras (solver name -> :meth:`~posekit.viz.SkeletonViewer.camera_state`): undo and redo put
         the views back with the pose.
-    keys : list of list of dict
-        The timeline's key setups.
+    keys : list of tuple
+        The timeline's keys (the session's).
     frames : list of IKResult
         The last built animation.
     widget : ipywidgets.VBox
@@ -101,7 +106,7 @@ class PosingStudio(StudioExport, StudioTimeline):
 
     def __init__(self, skeleton, start: Pose, solvers=("fabrik", "dls"), effectors=(), available=None,
                  tolerance_of=None, export_dir=None, own_folder: bool = False, width: int | None = None,
-                 height: int = 360):
+                 height: int = 360, selected=None):
         import ipywidgets as w
 
         if start.local_rot is None:
@@ -111,8 +116,8 @@ class PosingStudio(StudioExport, StudioTimeline):
         self.export_dir = exports_dir() if export_dir is None else Path(export_dir)
         self.own_folder = bool(own_folder)
         self.size = (width, height)
-        self.keys, self.frames, self.timeline_viewer = [], [], None
-        self._restoring, self._last_move = False, (None, -1e9)
+        self.frames, self.timeline_viewer = [], None
+        self.session = None
 
         # every widget's layout and style shared with the widgets that have the same (posekit.viz.shared)
         self.checks = {n: widget(w.Checkbox, value=False, description=n, indent=False, layout={"width": "175px"})
@@ -180,9 +185,8 @@ class PosingStudio(StudioExport, StudioTimeline):
                              (self.compare_button, "compare"), (self.views_box, "views")):
             part.add_class(f"posekit-{name}")  # for a browser test (and a stylesheet)
         self.editor = None
-        self.set_solvers(solvers, effectors=effectors)
-        self.history, self.position = [self.editor.setup()], 0
-        self.cameras = [self._cameras()]
+        self.set_solvers(solvers, effectors=effectors, selected=selected)
+        self.session.notes[self.session.position]["cameras"] = self._cameras()
 
     def _ipython_display_(self):
         show_widget(self.widget, f"[posing studio: {', '.join(self.solvers)} side by side on {len(self.editor.rows)} "
@@ -224,7 +228,17 @@ class PosingStudio(StudioExport, StudioTimeline):
         """The names being compared."""
         return list(self.editor.solvers)
 
-    def set_solvers(self, names, effectors=()):
+    # the session's steps and keys, read where they are kept
+    history = property(lambda self: self.session.history)
+    position = property(lambda self: self.session.position)
+    keys = property(lambda self: self.session.keys)
+
+    @property
+    def cameras(self) -> list:
+        """Each step's cameras (solver name -> camera state), kept with the session's steps."""
+        return [n.get("cameras", {}) for n in self.session.notes]
+
+    def set_solvers(self, names, effectors=(), selected=None):
         """Compare these 2-4 registered solvers on the current effectors (or ``effectors`` at the start)."""
         names = list(dict.fromkeys(names))
         if not MIN_SOLVERS <= len(names) <= MAX_SOLVERS:
@@ -240,19 +254,21 @@ class PosingStudio(StudioExport, StudioTimeline):
                 raise ValueError(f"{n} cannot pose this skeleton: {err}") from None
         for solver in built.values():  # a first solve compiles or loads what it needs: not part of its time
             self._warm_up(solver, effectors)
-        setup = self.editor.setup() if self.editor is not None else None
         w, h = self.size
         w = w or int(np.clip(1250 // len(names), 300, 560))
-        editor = EffectorEditor(self.skeleton, built, self.start, effectors, tolerance_of=self.tolerance_of,
-                                width=w, height=h)
-        if setup is not None:
-            editor.updates += self.editor.updates  # the summary's update count goes on across solver changes
-            editor.set_setup(setup)
+        if self.session is None:
+            self.session = PosingSession(self.skeleton, self.start, built, effectors, tolerance_of=self.tolerance_of)
+            self.session.on_before_change(self._before_change)
+        replacing = self.editor is not None
+        if replacing:
+            selected = self.editor.first.selected  # keep the joint the sliders move
+            self.editor.close()
+        editor = EffectorEditor(self.skeleton, built, self.start, session=self.session, width=w, height=h,
+                                selected=selected)
+        editor.first.page_watch.reveal = replacing  # after compare: the new views scrolled into sight
         editor.on_change(self._on_change)
-        editor.on_before_change(self._before_change)
-        if self.editor is not None and self.editor.first.selected is not None:
-            editor.first.select(self.editor.first.selected)  # keep the joint the sliders move
-        editor.first._forget_replaced_sliders()  # the new views are not shown yet
+        editor.keys_undo, editor.keys_redo = self.undo, self.redo  # Ctrl+Z anywhere in the studio: its undo
+        editor.first.page_watch.keys_scope = "posekit-studio"
         self.editor = editor
         self.views_box.children = (editor.widget,)
         for n, c in self.checks.items():
@@ -270,88 +286,47 @@ class PosingStudio(StudioExport, StudioTimeline):
         candidates = [list(effectors)] if effectors else []
         candidates += [[Effector(r, P[s.index(r)]) for r in roles[:2]], [Effector(r, P[s.index(r)]) for r in roles],
                        [Effector(s.pelvis(), P[s.pelvis()])]]
-        start = self.start if getattr(solver, "needs_start", True) else None
         for effs in candidates:
-            if not effs:
-                continue
-            try:
-                solver.solve(start, [e for e in effs if e.kind in getattr(solver, "kinds", ("position",))] or effs)
-                return True
-            except Exception:  # noqa: BLE001 - try the next set; the real solve says what is wrong
-                continue
+            done = solve_honoured(solver, self.start, effs) if effs else None
+            if done is not None and done.result is not None and not isinstance(done.result, Exception):
+                return True  # else the next set; the real solve says what is wrong
         return False
 
     def _refresh(self):
-        rows = []
-        effectors = self.editor.effectors
-        for name, solver in self.editor.solvers.items():
-            res = self.editor.results.get(name)
-            ignored = ignored_effectors(solver, effectors)
-            if res is None and effectors and ignored:
-                rows.append((html.escape(name), "nothing to solve · <span style='color:#b9770e'>"
-                             f"{html.escape(', '.join(dict.fromkeys(e.kind.replace('_', '-') for e in ignored)))} "
-                             "ignored</span>"))
-            elif res is None:
-                rows.append((html.escape(name), "no effectors"))
-            elif isinstance(res, Exception):
-                rows.append((html.escape(name), _error(f"failed: {res}")))
-            else:
-                rows.append((html.escape(name), reached_mark(res, ignored), worst_errors(res),
-                             f"{self.editor.times.get(name, 0):.2f} ms"))
-        self.undo_button.disabled = getattr(self, "position", 0) == 0
-        self.redo_button.disabled = getattr(self, "position", 0) >= len(getattr(self, "history", [None])) - 1
+        self.undo_button.disabled = not self.session.can_undo
+        self.redo_button.disabled = not self.session.can_redo
         # the update counter last: when the browser shows it, every view and button of this update is there
-        self.summary.value = status_table(f"update {self.editor.updates}", rows)
+        self.summary.value = status_table(f"update {self.session.updates}", self.session.summary_rows())
 
     # ------------------------------------------------------------------ undo and redo
     def _on_change(self, what, index):
-        if not self._restoring and hasattr(self, "history"):
-            now = time.monotonic()
-            same = what == "move" and self._last_move[0] == index and now - self._last_move[1] < COALESCE_S
-            if same and self.position == len(self.history) - 1 and self.position > 0:
-                self.history[self.position] = self.editor.setup()
-                self.cameras[self.position] = self._cameras()
-            else:
-                del self.history[self.position + 1:]
-                del self.cameras[self.position + 1:]
-                self.history.append(self.editor.setup())
-                self.cameras.append(self._cameras())
-                self.position += 1
-            self._last_move = (index, now) if what == "move" else (None, -1e9)
+        """After a change, its solve and its drawing: the step's cameras as the views show them now (undo and redo put
+        the step's cameras back instead), then the summary."""
+        note = self.session.notes[self.session.position]
+        if what in ("undo", "redo", "cancel"):
+            for name, state in note.get("cameras", {}).items():  # each view as it was at that step
+                if name in self.editor.viewers:
+                    self.editor.viewers[name].set_camera_state(state)
+        elif what != "solvers":
+            note["cameras"] = self._cameras()
         self._refresh()
 
     def _before_change(self, what, index):
         """The current step's cameras as the views show them just before a change (an orbit since is kept)."""
-        if not self._restoring and hasattr(self, "cameras"):
-            self.cameras[self.position] = self._cameras()
+        if self.editor is not None:
+            self.session.notes[self.session.position]["cameras"] = self._cameras()
 
     def _cameras(self) -> dict:
         """Each view's camera (:meth:`~posekit.viz.SkeletonViewer.camera_state`), by solver name."""
         return {n: v.camera_state() for n, v in self.editor.viewers.items()}
 
-    def _restore(self, setup, cameras=None):
-        self._restoring = True
-        try:
-            self.editor.set_setup(setup)
-            for name, state in (cameras or {}).items():  # each view as it was at that step (solvers shown then)
-                if name in self.editor.viewers:
-                    self.editor.viewers[name].set_camera_state(state)
-        finally:
-            self._restoring = False
-        self._last_move = (None, -1e9)
-        self._refresh()
-
     def undo(self):
-        """Go back one step (no-op at the first)."""
-        if self.position > 0:
-            self.position -= 1
-            self._restore(self.history[self.position], self.cameras[self.position])
+        """Go back one step (no-op at the first): the effectors and the views' cameras of that step."""
+        self.session.undo()
 
     def redo(self):
         """Redo the step undone last (no-op when there is none)."""
-        if self.position < len(self.history) - 1:
-            self.position += 1
-            self._restore(self.history[self.position], self.cameras[self.position])
+        self.session.redo()
 
     # ------------------------------------------------------------------ setups
     def setup_file(self) -> Path:
@@ -370,7 +345,7 @@ class PosingStudio(StudioExport, StudioTimeline):
         """Write the effectors and the solvers as a setup JSON file; the message links a download."""
         path = save_setup(path, self.skeleton, self.editor.setup(), self.solvers)
         self.message.row = "setup"
-        self.message.value = f"saved {html.escape(str(path))} ({len(self.editor.rows)} effectors) — {link(path, 'application/json')}"
+        self.message.value = f"saved {html.escape(str(path))} ({len(self.session.effectors)} effectors) — {link(path, 'application/json')}"
         return path
 
     def load(self, path):
@@ -385,9 +360,8 @@ class PosingStudio(StudioExport, StudioTimeline):
     def load_text(self, text: str, source: str = "setup"):
         """Apply setup JSON text (see :meth:`load`)."""
         doc = parse_setup(text, self.skeleton, source)
-        before = self.editor.setup()
         try:
-            self.editor.set_setup(doc["effectors"])  # checks every effector before changing anything
+            self.session.from_dict(doc)  # checks every effector before changing anything
         except ValueError as err:
             raise SetupError(f"{source}: {err}") from None
         names = [n for n in doc["solvers"] if n in self.available]
@@ -395,7 +369,7 @@ class PosingStudio(StudioExport, StudioTimeline):
             try:
                 self.set_solvers(names)
             except ValueError:
-                self.editor.set_setup(before)
+                self.session.revert_to(self.session.position - 1)
                 raise
         self.message.row = "setup"
         self.message.value = f"loaded {html.escape(source)}: {len(doc['effectors'])} effectors"

@@ -32,8 +32,27 @@ from pathlib import Path
 
 from ..paths import EXPORTS as _EXPORTS, exports_dir
 
-__all__ = ["SOLVERS", "VOILA_PATH", "VOILA_TEMPLATE", "EXPORTS", "studio_case", "usable_solvers", "session_folder",
-           "app_studio", "refused_note", "app_page", "data_line", "kept_label"]
+__all__ = ["SOLVERS", "STUDIO_POOL", "VOILA_PATH", "VOILA_TEMPLATE", "EXPORTS", "studio_case", "usable_solvers",
+           "session_folder", "app_studio", "refused_note", "app_page", "data_line", "kept_label"]
+
+STUDIO_POOL = 3
+"""Kernels ``make studio`` keeps preheated (Voila's pool: each has already run the page, so a visitor's first view
+waits for no kernel to start): sized for a class arriving at once, a small group at a time. Each costs its memory
+while it waits, about 0.25 GB (``posekit bench studio --sessions``: a kernel's RSS, docs/studio.md), so the default
+holds about 0.75 GB; ``make studio STUDIO_POOL=N`` sizes it for N (e.g. the class's size). ``posekit bench studio
+--visitors 3`` measures every visitor's first view with three at once."""
+
+COMPACT_HEADER = (
+    ".jp-MarkdownCell h1 { font-size: 18px; line-height: 22px; margin: 0 0 2px 0 !important; padding: 0; }"
+    ".jp-MarkdownCell .jp-RenderedMarkdown p { font-size: 11px; line-height: 14px; margin: 0; }"
+    ".jp-MarkdownCell .jp-RenderedMarkdown p code { line-height: 14px; vertical-align: top; }"
+    ".posekit-data-line { font-size: 11px; line-height: 14px; margin: 0 0 6px 0 !important; }"
+    ".jp-MarkdownCell .jp-RenderedMarkdown { padding-top: 0; padding-bottom: 0; }"
+    ".jp-Cell { padding-top: 2px; padding-bottom: 2px; }")
+"""The app page's rules for its header (the notebook's title and paragraph, about 185 px at full size): small, so the
+views, the *selected* list, the X/Y/Z sliders and the readout lie on the first screen of a 1280 x 800 or a
+1366 x 768 display when the page opens. Sizes and line heights in whole pixels: the views below then lie on whole
+pixels (a fractional offset blurs a screenshot of a canvas by half a pixel)."""
 
 VOILA_PATH = Path(__file__).parent / "voila"
 """A Jupyter data folder (for ``JUPYTER_PATH``) holding the studio's Voila page template, :data:`VOILA_TEMPLATE`."""
@@ -134,11 +153,10 @@ def app_studio(data: str | None = None, solvers=None, export_dir=None):
         first = ["fabrik", "dls"]
     studio = PosingStudio(skeleton, start, first, effectors, available=available,
                           tolerance_of=tolerance_of, own_folder=True,
-                          export_dir=session_folder() if export_dir is None else export_dir)
+                          export_dir=session_folder() if export_dir is None else export_dir,
+                          selected=skeleton.names[skeleton.index(effectors[0].joint)])
     for v in studio.editor.viewers.values():
         v.set_ghost(goal)
-    studio.editor.first.select(skeleton.names[skeleton.index(effectors[0].joint)])
-    studio.editor.first._forget_replaced_sliders()  # not shown yet: no press can come from the sliders replaced
     return studio, refused
 
 
@@ -199,7 +217,9 @@ def app_page():
 
     from IPython.display import HTML, display
 
-    display(HTML(f"<small>{html.escape(data_line())}</small>"))
+    # the page's header (the notebook's title and its paragraph) compact, so that the views, the selected list, the
+    # X/Y/Z sliders and the readout are on the first screen on arrival at 1280 x 800 and 1366 x 768
+    display(HTML(f"<style>{COMPACT_HEADER}</style><div class='posekit-data-line'>{html.escape(data_line())}</div>"))
     try:
         studio, refused = app_studio()
     except (ValueError, OSError) as e:  # bad input: a missing path, a broken file, an unknown solver name
@@ -233,20 +253,25 @@ def kept_label(editor):
     label = widget(HTML)
     label.counts = {}
 
-    def count(*_):
-        for name, res in editor.results.items():
+    session = getattr(editor, "session", editor)  # the editor's session (or anything with results and solvers)
+
+    def count():
+        if not getattr(session, "effectors", [None]):  # nothing was solved: nothing to count
+            return
+        for name, res in session.results.items():
             info = getattr(res, "info", None) or {}
             if "learned_ms" not in info:  # not an exact finish (or the solver refused)
                 continue
             kept, total = label.counts.setdefault(name, [0, 0])
             label.counts[name] = [kept + (info.get("kept") != "start"), total + 1]
         parts = [f"{n} kept the learned pose in {k} of {t} solves" for n, (k, t) in label.counts.items()]
-        unjudged = [n for n in label.counts if getattr(editor.solvers.get(n), "choose", "natural") != "natural"]
+        unjudged = [n for n in label.counts if getattr(session.solvers.get(n), "choose", "natural") != "natural"]
         why = ("the more natural answer" if not unjudged else "the answer kept (" + ", ".join(unjudged)
                + ": no naturalness comparison, no training poses of this skeleton)")
         label.value = ("<small>Exact finish: " + html.escape("; ".join(parts) + f" (in the others DLS from the "
                        f"start pose gave {why}: the learned pose was discarded)") + "</small>") if parts else ""
 
     count()
-    editor.on_change(count)
+    # the session's changes, which outlive the editor a solver change replaces; a selection solves nothing
+    session.on_change(lambda what, _=None: what != "select" and count())
     return label

@@ -143,7 +143,7 @@ class StudioExport:
             raise ValueError(f"{path}: frame {frame} out of range (the file has {motion.n_frames})")
         lp = None if motion.local_pos is None else motion.local_pos[frame]
         self.start = Pose.from_rotations(self.skeleton, motion.local_rot[frame], motion.root_pos[frame], lp)
-        self.editor.start = self.start
+        self.session.start = self.editor.start = self.start
         self.editor.solve()
         self._refresh()
         self.message.row = "setup"  # a start pose comes through the upload box

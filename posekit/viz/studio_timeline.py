@@ -19,23 +19,18 @@ __all__ = ["StudioTimeline"]
 
 class StudioTimeline:
     """Keys and their animation for :class:`~posekit.viz.studio.PosingStudio` (a mixin: the studio holds
-    ``editor``, ``keys``, ``frames``, ``keys_label``, ``timeline_box``, ``inbetweens``, ``ease``, ``size``,
+    ``session`` (whose keys these are), ``editor``, ``frames``, ``keys_label``, ``timeline_box``, ``inbetweens``, ``ease``, ``size``,
     ``start``, ``export_solver``, ``export_dir`` and ``message``)."""
 
     def add_key(self):
         """Store the current effectors as the next key of the timeline."""
-        if not self.editor.rows:
-            raise ValueError("add an effector before adding a key")
-        if self.keys and [(r["joint"], r["kind"]) for r in self.keys[0][0]] != \
-                [(r["joint"], r["kind"]) for r in self.editor.rows]:
-            raise ValueError("every key needs the same effectors as the first (same joints and kinds): "
-                             "move them, do not add or remove them, or clear the keys")
-        self.keys.append((self.editor.setup(), self.editor.effectors))
+        self.session.add_key()  # refuses no effectors, or others than the first key's
         self.keys_label.value = f"{len(self.keys)} key{'s' if len(self.keys) > 1 else ''}"
 
     def clear_keys(self):
         """Forget every key and the built animation."""
-        self.keys, self.frames = [], []
+        self.session.clear_keys()
+        self.frames = []
         self.keys_label.value = "no keys yet"
         self.timeline_box.children = ()
 
@@ -48,10 +43,9 @@ class StudioTimeline:
         name = solver or self.export_solver.value
         if len(self.keys) < 2:
             raise ValueError(f"a timeline needs at least two keys, got {len(self.keys)}: pose, add key, pose, add key")
-        s = self.editor.solvers[name]
-        kinds = getattr(s, "kinds", ("position",))
-        frames = inbetween_effectors(self.skeleton, [[e for e in k[1] if e.kind in kinds] for k in self.keys],
-                                     int(self.inbetweens.value), self.ease.value)
+        s = self.session.solvers[name]
+        frames = inbetween_effectors(self.skeleton, self.session.key_effectors(name), int(self.inbetweens.value),
+                                     self.ease.value)
         self.frames = solve_sequence(s, self.start, frames, progress=True)
         self._frames_solver = name
         h = self.size[1]

@@ -93,6 +93,21 @@ def _sun(target):
                                   matrixWorldNeedsUpdate=True)
 
 
+class OwnMarkers:
+    """The points a view shows when no session drives it (a lesson's lone viewer): those :meth:`SkeletonViewer.
+    set_targets` gave and the sliders or a drag moved. A :class:`~posekit.studio.PosingSession` has the same
+    ``markers()`` and ``move()``: a view attached to one (:meth:`SkeletonViewer.attach`) keeps no points at all."""
+
+    def __init__(self):
+        self.positions, self.looks, self.rotations = {}, {}, {}
+
+    def markers(self) -> tuple:
+        return self.positions, self.looks, self.rotations
+
+    def move(self, joint, point, kind: str = "position"):
+        (self.looks if kind == "look_at" else self.positions)[joint] = point
+
+
 def antialias_default() -> bool:
     """Whether viewers smooth their edges: yes, unless ``POSEKIT_ANTIALIAS=0`` (``make studio STUDIO_ANTIALIAS=0``).
 
@@ -160,7 +175,7 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         J = skeleton.n_joints
         self.pose = np.array(rest_pose(skeleton) if pose is None else pose, dtype=float)
         self._check(self.pose, "pose")
-        self.targets, self.look_targets, self.rotation_targets = {}, {}, {}
+        self.source = OwnMarkers()  # what the markers show: a session (attach), or the points set_targets gave
         self.selected = None
         self.follow = follow
         self.aspect = width / height
@@ -226,6 +241,28 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
              "widget": "_make_widget", "_extra": "_make_widget"}
     """The parts a view without controls makes when first asked for, and the method that makes them."""
 
+    @property
+    def targets(self) -> dict:
+        """Joint name -> (3,) position target, read from :attr:`source` (the view keeps none of its own)."""
+        return self.source.markers()[0]
+
+    @property
+    def look_targets(self) -> dict:
+        """Joint name -> (3,) point the joint looks at, read from :attr:`source`."""
+        return self.source.markers()[1]
+
+    @property
+    def rotation_targets(self) -> dict:
+        """Joint name -> (3, 3) world rotation asked for, read from :attr:`source`."""
+        return self.source.markers()[2]
+
+    def attach(self, source):
+        """Show the markers of ``source`` (a :class:`~posekit.studio.PosingSession`: ``markers()``, ``move(joint,
+        point, kind)`` and ``select(joint)``) from now on: a drag or a slider moves its targets, and :meth:`show`
+        redraws what it holds."""
+        self.source = source
+        self.show()
+
     def __getattr__(self, name):
         make = SkeletonViewer._LAZY.get(name)
         made = self.__dict__.get("_controls_made")
@@ -257,6 +294,7 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         scope = f"posekit-view-{self.renderer.model_id}"
         self.page_watch = widget(PageWatch, scope=scope, layout={"display": "none"})
         self.page_watch.on_release(self._let_go)
+        self.page_watch.on_key("cancel", self.cancel_drag)
         self.renderer.add_class(scope)
         # a layout of its own: showing or hiding the controls changes it
         # the selection's row and the sliders beside the readout, each wrapping on a narrow page (screen_fit)
@@ -340,15 +378,29 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
             if R.shape != (3, 3) or not np.all(np.isfinite(R)):
                 raise ValueError(f"rotation target for {name}: expected a finite (3, 3) matrix, got shape {R.shape}")
             rots[name] = R
-        self.rotation_targets = rots
+        if not isinstance(self.source, OwnMarkers):
+            raise ValueError("this view shows a session's effectors: change them through the session (move, add, "
+                             "remove), and the view follows")
+        self.source.positions, self.source.looks, self.source.rotations = new, looks, rots
+        self.show()
+
+    def show(self, pose=None):
+        """Draw the markers :attr:`source` holds now (and ``pose``, (J, 3), when given), once: the figure is laid
+        out again only when the set of markers changed; the sliders show the selected joint's handle."""
+        if pose is not None:
+            self.pose = self._check(pose, "pose").copy()
+            self._draw_due = True
+        new, looks, rots = self.source.markers()
         key = (tuple(new), tuple(looks), tuple(rots))
-        rebuild = key != self._target_key
-        self.targets, self.look_targets, self._target_key = new, looks, key
-        if rebuild:
+        if key != self._target_key:
+            self._target_key = key
             self._figure.layout(len(new), len(looks), len(rots))
         self._draw()
         self._follow()
         self._sync_sliders()
+        self._show_handle_choice()
+        if self.selected is not None:
+            self._update_status()
 
     @contextmanager
     def drawing_once(self):
@@ -406,6 +458,8 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         if name is not None and self.skeleton.index(name) not in self.selectable:
             raise ValueError(f"{name} is not offered in this view: choose one of {self._offered()}")
         self.selected = name
+        if hasattr(self.source, "select"):
+            self.source.select(name)  # the session knows what the sliders move; it adds nothing
         self._show_handle_choice()
         if self._controls_made and self.joint_select.value != (name or ""):
             self.joint_select.value = name or ""
@@ -465,12 +519,9 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
         position = np.asarray(position, dtype=float).reshape(3)
         if not np.all(np.isfinite(position)):
             raise ValueError(f"target for {name} contains NaN or inf")
-        targets = dict(self.targets)
-        targets[name] = position
-        with self.drawing_once():  # the listeners' solve sets the pose: the readout is written once, after it
-            self.set_targets(targets, self.look_targets, self.rotation_targets)
-            self._show_handle_choice()
-            self._update_status()
+        with self.drawing_once():  # the source's solve sets the pose: the readout is written once, after it
+            self.source.move(name, position, "position")
+            self.show()
             for cb in self._target_callbacks:
                 cb(name, self.targets[name].copy())
 
@@ -482,11 +533,9 @@ class SkeletonViewer(FramedCamera, DragTargets, TargetSliders):
             raise ValueError(f"{name} has no look-at target to move")
         if not np.all(np.isfinite(position)):
             raise ValueError(f"look-at target for {name} contains NaN or inf")
-        looks = dict(self.look_targets)
-        looks[name] = position
         with self.drawing_once():
-            self.set_targets(self.targets, looks, self.rotation_targets)
-            self._update_status()
+            self.source.move(name, position, "look_at")
+            self.show()
             if not self._look_callbacks:  # nobody listens to look-at moves: the joint's target it is
                 for cb in self._target_callbacks:
                     cb(name, position.copy())

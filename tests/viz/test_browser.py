@@ -587,3 +587,33 @@ def test_a_drag_ends_outside_the_view_and_keys_reach_the_new_slider_in_lab(lab, 
         page.screenshot(path=str(lab[2] / "lab_drag_and_keys.png"))
     finally:
         page.close()
+
+
+def test_arrow_keys_in_the_selected_list_stay_in_the_list_in_lab(lab, chromium):
+    """Issue 65, in JupyterLab, lesson 01's panel: with the panel's cell active (command mode) and the focus on the
+    *selected* list, ArrowDown moves the list's selection to the next joint (the view's readout follows) and
+    ArrowUp back; the notebook's active cell stays the panel's and the list keeps the focus (before, JupyterLab took
+    the arrows too and moved to the next cell, the focus leaving the list)."""
+    from tests.viz.browser_helpers import status_rows
+
+    page = _lab_page(chromium, {"width": 1280, "height": 1000})
+    active = """() => [...document.querySelectorAll('.jp-Notebook .jp-Cell')]
+      .findIndex(c => c.classList.contains('jp-mod-active'))"""
+    try:
+        cell, labels, canvases, before = _open_panel(page, lab, PANEL_NOTEBOOK, 3, "the solver panel")
+        listing = cell.locator(".widget-dropdown", has_text="selected").first.locator("select")
+        options = [o for o in listing.locator("option").all_inner_texts() if o != "(none)"]
+        listing.select_option(options[0])
+        kernel_round_trip(page, cell)
+        labels.first.click()  # the panel's cell active, the notebook in command mode
+        listing.focus()
+        here = page.evaluate(active)
+        assert here >= 0 and page.evaluate("() => document.activeElement.tagName") == "SELECT"
+        for key, want in (("ArrowDown", options[1]), ("ArrowDown", options[2]), ("ArrowUp", options[1])):
+            page.keyboard.press(key)
+            _wait_for(lambda want=want: listing.input_value() == want or None, 10, f"{key}: the list at {want}")
+            _wait_for(lambda want=want: want in status_rows(cell) or None, 30, f"the readout to show {want}")
+            assert page.evaluate(active) == here, f"{key} moved JupyterLab's active cell"
+            assert page.evaluate("() => document.activeElement.tagName") == "SELECT", f"{key}: the list lost the focus"
+    finally:
+        page.close()

@@ -125,10 +125,27 @@ _TEXTS = """(root) => [...root.querySelectorAll('.posekit-view')].filter(b => b.
   b.querySelector('canvas').width, b.querySelector('canvas').height])"""
 
 
+def _registered_difference(region, shot):
+    """Mean absolute difference (of 255) between a view of the PNG, ``region`` (the canvas's own pixels), scaled to
+    the screenshot ``shot`` of a canvas on the page, at the best of the sub-pixel offsets 0 and +-0.5 px on each axis
+    (where the page paints a canvas scaled to a fractional size and where the screenshot crops it differ by up to
+    half a pixel, with the page's layout above it); 3 px of border left out."""
+    from PIL import Image
+
+    image = Image.fromarray(region.astype(np.uint8))
+    best = np.inf
+    for dx in (-0.5, 0.0, 0.5):
+        for dy in (-0.5, 0.0, 0.5):
+            moved = image.transform(image.size, Image.AFFINE, (1, 0, dx, 0, 1, dy), Image.BILINEAR)
+            scaled = np.asarray(moved.resize(shot.shape[1::-1], Image.BILINEAR)).astype(int)
+            best = min(best, float(np.abs(scaled - shot)[3:-3, 3:-3].mean()))
+    return best
+
+
 def test_views_as_png_holds_the_views_own_pixels_and_labels(studio_page):
     """Issue 57, item 4: *views as PNG* in the app gives one picture whose every view is that view's canvas (mean
-    absolute difference to a screenshot of the canvas, scaled to the same size, under 2.5 of 255 and under half its
-    difference to any other view's screenshot), not blank, with each view's title and status lines around it."""
+    absolute difference to a screenshot of the canvas, scaled to the same size and registered to half a pixel,
+    under 2.5 of 255 and under half its difference to any other view's screenshot), not blank, with each view's title and status lines around it."""
     from PIL import Image
 
     from posekit.viz.canvas_capture import decode_data_url
@@ -156,11 +173,69 @@ def test_views_as_png_holds_the_views_own_pixels_and_labels(studio_page):
     for k, ((x, y, w, h), shot) in enumerate(zip(boxes, shots)):
         region = a[y:y + h, x:x + w]
         assert (np.abs(region - BACKGROUND).sum(-1) > 60).mean() > 0.002, f"view {k + 1} is blank in the PNG"
-        scaled = np.asarray(Image.fromarray(region.astype(np.uint8)).resize(shot.shape[1::-1], Image.BILINEAR))
-        diffs.append([float(np.abs(scaled.astype(int) - s).mean()) for s in shots])
+        diffs.append([_registered_difference(region, s) for s in shots])
         assert (a[:y, x:x + w] < 100).all(-1).any(), f"no title above view {k + 1}"
         assert (a[y + max(b[3] for b in boxes):, x:x + w] < 100).all(-1).sum() > 50, f"no status under view {k + 1}"
     print("mean absolute difference, PNG view k vs screenshot of canvas j:", np.round(diffs, 2).tolist())
-    for k, row in enumerate(diffs):  # its own canvas (a half-pixel offset of the scaled canvas: about 1.3)
+    for k, row in enumerate(diffs):  # its own canvas: about 1 here
         others = min(d for j, d in enumerate(row) if j != k)  # another view's canvas: 4-6 here
         assert row[k] < 2.5 and row[k] < others / 2, f"view {k + 1} of the PNG vs the screenshots: {row}"
+
+
+_ARRIVAL = """(root) => {
+  // where the parts lie as the page opens, nothing scrolled (the page's own scroll position: the top)
+  const box = (el) => { const r = el.getBoundingClientRect();
+    return {x: r.x, y: r.y, right: r.right, bottom: r.bottom, width: r.width, height: r.height}; };
+  const visible = (el) => el.offsetParent !== null;
+  const first = (list) => list.filter(visible).map(box)[0] ?? null;
+  const views = [...root.querySelectorAll('.posekit-views canvas')].filter(visible).map(box);
+  const selected = first([...root.querySelectorAll('.widget-dropdown')].filter(d => d.textContent.includes('selected')));
+  const sliders = ['x', 'y', 'z'].map(a => first([...root.querySelectorAll(`.posekit-target-${a}`)]));
+  const readout = first([...root.querySelectorAll('.widget-html-content')].filter(d => d.querySelector('th')
+    && d.textContent.includes('x m')));
+  return {views, parts: {selected, 'slider x': sliders[0], 'slider y': sliders[1], 'slider z': sliders[2], readout},
+          scrolled: scrollY + (document.scrollingElement?.scrollTop ?? 0), width: innerWidth, height: innerHeight};
+}"""
+
+
+def _arrival(voila, chromium, size):  # noqa: F811
+    """The studio app opened in a fresh tab of ``size`` (width, height): :data:`_ARRIVAL` measured as it opens."""
+    page = open_studio(chromium, voila.url, page=blank_tab(chromium, size))
+    try:
+        wait_for(lambda: page.locator(".posekit-views canvas").count() == 4 or None, 60, "four views")
+        page.locator(".posekit-target-x").first.wait_for(timeout=60_000)
+        wait_for(lambda: page.locator(".posekit-views .widget-html-content th", has_text="x m").count() or None, 60,
+                 "the readout")
+        m = page.locator(".posekit-studio").first.evaluate(_ARRIVAL)
+        _shot(page, f"voila_{size[0]}x{size[1]}_arrival.png")
+        return m
+    finally:
+        page.close()
+
+
+@pytest.mark.parametrize("size", [(1280, 800), (1366, 768)])
+def test_the_app_shows_views_list_sliders_and_readout_on_the_first_screen_on_arrival(voila, chromium, size):  # noqa: F811
+    """Issue 65: as the app opens, unscrolled, at 1280 x 800 and 1366 x 768, the four views, the *selected* list, the
+    X/Y/Z sliders and the readout (the selected joint's table) lie wholly in the window (the old header, 185 px
+    tall, pushed the sliders and the readout below it)."""
+    m = _arrival(voila, chromium, size)
+    width, height = size
+    print(size, m)
+    assert m["scrolled"] == 0 and len(m["views"]) == 4
+    parts = [(f"view {k + 1}", b) for k, b in enumerate(m["views"])] + list(m["parts"].items())
+    out = [f"{name}: {b}" for name, b in parts
+           if b is None or b["x"] < -0.5 or b["y"] < -0.5 or b["right"] > width + 0.5 or b["bottom"] > height + 0.5]
+    assert out == [], f"not on the first screen at {width} x {height}: {out}"
+
+
+def test_the_views_grow_with_a_1920_by_1080_window(voila, chromium):  # noqa: F811
+    """Issue 65: at 1920 x 1080 the four views share the window's width (the old views stayed 312 px wide, their
+    canvas's own width, half the width empty), and the *selected* list, the sliders and the readout still lie on
+    the first screen."""
+    m = _arrival(voila, chromium, (1920, 1080))
+    views = m["views"]
+    print([round(v["width"]) for v in views], m["parts"])
+    assert len(views) == 4 and len({round(v["y"]) for v in views}) == 1
+    assert min(v["width"] for v in views) >= 400, [v["width"] for v in views]
+    assert max(v["right"] for v in views) - min(v["x"] for v in views) >= 0.8 * 1920
+    assert all(b is not None and b["bottom"] <= 1080 for b in m["parts"].values()), m["parts"]

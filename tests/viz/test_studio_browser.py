@@ -400,6 +400,78 @@ def test_key_presses_right_after_a_selection_all_reach_the_new_joint(page):
         wait_for(lambda j=j: target_mm(scope, j) == expected[j], 30, f"{j}'s target at {expected[j]} mm")
 
 
+_SELECT_THEN_FOCUS = """([scope, joints]) => {
+  // a person's choice in the *selected* list (the list has the focus, its value changes; two choices at once when
+  // the arrow keys pass over a joint), then at once the X slider's handle focused: the handle on the page now, the
+  // outgoing joint's until the kernel's new sliders come
+  const list = [...scope.querySelectorAll('.widget-dropdown')].find(d => d.textContent.includes('selected'))
+    .querySelector('select');
+  list.focus();
+  for (const joint of joints) {
+    list.value = joint;
+    list.dispatchEvent(new Event('input', {bubbles: true}));
+    list.dispatchEvent(new Event('change', {bubbles: true}));
+  }
+  const handle = scope.querySelector('.posekit-target-x .noUi-handle');
+  handle.focus();
+  window.__focused = handle;
+  return document.activeElement === handle;
+}"""
+
+
+def test_presses_right_after_choosing_in_the_list_all_land_on_the_new_joint(page):
+    """Issue 65, item 3: choose a joint in the *selected* list, at once focus the X slider's handle (still the
+    outgoing joint's: the kernel has not yet made the new joint's sliders) and press ArrowRight 5 times, 30 ms apart,
+    10 times over four joints, a second process keeping a core busy; every other trial passes over another joint on
+    the way (two choices at once: the list's second message waits in the page for the kernel's answer to the first,
+    while the slider's leave at once). Every trial moves the joint chosen last +5 mm on X, and no other target moves:
+    not the joint chosen before, not the one passed over (a press on the outgoing handle used to reach the kernel
+    before the second choice and move the joint passed over; before issue 57 some trials lost all five presses)."""
+    import subprocess
+    import sys
+
+    from tests.viz.browser_helpers import target_mm
+
+    scope = page.locator(VIEWS)
+    joints = RACE_JOINTS
+    where = {}
+    for j in joints:
+        _joint_list(page).select_option(j)
+        where[j] = wait_for(lambda j=j: target_mm(scope, j), 30, f"{j}'s target in the status table")
+    kernel_round_trip(page, VIEWS)
+    expected, moved, on_old = dict(where), [], 0
+    root = scope.element_handle()
+    busy = subprocess.Popen([sys.executable, "-c", "while True: pass"])
+    try:
+        for i in range(10):
+            old, new = joints[(i - 1) % len(joints)], joints[i % len(joints)]
+            chosen = [new] if i % 2 == 0 else [joints[(i + 1) % len(joints)], new]
+            wait_for(lambda: target_mm(scope, old) == expected[old], 30, f"{old}'s sliders and target")
+            kernel_round_trip(page, VIEWS)  # the old joint's sliders are the ones on the page
+            assert page.evaluate(_SELECT_THEN_FOCUS, [root, chosen]), "the X slider's handle did not take the focus"
+            for _ in range(5):
+                page.keyboard.press("ArrowRight")
+                time.sleep(0.03)
+            goal = (expected[new][0] + 5, *expected[new][1:])
+            try:
+                wait_for(lambda: target_mm(scope, new) == goal, 15, f"{new}'s target +5 mm", every=0.2)
+            except pytest.fail.Exception:
+                pass
+            now = wait_for(lambda: target_mm(scope, new), 30, f"{new}'s target")
+            moved.append(now[0] - expected[new][0])
+            expected[new] = now
+            on_old += page.evaluate("() => !window.__focused.isConnected")  # the handle focused was replaced
+    finally:
+        busy.kill()
+        busy.wait()
+    print(f"\nX moved per trial (mm): {moved}; {on_old} of 10 focused the outgoing joint's handle")
+    assert moved == [5] * 10, f"{sum(m == 5 for m in moved)} of 10 trials moved +5 mm: {moved}"
+    for j in joints:  # every target moved by its own presses only: none landed on a joint chosen before
+        _joint_list(page).select_option(j)
+        wait_for(lambda j=j: target_mm(scope, j) == expected[j], 30, f"{j}'s target at {expected[j]} mm")
+    assert on_old >= 1, "no trial focused the outgoing joint's handle: the test did not race"
+
+
 def _changed_fraction(a, b):
     """The share of pixels whose colour differs by more than 30 in a channel."""
     return float((np.abs(a.astype(int) - b.astype(int)).max(axis=-1) > 30).mean())
@@ -540,11 +612,111 @@ def test_1000_rapid_updates_keep_the_kernel_alive_and_small(page, server):
     _wait_update(page, n0, "an update after the 1,000")
 
 
+def test_keyboard_only_the_list_passes_over_joints_and_ctrl_z_undoes_a_press(page):
+    """Issue 65, item 4: with the keyboard alone, arrow keys in the *selected* list pass over joints without adding
+    an effector or solving; a press on the selected joint's Y slider moves its target one step, Ctrl+Z (focus in
+    the studio) takes it back and Ctrl+Shift+Z does it again."""
+    joints = _joint_list(page)
+    joints.select_option("Hand_L")
+    kernel_round_trip(page, VIEWS)
+    n0, texts = update_number(page), _texts(page)
+    joints.focus()
+    for key in ("ArrowDown", "ArrowDown", "ArrowDown"):  # over the next joints
+        page.keyboard.press(key)
+        kernel_round_trip(page, VIEWS)
+    assert update_number(page) == n0 and _texts(page) == texts, "passing over joints solved: an effector was added"
+    joints.select_option("Hand_L")  # chosen: the sliders are the hand's
+    kernel_round_trip(page, VIEWS)
+    assert update_number(page) == n0
+    y0 = _status_rows(page)["target"][1]
+    handle = page.locator(VIEWS).locator(".posekit-target-y .noUi-handle").last
+    handle.focus()
+    page.keyboard.press("ArrowUp")
+    _wait_update(page, n0, "the press's solve")
+    wait_for(lambda: abs(_status_rows(page)["target"][1] - (y0 + 0.001)) < 2e-4 or None, 60, "the target one step up")
+    n1 = update_number(page)
+    page.locator(VIEWS).locator(".posekit-target-y .noUi-handle").last.focus()
+    page.keyboard.press("Control+z")
+    _wait_update(page, n1, "the undo's solve")
+    wait_for(lambda: abs(_status_rows(page)["target"][1] - y0) < 2e-4 or None, 60, "the target back where it was")
+    n2 = update_number(page)
+    page.locator(VIEWS).locator(".posekit-target-y .noUi-handle").last.focus()
+    page.keyboard.press("Control+Shift+z")
+    _wait_update(page, n2, "the redo's solve")
+    wait_for(lambda: abs(_status_rows(page)["target"][1] - (y0 + 0.001)) < 2e-4 or None, 60, "the step redone")
+
+
+@pytest.fixture(scope="module")
+def small_page(server, chromium):
+    """A fresh studio (a kernel of its own: the set-up the app opens with) in a 1280 x 800 tab."""
+    tab = open_studio(chromium, server.url, page=blank_tab(chromium, (1280, 800)))
+    try:
+        wait_for(lambda: tab.locator(f"{VIEWS} canvas").count() == 4 or None, 120, "four views")
+        yield tab
+    finally:
+        tab.close()
+
+
+def test_escape_during_a_drag_puts_the_target_back_where_it_started(small_page):
+    """Issue 65: press on the selected hand with *drag in 3D* on and drag its target up (the readout follows it);
+    Escape with the button still held puts the target back where it was at the press and ends the drag: moving on
+    and letting go moves nothing (before, Escape did nothing and the drag went on)."""
+    from posekit.viz.drag import DRAG_HELD_CLASS
+    from tests.viz.browser_helpers import target_mm
+
+    page = small_page
+    scope = page.locator(VIEWS)
+    _joint_list(page).select_option("Hand_L")
+    start = wait_for(lambda: target_mm(scope, "Hand_L"), 30, "the hand's target in the status table")
+    kernel_round_trip(page, VIEWS)
+    first = _canvases(page)[0]
+    first.scroll_into_view_if_needed()
+    toggle = page.locator(VIEWS).get_by_role("button", name="drag in 3D").first
+    x, y = press_in_3d(page, first, selected_joint(wait_still(first, 30, "the view to stand still")), VIEWS)
+    try:
+        wait_for(lambda: DRAG_HELD_CLASS in (toggle.get_attribute("class") or "").split() or None, 30,
+                 "the kernel to hold the drag")
+        page.mouse.move(x + 10, y - 40, steps=8)
+        moved = wait_for(lambda: (lambda t: t if t not in (None, start) else None)(target_mm(scope, "Hand_L")), 30,
+                         "the target to follow the drag")
+        page.keyboard.press("Escape")
+        wait_for(lambda: target_mm(scope, "Hand_L") == start, 30, f"the target back at {start} mm (it was at {moved})")
+        wait_for(lambda: DRAG_HELD_CLASS not in (toggle.get_attribute("class") or "").split() or None, 30,
+                 "the drag to end")
+        page.mouse.move(x + 30, y - 70, steps=6)  # the button still down: the drag has ended, nothing follows
+    finally:
+        page.mouse.up()
+    kernel_round_trip(page, VIEWS)
+    assert target_mm(scope, "Hand_L") == start
+    drag_in_3d(page, VIEWS, False)
+
+
+def test_after_compare_the_new_views_are_in_sight(small_page):
+    """Issue 65: in a 1280 x 800 window, scroll down to the solver check boxes (the views above, out of sight),
+    tick two others and press *compare*: the new views are scrolled into sight, every canvas wholly in the window
+    (before, the page stayed where it was, the new views above it)."""
+    tab = small_page
+    tab.locator(".posekit-compare").scroll_into_view_if_needed()
+    tops = [c.bounding_box()["y"] for c in tab.locator(f"{VIEWS} canvas").all()]
+    assert max(tops) < 0, f"the views' tops at {tops} px: the test did not scroll them out of sight"
+    choose_solvers(tab, ["fabrik", "ccd"])
+    canvases = tab.locator(f"{VIEWS} canvas")
+
+    def in_sight():
+        boxes = [c.bounding_box() for c in canvases.all()]
+        return all(b is not None and b["y"] >= -0.5 and b["y"] + b["height"] <= 800.5 for b in boxes) or None
+
+    try:
+        wait_for(in_sight, 10, "the new views in sight")
+    except pytest.fail.Exception:
+        pytest.fail(f"after compare the views are out of sight: {[c.bounding_box() for c in canvases.all()]}")
+
+
 def test_voila_shuts_its_kernel_down(page, server):
+    """Last in this file: it closes the page and stops the server the tests above share."""
     kernels = server.note_kernels()
     assert kernels and all(k.is_running() for k in kernels)
     page.close()
     alive = server.stop()
     assert alive == [], f"kernels still running after Voila stopped: {alive}"
     assert all(not k.is_running() or k.status() == "zombie" for k in kernels)
-

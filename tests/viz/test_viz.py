@@ -490,6 +490,31 @@ def test_dragging_an_orange_marker_moves_the_look_at_target():
     assert not np.allclose(ed.rows[0]["target"], head) and np.allclose(ed.rows[1]["target"], goal)
 
 
+def test_a_lone_viewer_drags_its_orange_markers_joint_target(sample):
+    """A lone viewer (lesson 00's, no session, nobody listening to look-at moves): a drag on an orange look-at
+    marker moves the joint's position target (created at the drag's point), its look-at point stays, and the target
+    listeners hear it, as before the views read their markers from a session; Escape puts it back (no target)."""
+    s = sample.skeleton
+    v = SkeletonViewer(s, sample.global_pos[0])
+    head = sample.global_pos[0][s.index("head")]
+    look0 = head + np.array([0.0, 0.0, 1.0])
+    v.set_targets({}, look_at={"head": look0})
+    seen = []
+    v.on_target_change(lambda name, p: seen.append((name, p.copy())))
+    v.grab(look0 + 0.01)
+    assert v.dragging == "head" and not v.dragging_look
+    cam = np.asarray(v.camera.position) + v._offset
+    goal = look0 + np.array([0.3, 0.0, 0.0])
+    goal = goal - ((goal - look0) @ (cam - look0)) / np.sum((cam - look0) ** 2) * (cam - look0)  # in the plane
+    v.drag_to(cam + 0.5 * (goal - cam))
+    np.testing.assert_allclose(v.targets["head"], goal, atol=1e-9)
+    np.testing.assert_allclose(v.look_targets["head"], look0)
+    assert seen and seen[-1][0] == "head" and np.allclose(seen[-1][1], goal, atol=1e-9)
+    v.cancel_drag()  # Escape: the target the drag made goes again, the look-at point stays
+    assert v.dragging is None and "head" not in v.targets
+    np.testing.assert_allclose(v.look_targets["head"], look0)
+
+
 def test_values_sent_back_unchanged_move_nothing_and_a_move_changes_one_axis(sample):
     """Issue 27: selecting joints one after another never moves a target: the browser sending back a slider's own
     value (or its snap to the step grid) is zero steps. A move changes its own axis only, and a slider pushed to an
@@ -625,15 +650,18 @@ def test_antialiasing_is_on_unless_posekit_antialias_is_0(sample, monkeypatch):
     assert "POSEKIT_ANTIALIAS" not in dry.stdout
 
 
-def test_make_studio_keeps_one_kernel_preheated_or_studio_pool_of_them():
-    """make studio: Voila keeps one kernel with the page already run for the next visitor; STUDIO_POOL=N keeps N,
-    for a class arriving at once."""
+def test_make_studio_keeps_studio_pool_kernels_preheated():
+    """make studio: Voila keeps STUDIO_POOL kernels with the page already run for the next visitors (default
+    posekit.viz.studio_app.STUDIO_POOL, issue 65: three arriving at once); STUDIO_POOL=N keeps N, for a class."""
     import subprocess
     from pathlib import Path
 
+    from posekit.viz.studio_app import STUDIO_POOL
+
     root = Path(__file__).resolve().parents[2]
     dry = subprocess.run(["make", "-n", "-C", str(root), "studio"], capture_output=True, text=True)
-    assert dry.returncode == 0 and "--preheat_kernel=True --pool_size=1 " in dry.stdout, dry.stdout + dry.stderr
+    assert dry.returncode == 0 and f"--preheat_kernel=True --pool_size={STUDIO_POOL} " in dry.stdout, \
+        dry.stdout + dry.stderr
     dry = subprocess.run(["make", "-n", "-C", str(root), "studio", "STUDIO_POOL=30"], capture_output=True, text=True)
     assert "--preheat_kernel=True --pool_size=30 " in dry.stdout, dry.stdout
 
