@@ -197,7 +197,7 @@ PROTORES_COLUMNS = ["method", "width", "steps", "5point_ikd_l2_e3", "5point_loc_
 
 def _protores(name: str, d: dict) -> str:
     what = ("ProtoRes's scaling curve: widths and step counts, scored on lesson 05's benchmarks" if "scaling" in name
-            else "ProtoRes's reference setting of the studies (width 128, 2,000 steps) once per seed, nothing else "
+            else "ProtoRes's reference setting of the studies (its width and steps in the rows) once per seed, nothing else "
             "changed: how far runs that differ only in their seed differ, the yardstick lesson 05 reads every "
             "ordering of a network against" if "seeds" in name else
             "ProtoRes and its ablations (Table 2 of Oreshkin et al. 2022), short runs at CPU scale, scored on "

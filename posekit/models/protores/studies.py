@@ -299,8 +299,8 @@ register_trainer(
                    "seconds), written to data_samples/results/protores_scaling.json"),
           arg("--seeds", default=None, metavar="S,S,...",
               help="the seed study instead: the reference setting (width 128, 2,000 steps) once per seed, "
-                   "written to data_samples/results/protores_seeds.json (lesson 05's yardstick; about 15 minutes "
-                   "on 2 cores for 0,1,2)"),
+                   "written to data_samples/results/protores_seeds.json (lesson 05's yardstick; its time is the "
+                   "file's seconds)"),
           arg("--shipped", action="store_true",
               help="no training: score the shipped ProtoRes again into both files' shipped row (after new weights)"),
           arg("--out", default=None, help="JSON file (default data_samples/results/protores_ablation.json, or "
