@@ -483,15 +483,7 @@ def preheated_first_views(pages: int = 3, antialias: bool = False, floor: bool =
             browser = launch_chromium(p)
             try:
                 for _ in range(pages):
-                    t0, quiet = time.time(), 0
-                    while time.time() - t0 < ready_s and quiet < 3:
-                        time.sleep(1)
-                        ks = kernel_processes(server.process.pid)
-                        try:
-                            busy = not ks or any(k.cpu_percent(interval=None) > 5 for k in ks)
-                        except Exception:  # noqa: BLE001 - psutil: a kernel starting or gone
-                            busy = True
-                        quiet = 0 if busy else quiet + 1
+                    _wait_quiet(server, ready_s)
                     tab = blank_tab(browser)
                     _drawn_probe(tab, probe)
                     t0 = time.perf_counter()

@@ -35,6 +35,8 @@ import io
 import json
 import os
 import re
+import signal
+import socket
 import subprocess
 import sys
 import tempfile
@@ -294,8 +296,6 @@ class _Forked:
     in a session of its own, that starts in a fraction of the time a new interpreter and the imports take."""
 
     def __init__(self, template: "_Template"):
-        import socket
-
         ours, theirs = socket.socketpair()
         r, w = os.pipe()
         try:
@@ -315,8 +315,6 @@ class _Forked:
                 kill(self.pid, 9)
 
     def close(self) -> str:
-        import socket
-
         with contextlib.suppress(OSError):
             self.sock.shutdown(socket.SHUT_WR)  # the answer's input ends: the executor returns
         printed = self._printed(10)  # its standard error closes when it (and what it started) ends
@@ -357,8 +355,6 @@ class _Template:
     answer stop or kill it, the next answers are spawned as new interpreters instead (:class:`_Spawned`)."""
 
     def __init__(self, imports: str, env, timeout_s: float = 120):
-        import socket
-
         self.imports = imports
         self.ctl, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
         self.proc = subprocess.Popen([sys.executable, "-m", "posekit.exercises._judge", "--template",
@@ -372,8 +368,6 @@ class _Template:
         self.ctl.settimeout(10)
 
     def ask(self, fds) -> None:
-        import socket
-
         socket.send_fds(self.ctl, [b"fork"], fds)
 
     def reply(self) -> dict:
@@ -508,9 +502,6 @@ def _execute() -> int:
 
 def _template(fd: int) -> int:
     """The template of :class:`_Template`: run the lesson's imports, then fork an executor for each request."""
-    import signal
-    import socket
-
     _not_dumpable()
     ctl = socket.socket(fileno=fd)
     signal.signal(signal.SIGCHLD, signal.SIG_IGN)  # the executors are reaped as they end
