@@ -54,6 +54,9 @@ REFERENCES: dict[str, Reference] = {
     "zhou2019": Reference(
         ("Y. Zhou", "C. Barnes", "J. Lu", "J. Yang", "H. Li"),
         "On the Continuity of Rotation Representations in Neural Networks", "CVPR", 2019),
+    "shepperd1978": Reference(
+        ("S. W. Shepperd",), "Quaternion from Rotation Matrix", "Journal of Guidance and Control 1(3)", 1978,
+        doi="10.2514/3.55767b"),
     "aristidou2018": Reference(
         ("A. Aristidou", "J. Lasenby", "Y. Chrysanthou", "A. Shamir"),
         "Inverse Kinematics Techniques in Computer Graphics: A Survey", "Computer Graphics Forum", 2018),

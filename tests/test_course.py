@@ -262,7 +262,7 @@ def test_instructor_notebook_fills_every_exercise(number):
 def test_solutions_command_runs_the_instructor_version(tmp_path, capsys):
     assert main(["exercises", "solutions", "00", "--out", str(tmp_path), "--html"]) == 0
     out = capsys.readouterr().out
-    for checker in ("check_local_from_global", "check_sixd_to_matrix", "check_bone_lengths"):
+    for checker in ("check_local_from_global", "check_matrix_to_quat", "check_bone_lengths"):
         assert f"✓ {checker}" in out
     assert "✗" not in out
     nb = read_notebook(tmp_path / "00_skeletons_and_poses.solutions.ipynb")

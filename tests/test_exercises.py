@@ -307,7 +307,7 @@ def test_each_checker_refuses_the_wrong_answers_that_used_to_pass(slip, capsys):
 
 CALLS_POSEKIT = {  # checker: (lesson, the reference solution, the posekit function the answer calls, its name)
     "check_local_from_global": ("00", "exercise_local_from_global", "posekit.kinematics:fk"),
-    "check_sixd_to_matrix": ("00", "exercise_sixd_to_matrix", "posekit.rotations:sixd_to_matrix"),
+    "check_matrix_to_quat": ("00", "exercise_matrix_to_quat", "posekit.rotations:matrix_to_quat"),
     "check_bone_lengths": ("00", "exercise_bone_lengths", "posekit.kinematics:bone_lengths_of"),
     "check_gpr_loo": ("02", "exercise_gpr_loo", "posekit.invrig.gpr:cross_validate"),
     "check_dls_prior": ("02", "exercise_dls_prior", "posekit.invrig.jacobian:refine"),
@@ -318,7 +318,7 @@ CALLS_POSEKIT = {  # checker: (lesson, the reference solution, the posekit funct
     "check_adversarial": ("04", "exercise_adversarial", "posekit.models.aegan.train:_bce"),
     "check_look_at_angle": ("05", "exercise_look_at_angle", "posekit.exercises.nb05:look_at_angle_reference"),
     "check_rotation_noise": ("05", "exercise_rotation_noise", "posekit.models.protores.data:axis_angle_matrix"),
-    "check_centroid": ("05", "exercise_centroid", "posekit.models.protores.networks:centroid"),
+    "check_effector_inputs": ("05", "exercise_effector_inputs", "posekit.models.protores.networks:centroid"),
     "check_drag_on_sphere": ("06", "exercise_drag_on_sphere", "posekit.exercises.nb06:sphere_drag_reference"),
     "check_slerp": ("06", "exercise_slerp", "posekit.ik.keyframes:slerp"),
 }
@@ -738,7 +738,8 @@ def _sol(lesson, name):
     return solution_function(find_lesson(lesson), name)
 
 
-LOCAL, SIXD, BONES = _sol("00", "exercise_local_from_global"), _sol("00", "exercise_sixd_to_matrix"), _sol("00", "exercise_bone_lengths")
+LOCAL, TO_QUAT, BONES = (_sol("00", "exercise_local_from_global"), _sol("00", "exercise_matrix_to_quat"),
+                         _sol("00", "exercise_bone_lengths"))
 
 
 def _local_own(parents, global_rot, global_pos, order="parent first", offsets="parent frame", root="kept",
@@ -769,16 +770,44 @@ def _local_own(parents, global_rot, global_pos, order="parent first", offsets="p
     return L, O
 
 
-def _sixd_own(x, columns=True, normalise=True, order=1.0, in_place=False):
-    x = x if in_place else np.array(x, float)
-    a1, a2 = x[:3], x[3:6]
-    if in_place:
-        a1 /= np.linalg.norm(a1)
-    b1 = a1 / np.linalg.norm(a1) if normalise else a1
-    b2 = a2 - (b1 @ a2) * b1
-    b2 = b2 / np.linalg.norm(b2)
-    b3 = np.cross(b1, b2) if order > 0 else np.cross(b2, b1)
-    return np.stack([b1, b2, b3], axis=1 if columns else 0)
+def _quat_own(R, method="largest", order="xyzw", transposed=False, keep_sign=False, flattened=False,
+              in_place=False, dtype=float):
+    """A student's own matrix-to-quaternion, with the slips below as options. ``method``: "largest" divides by the
+    largest of the four components (Shepperd), "trace" by w always, "copysign" takes every component from its
+    square root and the sign of an off-diagonal difference, "eigen" the top eigenvector of a symmetric 4 x 4 matrix
+    built from ``R``. ``keep_sign``: the largest component made positive, as Shepperd's branches leave it, not w."""
+    if in_place:  # "cleans" the caller's matrices first
+        R[...] = np.round(R, 15)
+    R = np.array(R, dtype)
+    if transposed:
+        R = np.swapaxes(R, -1, -2)
+    m = R.reshape(-1, 3, 3)
+    out = np.empty((len(m), 4), dtype)
+    for i, r in enumerate(m):
+        tr = np.trace(r)
+        d = np.array([r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]])
+        if method == "trace":
+            w = np.sqrt(max(1 + tr, 0.0)) / 2
+            with np.errstate(divide="ignore", invalid="ignore"):
+                q = np.append(d / (4 * w), w)
+        elif method == "copysign":
+            sq = np.sqrt(np.maximum([1 + 2 * r[0, 0] - tr, 1 + 2 * r[1, 1] - tr, 1 + 2 * r[2, 2] - tr, 1 + tr], 0)) / 2
+            q = np.append(np.copysign(sq[:3], d), sq[3])
+        elif method == "eigen":
+            K = np.array([[r[0, 0] - r[1, 1] - r[2, 2], r[1, 0] + r[0, 1], r[2, 0] + r[0, 2], d[0]],
+                          [r[1, 0] + r[0, 1], r[1, 1] - r[0, 0] - r[2, 2], r[2, 1] + r[1, 2], d[1]],
+                          [r[2, 0] + r[0, 2], r[2, 1] + r[1, 2], r[2, 2] - r[0, 0] - r[1, 1], d[2]],
+                          [d[0], d[1], d[2], tr]]) / 3
+            q = np.linalg.eigh(K.astype(float))[1][:, -1]
+        else:
+            q = np.asarray(TO_QUAT(r), float)
+        big = q[int(np.argmax(np.abs(q)))]
+        if (big if keep_sign else q[3]) < 0:
+            q = -q
+        out[i] = q
+    if order == "wxyz":
+        out = out[:, [3, 0, 1, 2]]
+    return out if flattened else out.reshape(R.shape[:-2] + (4,))
 
 
 def _bones_root_first(parents, global_pos):
@@ -813,15 +842,20 @@ BY_CHECKER["check_local_from_global"] = ({
         _local_own(par, g, p, one_pose=True) for g, p in zip(np.reshape(G, (-1,) + np.shape(G)[-3:]),
                                                               np.reshape(P, (-1,) + np.shape(P)[-2:]))))),
 })
-BY_CHECKER["check_sixd_to_matrix"] = ({
-    "rows, not columns": (lambda x: _sixd_own(x, columns=False), "columns must be b1, b2, b1 x b2"),
-    "b1 not normalised": (lambda x: _sixd_own(x, normalise=False), "case 4 differs"),
-    "b3 = b2 x b1": (lambda x: _sixd_own(x, order=-1.0), "case 1 differs"),
-    "the caller's x normalised in place": (lambda x: _sixd_own(x, in_place=True), "changed its input `x` in place"),
+BY_CHECKER["check_matrix_to_quat"] = ({
+    "the textbook formula, divided by w": (lambda R: _quat_own(R, method="trace"), "near a half-turn"),
+    "every component from its own square root, signs copied": (lambda R: _quat_own(R, method="copysign"),
+                                                                "w from its square root"),
+    "scalar first, (w, x, y, z)": (lambda R: _quat_own(R, order="wxyz"), "the order is (x, y, z, w), scalar last"),
+    "the inverse rotation's": (lambda R: _quat_own(R, transposed=True), "(x, y, z) has the wrong sign"),
+    "w left negative": (lambda R: _quat_own(R, keep_sign=True), "w is negative"),
+    "the batch axes not given back": (lambda R: _quat_own(R, flattened=True), "case 2 returned shape (1, 4)"),
+    "the caller's R rounded in place": (lambda R: _quat_own(R, in_place=True), "changed its input `R` in place"),
 }, {
-    "the reference solution": SIXD,
-    "its own Gram-Schmidt": _sixd_own,
-    "in float32": lambda x: _sixd_own(x).astype(np.float32),
+    "the reference solution": TO_QUAT,
+    "its own Shepperd": _quat_own,
+    "the top eigenvector of a 4 x 4 matrix": lambda R: _quat_own(R, method="eigen"),
+    "in float32": lambda R: _quat_own(R, dtype=np.float32),
 })
 BY_CHECKER["check_bone_lengths"] = ({
     "the root assumed at index 0": (_bones_root_first, "of parents [3, 0, 0, -1]"),
@@ -974,8 +1008,8 @@ BY_CHECKER["check_authors_loss"] = ({
     "in float32": lambda *a: _authors_own(*a, dtype=np.float32),
 })
 
-LOOK_AT, ROT_NOISE, CENTROID = (_sol("05", "exercise_look_at_angle"), _sol("05", "exercise_rotation_noise"),
-                                _sol("05", "exercise_centroid"))
+LOOK_AT, ROT_NOISE, INPUTS = (_sol("05", "exercise_look_at_angle"), _sol("05", "exercise_rotation_noise"),
+                              _sol("05", "exercise_effector_inputs"))
 
 
 def _look_own(R, v, t, p, form="atan2", transpose=False, from_origin=False, degrees=False, in_place=False,
@@ -1019,12 +1053,28 @@ def _noise_own(R, n, lam, side="left", sign=1.0, eta=13, scale=True, guard=True,
     return np.stack(out)
 
 
-def _centroid_own(kind, value, lam, all_kinds=False, weight="1 - lam", dtype=float):
-    pos = np.ones(len(kind), bool) if all_kinds else np.asarray(kind) == 0
-    w = {"1 - lam": 1 - lam + 1e-3, "lam": lam, "no 1e-3": 1 - lam}[weight][pos]
-    with np.errstate(invalid="ignore"):
-        out = (w[:, None] * value[pos, :3]).sum(0) / w.sum()
-    return np.zeros(3, dtype) if not pos.any() and weight != "no 1e-3" else out.astype(dtype)
+def _inputs_own(kind, value, lam, weight="1 - lam", counted=(0,), moved=(0, 2), columns=3, per_request=True,
+                guard=True, torch_style=False, in_place=False, dtype=float):
+    """A student's own centroid and inputs, with the slips below as options (``torch_style``: the library's
+    branch-free form, ``sum / max(s, 1e-9) * (s > 0)``)."""
+    kind = np.asarray(kind)
+    lam = np.asarray(lam, dtype)
+    val = value if in_place else np.array(value, dtype)
+    w = np.isin(kind, counted) * {"1 - lam": 1 - lam + dtype(1e-3), "lam": lam, "no 1e-3": 1 - lam}[weight]
+    if per_request:
+        s = w.sum(axis=1)[:, None]
+        total = (w[..., None] * val[..., :3]).sum(axis=1)
+    else:
+        s = np.full((len(kind), 1), w.sum())
+        total = np.broadcast_to((w[..., None] * val[..., :3]).sum(axis=(0, 1)), (len(kind), 3))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        if torch_style:
+            c = total / np.maximum(s, 1e-9) * (s > 0)
+        else:
+            c = np.where(s > 0, total / s, 0.0) if guard else total / s
+    out = val
+    out[..., :columns] -= np.isin(kind, moved)[..., None] * np.tile(c, 2)[:, None, :columns]
+    return c.astype(dtype), out
 
 
 BY_CHECKER["check_look_at_angle"] = ({
@@ -1052,13 +1102,23 @@ BY_CHECKER["check_rotation_noise"] = ({
     "its own Rodrigues": _noise_own,
     "in float32": lambda *a: _noise_own(*a, dtype=np.float32),
 })
-BY_CHECKER["check_centroid"] = ({
-    "every kind averaged": (lambda *a: _centroid_own(*a, all_kinds=True), "only kind 0"),
-    "weighted by lam": (lambda *a: _centroid_own(*a, weight="lam"), "weights 1 - lam + 1e-3"),
-    "without the 1e-3": (lambda *a: _centroid_own(*a, weight="no 1e-3"), "weights 1 - lam + 1e-3"),
+BY_CHECKER["check_effector_inputs"] = ({
+    "weighted by lam": (lambda *a: _inputs_own(*a, weight="lam"), "not Lambda"),
+    "without the 1e-3": (lambda *a: _inputs_own(*a, weight="no 1e-3"), "without the 1e-3 a loose effector"),
+    "look-at targets in the centroid": (lambda *a: _inputs_own(*a, counted=(0, 2)), "look-at targets counted"),
+    "one centroid for the batch": (lambda *a: _inputs_own(*a, per_request=False), "each request has its own"),
+    "rotations moved": (lambda *a: _inputs_own(*a, moved=(0, 1, 2)), "a rotation's 6D moved"),
+    "look-at targets left": (lambda *a: _inputs_own(*a, moved=(0,)), "a look-at target left where it was"),
+    "all six values moved": (lambda *a: _inputs_own(*a, columns=6), "the last three values moved too"),
+    "no guard for a request without positions": (lambda *a: _inputs_own(*a, guard=False),
+                                                 "it has no position effector: its centroid is the origin"),
+    "the caller's values moved in place": (lambda *a: _inputs_own(*a, in_place=True),
+                                           "changed its input `value` in place"),
 }, {
-    "the reference solution": CENTROID,
-    "in float32": lambda *a: _centroid_own(*a, dtype=np.float32),
+    "the reference solution": INPUTS,
+    "its own": _inputs_own,
+    "the library's branch-free form": lambda *a: _inputs_own(*a, torch_style=True),
+    "in float32": lambda *a: _inputs_own(*a, dtype=np.float32),
 })
 
 

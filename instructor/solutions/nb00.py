@@ -3,7 +3,7 @@ them into the lesson)."""
 
 from __future__ import annotations
 
-__all__ = ["exercise_local_from_global", "exercise_sixd_to_matrix", "exercise_bone_lengths"]
+__all__ = ["exercise_local_from_global", "exercise_matrix_to_quat", "exercise_bone_lengths"]
 
 
 def exercise_local_from_global(parents, global_rot, global_pos):
@@ -42,30 +42,49 @@ def exercise_local_from_global(parents, global_rot, global_pos):
     return local_rot, local_pos
 
 
-def exercise_sixd_to_matrix(x):
-    """A rotation matrix from a 6D vector by Gram-Schmidt (Zhou et al. 2019).
+def exercise_matrix_to_quat(R):
+    """Rotation matrices back to unit quaternions ``(x, y, z, w)``, ``w >= 0``, accurate at every angle.
 
-    ``b1 = a1 / |a1|``, ``b2 = (a2 - (b1 . a2) b1) / |...|``, ``b3 = b1 x b2``, ``R = [b1 b2 b3]``.
+    From ``R(q)`` (the exercise's matrix), the diagonal and the trace give each component's square,
+    ``4w^2 = 1 + tr R``, ``4x^2 = 1 + 2 R_11 - tr R``, ``4y^2 = 1 + 2 R_22 - tr R``, ``4z^2 = 1 + 2 R_33 - tr R``,
+    and the off-diagonal entries give the products of pairs, ``R_32 - R_23 = 4wx``, ``R_21 + R_12 = 4xy`` and so
+    on. Dividing those by ``4w`` (the textbook formula) loses every digit near a half-turn, where ``w -> 0``;
+    Shepperd's method (Shepperd 1978) square-roots the *largest* of the four squares (at least 1/4 of their sum,
+    1) and divides by it. The sign is then chosen so that ``w >= 0`` (``q`` and ``-q`` are the same rotation).
 
     Parameters
     ----------
-    x : ndarray, shape (6,)
-        The first two columns ``a1``, ``a2`` of a rotation matrix, one after the other; need not be
-        orthonormal (e.g. a network's output).
+    R : ndarray, shape (..., 3, 3)
+        Rotation matrices (acting on column vectors).
 
     Returns
     -------
-    ndarray, shape (3, 3)
-        A rotation matrix with columns ``b1, b2, b3``.
+    ndarray, shape (..., 4)
+        Unit quaternions, scalar last, ``w >= 0``.
     """
     import numpy as np
 
-    a1, a2 = x[:3], x[3:]
-    b1 = a1 / np.linalg.norm(a1)
-    b2 = a2 - (b1 @ a2) * b1  # remove the part of a2 along b1
-    b2 = b2 / np.linalg.norm(b2)
-    b3 = np.cross(b1, b2)
-    return np.stack([b1, b2, b3], axis=1)  # as columns, not rows
+    R = np.asarray(R, dtype=float)
+    m = R.reshape(-1, 3, 3)  # any batch axes, one matrix at a time
+    q = np.empty((len(m), 4))
+    for i, r in enumerate(m):
+        tr = np.trace(r)
+        four_squares = [1 + 2 * r[0, 0] - tr, 1 + 2 * r[1, 1] - tr, 1 + 2 * r[2, 2] - tr, 1 + tr]  # 4x^2 ... 4w^2
+        k = int(np.argmax(four_squares))
+        s = 2.0 * np.sqrt(four_squares[k])  # 4 times the largest component: never near zero
+        w4, xy4, xz4, yz4 = r[2, 1] - r[1, 2], r[1, 0] + r[0, 1], r[0, 2] + r[2, 0], r[2, 1] + r[1, 2]
+        wx4, wy4, wz4 = w4, r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]
+        if k == 0:
+            q[i] = [s / 4, xy4 / s, xz4 / s, wx4 / s]
+        elif k == 1:
+            q[i] = [xy4 / s, s / 4, yz4 / s, wy4 / s]
+        elif k == 2:
+            q[i] = [xz4 / s, yz4 / s, s / 4, wz4 / s]
+        else:
+            q[i] = [wx4 / s, wy4 / s, wz4 / s, s / 4]
+        if q[i, 3] < 0:
+            q[i] = -q[i]
+    return q.reshape(R.shape[:-2] + (4,))
 
 
 def exercise_bone_lengths(parents, global_pos):

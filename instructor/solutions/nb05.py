@@ -3,7 +3,7 @@ them into the lesson)."""
 
 from __future__ import annotations
 
-__all__ = ["exercise_look_at_angle", "exercise_rotation_noise", "exercise_centroid"]
+__all__ = ["exercise_look_at_angle", "exercise_rotation_noise", "exercise_effector_inputs"]
 
 
 def exercise_look_at_angle(R, v, t, p):
@@ -77,30 +77,42 @@ def exercise_rotation_noise(R, n, lam):
     return out
 
 
-def exercise_centroid(kind, value, lam):
-    """Tolerance-weighted centroid of a request's position effectors (Oreshkin et al. 2022, Sec. 2.1).
+def exercise_effector_inputs(kind, value, lam):
+    """What ProtoRes reads (Oreshkin et al. 2022, Sec. 2.1): the centroid of each request and every effector's six
+    values re-referenced to it, for a batch of requests.
 
-    ``c = sum_i w_i p_i / sum_i w_i`` over the position effectors, with ``w_i = 1 - Lambda_i + 1e-3`` (a
-    tight effector counts most); rotations and look-at targets do not count. The origin when the request has
-    no position effector.
+    ``c = sum_i w_i p_i / sum_i w_i`` over a request's position effectors, ``w_i = 1 - Lambda_i + 1e-3`` (a tight
+    effector counts most; at ``Lambda = 1`` every weight is ``1e-3``, still a mean); rotations and look-at targets do
+    not count, and a request with no position effector is centred on the origin. Then what moves with the character
+    moves: a position and a look-at target (points) lose ``c``; a rotation's 6D, a look-at direction and a position's
+    three zeros stay. Moving every point of a request by ``d`` moves ``c`` by ``d`` and leaves the inputs as they
+    were: the network never sees where the character stands.
 
     Parameters
     ----------
-    kind : ndarray of int, shape (N,)
+    kind : ndarray of int, shape (B, N)
         0 position, 1 rotation, 2 look-at.
-    value : ndarray, shape (N, 6)
-        Effector values; a position effector's position is ``value[:, :3]``, metres.
-    lam : ndarray, shape (N,)
+    value : ndarray, shape (B, N, 6)
+        ``[p, 0, 0, 0]`` for a position (metres), a rotation's 6D, ``[t, v]`` for a look-at (target in metres, local
+        direction).
+    lam : ndarray, shape (B, N)
         Tolerances ``Lambda`` in [0, 1].
 
     Returns
     -------
-    ndarray, shape (3,), metres
+    c : ndarray, shape (B, 3), metres
+    inputs : ndarray, shape (B, N, 6)
     """
     import numpy as np
 
-    is_position = np.asarray(kind) == 0
-    w = is_position * (1.0 - np.asarray(lam, dtype=float) + 1e-3)  # 0 for the other kinds
-    if w.sum() == 0:
-        return np.zeros(3)
-    return (w[:, None] * value[:, :3]).sum(axis=0) / w.sum()
+    kind = np.asarray(kind)
+    value = np.asarray(value, dtype=float)
+    w = (kind == 0) * (1.0 - np.asarray(lam, dtype=float) + 1e-3)  # 0 for rotations and look-ats
+    total = w.sum(axis=1)  # one sum per request
+    c = np.zeros((len(kind), 3))
+    has = total > 0  # a request with no position effector keeps the origin
+    c[has] = (w[has, :, None] * value[has, :, :3]).sum(axis=1) / total[has, None]
+    inputs = value.copy()  # the caller's array stays
+    points = kind != 1  # positions and look-at targets are points; a rotation is not
+    inputs[..., :3] -= points[..., None] * c[:, None, :]
+    return c, inputs

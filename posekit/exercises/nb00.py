@@ -1,9 +1,10 @@
 """Checkers for ``notebooks/00_skeletons_and_poses.ipynb``.
 
 Section 2 writes forward kinematics; exercise 1 asks for its other half, the local rotations and offsets of a posed
-skeleton from its global rotations and positions, for any batch of poses and any tree. Each checker starts with a
-generic case, accepts float32 answers, and refuses an answer that calls the posekit function it is compared against
-or changes its inputs.
+skeleton from its global rotations and positions, for any batch of poses and any tree. Section 3 turns quaternions
+into matrices; exercise 2 goes back, accurate at half-turns where the textbook formula divides by nearly zero. Each
+checker starts with a generic case, accepts float32 answers, and refuses an answer that calls the posekit function
+it is compared against or changes its inputs.
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..kinematics import bone_lengths_of, fk
-from ..rotations import matrix_to_sixd, quat_to_matrix, random_rotations, sixd_to_matrix
+from ..rotations import quat_to_matrix, random_rotations
 from ._check import flat, report
 from ._judge import judged
 
@@ -117,22 +118,139 @@ def check_local_from_global(my_local_from_global) -> bool:
                   arg_names=("parents", "global_rot", "global_pos"))
 
 
-@judged
-def check_sixd_to_matrix(my_sixd_to_matrix) -> bool:
-    """Check ``my_sixd_to_matrix(x (6,)) -> R (3, 3)`` (Gram-Schmidt of Zhou et al. 2019) on exact
-    6D vectors and on noisy, unnormalised ones."""
-    rng = np.random.default_rng(3)
-    R = quat_to_matrix(random_rotations(3, rng))
-    inputs = [matrix_to_sixd(r) for r in R] + [matrix_to_sixd(R[0]) * 2.5 + rng.normal(0, 0.2, 6),
-                                               rng.normal(size=6), matrix_to_sixd(np.eye(3)),
-                                               np.array([1e-3, 0.0, 0.0, 1e-3, 2e-3, 0.0]),  # tiny, unnormalised
-                                               matrix_to_sixd(R[1]).astype(np.float32)]  # float32
+# -- exercise 2: a matrix back to a quaternion, accurate at every angle ---------------------------------------------
 
-    def describe(got, expected):
-        return f"max entry error {np.abs(got - expected).max():.3g}; columns must be b1, b2, b1 x b2"
-    cases = [((x.copy(),), sixd_to_matrix(np.asarray(x, float)), describe) for x in inputs]
-    return report("check_sixd_to_matrix", my_sixd_to_matrix, cases, atol=1e-6, forbid=(sixd_to_matrix,),
-                  arg_names=("x",))
+def matrix_to_quat_reference(R):
+    """What :func:`check_matrix_to_quat` expects: unit quaternions ``(x, y, z, w)``, ``w >= 0``, of rotation
+    matrices ``(..., 3, 3)``, by Shepperd's method (Shepperd 1978): of ``4w^2 = 1 + tr R`` and
+    ``4x^2 = 1 + 2 R_11 - tr R`` (and y, z alike) the largest is taken square-rooted, and the other three components
+    come from the off-diagonal sums and differences divided by it, so no division is by a number near zero."""
+    R = np.asarray(R, dtype=float)
+    m = R.reshape(-1, 3, 3)
+    out = np.empty((len(m), 4))
+    for i, r in enumerate(m):
+        tr = r[0, 0] + r[1, 1] + r[2, 2]
+        squares = (1 + 2 * r[0, 0] - tr, 1 + 2 * r[1, 1] - tr, 1 + 2 * r[2, 2] - tr, 1 + tr)  # 4x^2 4y^2 4z^2 4w^2
+        k = int(np.argmax(squares))
+        s = 2.0 * np.sqrt(squares[k])  # 4 times the largest component
+        if k == 3:
+            q = [(r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s, s / 4]
+        elif k == 0:
+            q = [s / 4, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s, (r[2, 1] - r[1, 2]) / s]
+        elif k == 1:
+            q = [(r[0, 1] + r[1, 0]) / s, s / 4, (r[1, 2] + r[2, 1]) / s, (r[0, 2] - r[2, 0]) / s]
+        else:
+            q = [(r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, s / 4, (r[1, 0] - r[0, 1]) / s]
+        out[i] = q if q[3] >= 0 else np.negative(q)
+    return out.reshape(R.shape[:-2] + (4,))
+
+
+def _quat_by_trace(R):
+    """The textbook formula alone: ``w = sqrt(1 + tr R) / 2`` and ``x = (R_32 - R_23) / 4w`` (its digits go near a
+    half-turn; the describe's slip)."""
+    R = np.asarray(R, dtype=float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        w = np.sqrt(np.maximum(1 + np.trace(R, axis1=-2, axis2=-1), 0)) / 2
+        xyz = np.stack([R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]], -1)
+        return np.concatenate([xyz / (4 * w[..., None]), w[..., None]], -1)
+
+
+def _about(axis, angle):
+    """The rotation matrix of ``angle`` radians about ``axis`` (Rodrigues), for the checker's cases."""
+    k = np.asarray(axis, float) / np.linalg.norm(axis)
+    K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
+
+
+def _library_matrix_to_quat() -> tuple:
+    """The library functions that turn a matrix into a quaternion (scipy's ``Rotation.from_matrix`` and the backends
+    behind it, roma's ``rotmat_to_unitquat``), those this installation has: an answer may not call them."""
+    import importlib
+
+    found = []
+    for module, name in (("scipy.spatial.transform", "Rotation.from_matrix"),
+                         ("scipy.spatial.transform._rotation_cy", "from_matrix"),
+                         ("scipy.spatial.transform._rotation_xp", "from_matrix"),
+                         ("roma", "rotmat_to_unitquat")):
+        try:
+            obj = importlib.import_module(module)
+            for part in name.split("."):
+                obj = getattr(obj, part)
+        except (ImportError, AttributeError):
+            continue
+        found.append(obj)
+    return tuple(found)
+
+
+def matrix_to_quat_cases(seed: int = 0):
+    """The cases of :func:`check_matrix_to_quat`: ``(R, what)``, generic first.
+
+    Every joint's global rotation in one real pose of the shipped sample; one matrix (3, 3); the identity; turns of
+    pi - 1e-7, pi - 1e-5 and pi - 1e-3 about three axes (where ``1 + tr R`` is nearly 0); a (2, 3) batch of random
+    rotations; half-turns exactly, about a generic axis and about x (``w = 0``: q and -q both have ``w >= 0``, either
+    is accepted); float32.
+    """
+    skel, q, root = _skeleton_and_poses(seed=seed + 2, n=1)
+    G = fk(skel, quat_to_matrix(q[0]), root[0])[1]
+    rng = np.random.default_rng(seed + 4)
+    out = [(G, " (a real pose's global rotations)"), (quat_to_matrix(random_rotations(1, rng))[0], " (one matrix)"),
+           (np.eye(3), " (the identity)")]
+    near = np.stack([_about(rng.normal(size=3), np.pi - d) for d in (1e-7, 1e-5, 1e-3)])
+    out.append((near, " (turns a hair short of pi: 1 + tr R is nearly 0)"))
+    out.append((quat_to_matrix(random_rotations((2, 3), rng)), " (a (2, 3) batch)"))
+    out.append((_about(rng.normal(size=3), np.pi), " (a half-turn: w = 0)"))
+    out.append((np.diag([1.0, -1.0, -1.0]), " (a half-turn about x: w = 0)"))
+    out.append((quat_to_matrix(random_rotations(4, rng)).astype(np.float32), " (float32)"))
+    return out
+
+
+@judged
+def check_matrix_to_quat(my_matrix_to_quat) -> bool:
+    """Check ``my_matrix_to_quat(R (..., 3, 3)) -> q (..., 4)``: unit quaternions ``(x, y, z, w)`` with ``w >= 0``
+    (the lesson's convention), accurate to 1e-9 at every angle, half-turns included
+    (:func:`matrix_to_quat_reference`). At a half-turn ``w = 0`` and both ``q`` and ``-q`` are accepted."""
+    from ..rotations import matrix_to_quat
+    from ._check import Either
+
+    def describe_for(R, what):
+        R = np.asarray(R, dtype=float)
+        exp = matrix_to_quat_reference(R)
+        slips = {
+            "the order is (x, y, z, w), scalar last": np.concatenate([exp[..., 3:], exp[..., :3]], -1),
+            "(x, y, z) has the wrong sign: that is R^T, the inverse rotation (R_32 - R_23 gives +4wx)":
+                exp * np.array([-1.0, -1.0, -1.0, 1.0]),
+            "w is negative: q and -q are the same rotation; the lesson keeps w >= 0": -exp,
+        }
+
+        def describe(got, expected):
+            got, expected = got.reshape(-1, 4), expected.reshape(-1, 4)
+            err = np.where(np.isfinite(got), np.abs(got - expected), np.inf).max(axis=-1)
+            i = int(np.argmax(err))
+            said = f"quaternion {i}{what}: got {np.round(got[i], 6)}, expected {np.round(expected[i], 6)}"
+            if not np.all(np.isfinite(got[i])):
+                return said + ": not finite — a division by w (or by a root of 1 + tr R) near a half-turn"
+            flat_exp = {why: wrong.reshape(-1, 4) for why, wrong in slips.items()}
+            for why, wrong in flat_exp.items():
+                if np.allclose(got[i], wrong[i], atol=1e-6) and not np.allclose(wrong[i], expected[i], atol=1e-6):
+                    return said + ": " + why
+            if expected[i, 3] < 1e-2:
+                return (said + f": off by {err[i]:.3g} near a half-turn, where 1 + tr R = 4w^2 is nearly 0: w from "
+                        "its square root, or anything divided by w, loses digits; start from the largest of 4w^2, "
+                        "4x^2, 4y^2, 4z^2")
+            if abs(np.linalg.norm(got[i]) - 1) > 1e-6:
+                return said + f": |q| = {np.linalg.norm(got[i]):.6g}, not 1"
+            return said + f": off by {err[i]:.3g}"
+        return describe
+
+    cases = []
+    for R, what in matrix_to_quat_cases():
+        exp = matrix_to_quat_reference(R)
+        if "w = 0" in what:
+            exp = Either(exp, -exp)
+        cases.append(((R,), exp, describe_for(R, what)))
+    return report("check_matrix_to_quat", my_matrix_to_quat, cases, atol=1e-9,
+                  forbid=(matrix_to_quat, matrix_to_quat_reference) + _library_matrix_to_quat(),
+                  arg_names=("R",))
 
 
 @judged
@@ -159,4 +277,4 @@ def check_bone_lengths(my_bone_lengths) -> bool:
                   arg_names=("parents", "global_pos"))
 
 
-__all__ = ["check_local_from_global", "check_sixd_to_matrix", "check_bone_lengths"]
+__all__ = ["check_local_from_global", "check_matrix_to_quat", "check_bone_lengths"]

@@ -3,9 +3,10 @@
 Section 2 writes the proto-residual step and section 1 states the tolerance's noise scale; the exercises build what
 section 4 only names: the look-at loss's angle, accurate at 0 and pi where the training loss clamps its arccos
 (exercise 1), and the noise model of a rotation effector, a rotation vector turned into a matrix by Rodrigues'
-formula, finite at sigma = 0 (exercise 2). Exercise 3 (the centroid) is kept. Each checker starts with a generic
-case, accepts float32 answers, and refuses an answer that calls the posekit function it is compared against or
-changes its inputs.
+formula, finite at sigma = 0 (exercise 2); and what the network reads, the centroid and the effector values
+re-referenced to it for a batch of requests, which section 1 states and section 2 calls posekit for (exercise 3).
+Each checker starts with a generic case, accepts float32 answers, and refuses an answer that calls the posekit
+function it is compared against or changes its inputs.
 """
 
 from __future__ import annotations
@@ -175,30 +176,139 @@ def _noise_with_sigma(R, n, sigma):
     return rotation_noise_reference(R, n, lam)
 
 
-@judged
-def check_centroid(my_centroid) -> bool:
-    """Check ``my_centroid(kind (N,), value (N, 6), lam (N,)) -> (3,)``: the mean of the *position* effectors'
-    positions weighted by ``1 - Lambda + 1e-3`` (the origin when there is none;
-    :func:`posekit.models.protores.networks.centroid`)."""
-    import torch
+# -- exercise 3: what the network reads ------------------------------------------------------------------------------
 
-    from ..models.protores.networks import centroid
+def effector_inputs_reference(kind, value, lam):
+    """What :func:`check_effector_inputs` expects: ``(c (B, 3), inputs (B, N, 6))`` for a batch of requests, the
+    centroid of Sec. 2.1 (each request's position effectors weighted by ``1 - Lambda + 1e-3``, the origin when it
+    has none) and the values re-referenced to it: a position and a look-at target minus ``c``, a rotation's 6D, a
+    look-at direction and a position's three zeros unchanged."""
+    kind, value, lam = np.asarray(kind), np.asarray(value, dtype=float), np.asarray(lam, dtype=float)
+    w = (kind == 0) * (1.0 - lam + 1e-3)
+    s = w.sum(axis=1)
+    c = np.zeros((len(kind), 3))
+    has = s > 0
+    c[has] = (w[has, :, None] * value[has, :, :3]).sum(axis=1) / s[has, None]
+    inputs = value.copy()
+    moves = kind != 1
+    inputs[..., :3] -= moves[..., None] * c[:, None, :]
+    return c, inputs
+
+
+def _inputs_with(kind, value, lam, weights="1 - lam", counted=(0,), shifted=(0, 2), columns=slice(0, 3),
+                 whole_batch=False):
+    """:func:`effector_inputs_reference` with one rule changed (the describe's slips)."""
+    kind, value, lam = np.asarray(kind), np.asarray(value, dtype=float), np.asarray(lam, dtype=float)
+    w = np.isin(kind, counted) * {"1 - lam": 1.0 - lam + 1e-3, "lam": lam, "equal": np.ones_like(lam),
+                                      "no 1e-3": 1.0 - lam}[weights]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        if whole_batch:
+            c = np.broadcast_to((w[..., None] * value[..., :3]).sum(axis=(0, 1)) / w.sum(), (len(kind), 3))
+        else:
+            c = (w[..., None] * value[..., :3]).sum(axis=1) / w.sum(axis=1)[:, None]
+    c = np.where(np.isfinite(c), c, 0.0)
+    inputs = value.copy()
+    inputs[..., columns] -= np.isin(kind, shifted)[..., None] * np.tile(c, 2)[:, None, columns]
+    return c, inputs
+
+
+@judged
+def check_effector_inputs(my_inputs) -> bool:
+    """Check ``my_inputs(kind (B, N), value (B, N, 6), lam (B, N)) -> (c (B, 3), inputs (B, N, 6))``: what the
+    network of section 1 reads, the tolerance-weighted centroid of each request's position effectors and the six
+    values of every effector re-referenced to it (:func:`effector_inputs_reference`)."""
+    from ..models.protores.blocks import centroid, effector_inputs
+    from ..models.protores.fast import NumpyPosingNet
+    from ..rotations import matrix_to_sixd, quat_to_matrix, random_rotations
 
     rng = np.random.default_rng(7)
+    names = ("position", "rotation", "look-at")
 
-    def describe(got, exp):
-        return f"got {np.round(got, 4)}, expected {np.round(exp, 4)}; only kind 0, weights 1 - lam + 1e-3?"
+    def request(kinds, at, rng):
+        """The values of one request: positions and look-at targets about ``at`` (metres), rotations in 6D, look-at
+        directions of unit length."""
+        kinds = np.asarray(kinds)
+        value = np.zeros((len(kinds), 6))
+        for i, k in enumerate(kinds):
+            if k == 0:
+                value[i, :3] = at + rng.normal(size=3) * 0.5
+            elif k == 1:
+                value[i] = matrix_to_sixd(quat_to_matrix(random_rotations(1, rng))[0])
+            else:
+                d = rng.normal(size=3)
+                value[i] = np.concatenate([at + rng.normal(size=3) * 2.0, d / np.linalg.norm(d)])
+        return value
+
+    def describe_for(kind, value, lam, what):
+        kind = np.asarray(kind)
+        slips = {
+            "the weights are 1 - Lambda + 1e-3 (a tight effector counts most), not Lambda":
+                _inputs_with(kind, value, lam, weights="lam"),
+            "a plain mean: the weights are 1 - Lambda + 1e-3": _inputs_with(kind, value, lam, weights="equal"),
+            "the weights are 1 - Lambda + 1e-3: without the 1e-3 a loose effector (Lambda = 1) would not count":
+                _inputs_with(kind, value, lam, weights="no 1e-3"),
+            "look-at targets counted: only position effectors make the centroid":
+                _inputs_with(kind, value, lam, counted=(0, 2)),
+            "one centroid for the whole batch: each request has its own": _inputs_with(kind, value, lam,
+                                                                                     whole_batch=True),
+            "a rotation's 6D moved: a rotation does not change when the character moves":
+                _inputs_with(kind, value, lam, shifted=(0, 1, 2)),
+            "a look-at target left where it was: a point moves with the character":
+                _inputs_with(kind, value, lam, shifted=(0,)),
+            "the last three values moved too: a direction (and a position's zeros) does not move":
+                _inputs_with(kind, value, lam, columns=slice(0, 6)),
+        }
+        B = len(kind)
+
+        def describe(got, exp):
+            gc, ec = got[:B * 3].reshape(B, 3), exp[:B * 3].reshape(B, 3)
+            gi, ei = got[B * 3:].reshape(kind.shape + (6,)), exp[B * 3:].reshape(kind.shape + (6,))
+            if not np.all(np.isfinite(got)):
+                b = int(np.nonzero(~np.all(np.isfinite(gc), axis=1) | ~np.all(np.isfinite(gi), axis=(1, 2)))[0][0])
+                return (f"request {b}{what} is not finite — "
+                        + ("it has no position effector: its centroid is the origin" if not (kind[b] == 0).any()
+                           else "a sum of weights of 0?"))
+            for why, (sc, si) in slips.items():
+                if np.allclose(gc, sc, atol=1e-7) and np.allclose(gi, si, atol=1e-7) \
+                        and not (np.allclose(sc, ec, atol=1e-7) and np.allclose(si, ei, atol=1e-7)):
+                    return why + what
+            err_c = np.abs(gc - ec).max(axis=1)
+            if err_c.max() > 1e-9 * max(1.0, np.abs(ec).max()):
+                b = int(np.argmax(err_c))
+                return (f"the centroid of request {b}{what}: got {np.round(gc[b], 4)}, expected {np.round(ec[b], 4)}"
+                        + ("; it has no position effector: the origin" if not (kind[b] == 0).any() else ""))
+            err = np.abs(gi - ei).max(axis=-1)
+            b, i = np.unravel_index(int(np.argmax(err)), err.shape)
+            return (f"request {b}, effector {i} (a {names[int(kind[b, i])]}){what}: got {np.round(gi[b, i], 4)}, "
+                    f"expected {np.round(ei[b, i], 4)}")
+        return describe
+
     cases = []
-    for kind in (np.array([0, 0, 0]), np.array([0, 1, 2, 0, 1]), np.array([1, 2]), np.array([2, 0, 0, 1, 0, 0]),
-                 np.array([1, 0, 2]), np.array([0, 0])):
-        value = rng.normal(size=(len(kind), 6))
-        lam = rng.uniform(0, 1, len(kind))
-        if len(kind) == 2:  # both loose at the limit: weights 1e-3 each, still a mean
-            lam = np.ones(2)
-        exp = centroid(torch.as_tensor(kind)[None], torch.as_tensor(value)[None], torch.as_tensor(lam)[None])[0].numpy()
-        cases.append(((kind, value, lam), exp, describe))
-    return report("check_centroid", lambda *a: flat(my_centroid(*a)), cases, atol=1e-9,
-                  forbid=(centroid,), arg_names=("kind", "value", "lam"))
+
+    def case(kind, value, lam, what=""):
+        kind = np.asarray(kind)
+        cases.append(((kind, value, lam), flat(*effector_inputs_reference(kind, value, lam)),
+                      describe_for(kind, value, lam, what)))
+
+    kinds = np.array([[0, 1, 2, 0, 2, 1, 0], [2, 0, 0, 1, 0, 2, 2], [0, 0, 0, 1, 2, 2, 1]])  # generic: 3 requests
+    at = np.array([[4.0, 0.9, -3.0], [-20.0, 1.0, 7.0], [0.5, 1.2, 60.0]])
+    case(kinds, np.stack([request(k, a, rng) for k, a in zip(kinds, at)]), rng.uniform(0, 1, kinds.shape))
+    kinds = np.array([[1, 2, 2, 1], [0, 2, 0, 1]])  # the first request pins no position
+    case(kinds, np.stack([request(k, a, rng) for k, a in zip(kinds, at[:2])]), rng.uniform(0, 1, kinds.shape),
+         " (request 0 has no position effector)")
+    kinds = np.array([[0, 0, 2, 0], [0, 1, 0, 2]])  # every position loose at the limit; one tight, one loose
+    case(kinds, np.stack([request(k, a, rng) for k, a in zip(kinds, at[1:])]),
+         np.array([[1.0, 1.0, 0.3, 1.0], [0.0, 0.5, 1.0, 0.2]]), " (Lambda = 1: weights of 1e-3)")
+    case(np.array([[0]]), request([0], at[0], rng)[None], np.array([[0.4]]), " (one request, one effector)")
+    kinds = np.array([[2, 0, 1, 0, 2]])
+    case(kinds, request(kinds[0], at[2], rng)[None].astype(np.float32),
+         rng.uniform(0, 1, kinds.shape).astype(np.float32), " (float32)")
+
+    def both(kind, value, lam):
+        return flat(*my_inputs(kind, value, lam))
+    return report("check_effector_inputs", both, cases, atol=1e-9,
+                  forbid=(centroid, effector_inputs, NumpyPosingNet._centroid, effector_inputs_reference),
+                  arg_names=("kind", "value", "lam"))
 
 
-__all__ = ["check_look_at_angle", "check_rotation_noise", "check_centroid"]
+__all__ = ["check_look_at_angle", "check_rotation_noise", "check_effector_inputs"]
