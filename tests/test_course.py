@@ -262,7 +262,7 @@ def test_instructor_notebook_fills_every_exercise(number):
 def test_solutions_command_runs_the_instructor_version(tmp_path, capsys):
     assert main(["exercises", "solutions", "00", "--out", str(tmp_path), "--html"]) == 0
     out = capsys.readouterr().out
-    for checker in ("check_local_from_global", "check_matrix_to_quat", "check_bone_lengths"):
+    for checker in ("check_local_from_global", "check_matrix_to_quat", "check_bone_drift"):
         assert f"✓ {checker}" in out
     assert "✗" not in out
     nb = read_notebook(tmp_path / "00_skeletons_and_poses.solutions.ipynb")
@@ -274,13 +274,13 @@ def test_solutions_command_runs_the_instructor_version(tmp_path, capsys):
 def test_a_solution_that_fails_its_checker_fails_the_run(tmp_path, monkeypatch, capsys):
     module = solutions_module(find_lesson("00"))
 
-    def exercise_bone_lengths(parents, global_pos):
+    def exercise_bone_drift(parents, clip):
         import numpy as np
         return np.ones(len(parents))
-    monkeypatch.setattr(module, "exercise_bone_lengths", exercise_bone_lengths)
+    monkeypatch.setattr(module, "exercise_bone_drift", exercise_bone_drift)
     assert main(["exercises", "solutions", "00", "--out", str(tmp_path)]) == 1
     err = capsys.readouterr().err
-    assert "the reference solution must pass check_bone_lengths" in err
+    assert "the reference solution must pass check_bone_drift" in err
 
 
 def test_solutions_refuse_an_unknown_lesson_or_a_missing_solution(monkeypatch, capsys):

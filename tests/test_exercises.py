@@ -121,13 +121,12 @@ def test_check_two_bone_swivel_refuses_each_wrong_answer_and_says_why(slip, caps
 def test_check_pose_vector_refuses_indices_of_one_skeleton(capsys):
     from posekit.data.bandai_mini import load_bandai_mini
     from posekit.data.metrics import body_joints
-    from posekit.transforms import to_root_space
 
     bandai = load_bandai_mini().skeleton
     fixed = body_joints(bandai)  # Bandai's body joints, whatever skeleton comes in
 
     def hard_coded(skeleton, global_pos):
-        local = to_root_space(skeleton, np.asarray(global_pos)[None])[0][0]
+        local = _vector_own(skeleton, global_pos, helper=True).reshape(-1, 3)
         return local[[j for j in fixed if j < skeleton.n_joints]].ravel()
     assert check_pose_vector(hard_coded) is False
     assert "case 2 returned shape" in capsys.readouterr().out
@@ -308,9 +307,10 @@ def test_each_checker_refuses_the_wrong_answers_that_used_to_pass(slip, capsys):
 CALLS_POSEKIT = {  # checker: (lesson, the reference solution, the posekit function the answer calls, its name)
     "check_local_from_global": ("00", "exercise_local_from_global", "posekit.kinematics:fk"),
     "check_matrix_to_quat": ("00", "exercise_matrix_to_quat", "posekit.rotations:matrix_to_quat"),
-    "check_bone_lengths": ("00", "exercise_bone_lengths", "posekit.kinematics:bone_lengths_of"),
+    "check_bone_drift": ("00", "exercise_bone_drift", "posekit.kinematics:bone_lengths_of"),
     "check_gpr_loo": ("02", "exercise_gpr_loo", "posekit.invrig.gpr:cross_validate"),
     "check_dls_prior": ("02", "exercise_dls_prior", "posekit.invrig.jacobian:refine"),
+    "check_pose_vector": ("03", "exercise_pose_vector", "posekit.transforms:to_root_space"),
     "check_pose_from_vector": ("03", "exercise_pose_from_vector", "posekit.data.pose_vectors:poses_from_vectors"),
     "check_authors_loss": ("03", "exercise_authors_loss", "posekit.models.pose_autoencoder.train:solver_loss"),
     "check_spl_all": ("04", "exercise_spl_all", "posekit.models.aegan.numpy_nets:tree_levels"),
@@ -739,7 +739,7 @@ def _sol(lesson, name):
 
 
 LOCAL, TO_QUAT, BONES = (_sol("00", "exercise_local_from_global"), _sol("00", "exercise_matrix_to_quat"),
-                         _sol("00", "exercise_bone_lengths"))
+                         _sol("00", "exercise_bone_drift"))
 
 
 def _local_own(parents, global_rot, global_pos, order="parent first", offsets="parent frame", root="kept",
@@ -810,16 +810,20 @@ def _quat_own(R, method="largest", order="xyzw", transposed=False, keep_sign=Fal
     return out if flattened else out.reshape(R.shape[:-2] + (4,))
 
 
-def _bones_root_first(parents, global_pos):
-    p = np.asarray(global_pos)
-    return np.concatenate([[0.0], np.linalg.norm(p[1:] - p[np.asarray(parents)[1:]], axis=1)])
-
-
-def _bones_sorts(parents, global_pos):
-    out = BONES(list(parents), global_pos)
-    if isinstance(parents, list):
-        parents.sort()
-    return out
+def _drift_own(parents, clip, root="skipped", signed=False, steps=False, reduce="max", in_place=False, dtype=float):
+    """A student's own bone drift, with the slips below as options (``root="indexed"``: ``clip[:, parents]`` with
+    the -1 of a root read as the last joint)."""
+    if in_place:  # the caller's clip moved to its first frame's root
+        clip -= clip[:1, :1]
+    P = np.asarray(clip, dtype)
+    par = np.asarray(parents)
+    if root == "indexed":
+        L = np.linalg.norm(P - P[:, par], axis=-1)
+    else:
+        L = np.where(par >= 0, np.linalg.norm(P - P[:, np.maximum(par, 0)], axis=-1), 0.0)
+    d = np.diff(L, axis=0, prepend=L[:1]) if steps else L - L[:1]
+    d = d if signed else np.abs(d)
+    return (d.max(axis=0) if reduce == "max" else d.mean(axis=0)).astype(dtype)
 
 
 BY_CHECKER["check_local_from_global"] = ({
@@ -857,12 +861,16 @@ BY_CHECKER["check_matrix_to_quat"] = ({
     "the top eigenvector of a 4 x 4 matrix": lambda R: _quat_own(R, method="eigen"),
     "in float32": lambda R: _quat_own(R, dtype=np.float32),
 })
-BY_CHECKER["check_bone_lengths"] = ({
-    "the root assumed at index 0": (_bones_root_first, "of parents [3, 0, 0, -1]"),
-    "the caller's parents sorted": (_bones_sorts, "changed its input `parents` in place"),
+BY_CHECKER["check_bone_drift"] = ({
+    "the root's parent -1 used as an index": (lambda *a: _drift_own(*a, root="indexed"), "a root has no bone"),
+    "growth only": (lambda *a: _drift_own(*a, signed=True), "a bone that shrinks drifts too"),
+    "from one frame to the next": (lambda *a: _drift_own(*a, steps=True), "the drift is against the first frame"),
+    "the mean over the clip": (lambda *a: _drift_own(*a, reduce="mean"), "case 1 differs"),
+    "the caller's clip moved in place": (lambda *a: _drift_own(*a, in_place=True), "changed its input `clip` in place"),
 }, {
     "the reference solution": BONES,
-    "in float32": lambda par, pos: BONES(par, pos).astype(np.float32),
+    "its own, vectorised": _drift_own,
+    "in float32": lambda *a: _drift_own(*a, dtype=np.float32),
 })
 
 LOO, DLS_PRIOR = _sol("02", "exercise_gpr_loo"), _sol("02", "exercise_dls_prior")
@@ -934,7 +942,22 @@ BY_CHECKER["check_dls_prior"] = ({
     "in float32": lambda *a: _prior_own(*a, dtype=np.float32),
 })
 
-FROM_VECTOR, AUTHORS_LOSS = _sol("03", "exercise_pose_from_vector"), _sol("03", "exercise_authors_loss")
+POSE_VECTOR, FROM_VECTOR, AUTHORS_LOSS = (_sol("03", "exercise_pose_vector"), _sol("03", "exercise_pose_from_vector"),
+                                         _sol("03", "exercise_authors_loss"))
+
+
+def _vector_own(skeleton, global_pos, turn=-1.0, keep_height=True, helper=False, in_place=False, dtype=float):
+    """A student's own pose vector, with the slips below as options."""
+    from posekit.data.metrics import body_joints
+    from posekit.transforms import facing_angle
+
+    P = global_pos if in_place else np.array(global_pos, dtype)
+    P -= P[skeleton.index("pelvis")] * (np.array([1.0, 0.0, 1.0], dtype) if keep_height else 1.0)
+    a = turn * float(facing_angle(skeleton, P))
+    c, s = np.cos(a), np.sin(a)
+    local = P @ np.array([[c, 0.0, -s], [0.0, 1.0, 0.0], [s, 0.0, c]], dtype)  # rows turned by Ry(a)
+    joints = np.arange(skeleton.n_joints) if helper else body_joints(skeleton)
+    return local[joints].ravel().astype(dtype)
 
 
 def _from_vector_own(skeleton, x, origin, angle, sign=1.0, add_origin=True, helper="rest", shift_first=False,
@@ -982,6 +1005,18 @@ def _authors_own(decoded, target, columns, w, weight_others=False, two=True, mea
     return loss, grad.astype(dtype), k
 
 
+BY_CHECKER["check_pose_vector"] = ({
+    "turned by plus the facing angle": (lambda *a: _vector_own(*a, turn=1.0), "turned the wrong way"),
+    "not turned": (lambda *a: _vector_own(*a, turn=0.0), "not turned: the root frame faces +Z"),
+    "the pelvis's height taken off": (lambda *a: _vector_own(*a, keep_height=False), "so heights are kept"),
+    "the helper root kept": (lambda *a: _vector_own(*a, helper=True), "case 1 returned shape (66,), expected (63,)"),
+    "the caller's pose moved in place": (lambda *a: _vector_own(*a, in_place=True),
+                                         "changed its input `global_pos` in place"),
+}, {
+    "the reference solution": POSE_VECTOR,
+    "its own": _vector_own,
+    "in float32": lambda *a: _vector_own(*a, dtype=np.float32),
+})
 BY_CHECKER["check_pose_from_vector"] = ({
     "turned the wrong way": (lambda *a: _from_vector_own(*a, sign=-1.0), "turned the wrong way"),
     "origin not added": (lambda *a: _from_vector_own(*a, add_origin=False), "not moved to origin"),

@@ -3,7 +3,7 @@ them into the lesson)."""
 
 from __future__ import annotations
 
-__all__ = ["exercise_local_from_global", "exercise_matrix_to_quat", "exercise_bone_lengths"]
+__all__ = ["exercise_local_from_global", "exercise_matrix_to_quat", "exercise_bone_drift"]
 
 
 def exercise_local_from_global(parents, global_rot, global_pos):
@@ -87,14 +87,20 @@ def exercise_matrix_to_quat(R):
     return q.reshape(R.shape[:-2] + (4,))
 
 
-def exercise_bone_lengths(parents, global_pos):
-    """Length of every bone (parent -> joint) of a posed skeleton; 0 for the root.
+def exercise_bone_drift(parents, clip):
+    """How far each bone's length drifts over a clip: the largest change against the first frame, metres.
+
+    FK (section 2) moves a joint by turning its parent's frame, so a bone ``|x_j - x_p|`` keeps its length in every
+    frame; a pose a network outputs as positions need not. For each bone ``max_t | L_j(t) - L_j(0) |`` with
+    ``L_j(t) = |x_j(t) - x_p(t)|``: the absolute change, so that a bone that shrinks counts as much as one that
+    grows, and against the first frame, so that a slow drift adds up. A root has no bone (0); its parent ``-1``
+    must not be used as an index (NumPy reads it as the last joint).
 
     Parameters
     ----------
-    parents : ndarray of int, shape (J,)
-        Parent of each joint, -1 for the root.
-    global_pos : ndarray, shape (J, 3), metres
+    parents : sequence of int, length J
+        Parent of each joint, -1 for a root (several allowed, in any order).
+    clip : ndarray, shape (T, J, 3), metres
 
     Returns
     -------
@@ -102,8 +108,11 @@ def exercise_bone_lengths(parents, global_pos):
     """
     import numpy as np
 
-    lengths = np.zeros(len(parents))
+    P = np.asarray(clip, dtype=float)
+    drift = np.zeros(P.shape[1])
     for j, p in enumerate(parents):
-        if p >= 0:  # the root has no bone
-            lengths[j] = np.linalg.norm(global_pos[j] - global_pos[p])
-    return lengths
+        if p < 0:  # a root: no bone
+            continue
+        length = np.linalg.norm(P[:, j] - P[:, p], axis=-1)  # (T,): this bone in every frame
+        drift[j] = np.abs(length - length[0]).max()
+    return drift

@@ -2,7 +2,8 @@
 
 Section 2 writes forward kinematics; exercise 1 asks for its other half, the local rotations and offsets of a posed
 skeleton from its global rotations and positions, for any batch of poses and any tree. Section 3 turns quaternions
-into matrices; exercise 2 goes back, accurate at half-turns where the textbook formula divides by nearly zero. Each
+into matrices; exercise 2 goes back, accurate at half-turns where the textbook formula divides by nearly zero.
+Exercise 3 measures how far each bone's length drifts over a clip, the test of a pose that FK did not make. Each
 checker starts with a generic case, accepts float32 answers, and refuses an answer that calls the posekit function
 it is compared against or changes its inputs.
 """
@@ -11,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..kinematics import bone_lengths_of, fk
+from ..kinematics import fk
 from ..rotations import quat_to_matrix, random_rotations
 from ._check import flat, report
 from ._judge import judged
@@ -253,28 +254,95 @@ def check_matrix_to_quat(my_matrix_to_quat) -> bool:
                   arg_names=("R",))
 
 
+# -- exercise 3: do the bones keep their length? -------------------------------------------------------------------
+
+def bone_drift_reference(parents, clip):
+    """What :func:`check_bone_drift` expects: for each bone (parent -> joint) the largest change of its length over
+    the clip's frames against the first frame, ``max_t | |x_j(t) - x_p(t)| - |x_j(0) - x_p(0)| |``, metres; 0 for
+    a root."""
+    P = np.asarray(clip, dtype=float)
+    out = np.zeros(P.shape[-2])
+    for j, p in enumerate(parents):
+        p = int(p)
+        if p >= 0:
+            L = np.linalg.norm(P[:, j] - P[:, p], axis=-1)
+            out[j] = np.abs(L - L[0]).max()
+    return out
+
+
+def _drift_with(parents, clip, signed=False, steps=False):
+    """:func:`bone_drift_reference` with one rule changed (the describe's slips): the largest growth only, or the
+    change from one frame to the next."""
+    P = np.asarray(clip, dtype=float)
+    out = np.zeros(P.shape[-2])
+    for j, p in enumerate(parents):
+        if int(p) >= 0:
+            L = np.linalg.norm(P[:, j] - P[:, int(p)], axis=-1)
+            d = np.diff(L, prepend=L[0]) if steps else L - L[0]
+            out[j] = d.max() if signed else np.abs(d).max()
+    return out
+
+
+def bone_drift_cases(seed: int = 0):
+    """The cases of :func:`check_bone_drift`: ``(parents, clip, what)``, generic first.
+
+    A real clip of the sample with noise on every joint (what a network that outputs positions may give); the
+    clip exactly as FK gives it (every drift 0 up to rounding); a clip whose bones only shrink, slowly; one frame;
+    a tree of its own with two roots, parents listed after their children, as a list; float32.
+    """
+    from ..data import load_sample
+
+    ms = load_sample()
+    rng = np.random.default_rng(seed + 6)
+    parents = np.array(ms.skeleton.parents)
+    walk = ms.global_pos[ms.clip_frames("walk")[:24]]
+    out = [(parents, walk + rng.normal(0, 0.01, walk.shape), " (a clip with noise)"),
+           (parents, walk.copy(), " (the clip as FK gives it)")]
+    T = 12
+    root = walk[:T, :1]
+    shrink = root + (walk[:T] - root) * np.linspace(1.0, 0.97, T)[:, None, None]  # about the root: every bone shrinks
+    out.append((parents, shrink, " (bones that only shrink, a little each frame)"))
+    out.append((parents, walk[5:6].copy(), " (one frame)"))
+    tree = [3, 0, 0, -1, -1, 4]
+    clip = rng.normal(size=(5, len(tree), 3))
+    out.append((list(tree), clip, f" (parents {tree}: two roots, a parent after its child)"))
+    out.append((parents, (walk[:6] + rng.normal(0, 0.01, walk[:6].shape)).astype(np.float32), " (float32)"))
+    return out
+
+
 @judged
-def check_bone_lengths(my_bone_lengths) -> bool:
-    """Check ``my_bone_lengths(parents (J,), global_pos (J,3)) -> lengths (J,)`` (0 for the root)."""
-    skel, q, root = _skeleton_and_poses(seed=5, n=3)
-    P = fk(skel, q, root)[0]
+def check_bone_drift(my_bone_drift) -> bool:
+    """Check ``my_bone_drift(parents (J,), clip (T, J, 3)) -> (J,)``: for each bone (parent -> joint) the largest
+    change of its length over the clip against the first frame, metres, 0 for a root (:func:`bone_drift_reference`;
+    the lessons' bone-length error is this change against a reference pose)."""
+    from ..data.metrics import bone_length_error
+    from ..kinematics import bone_lengths_of
 
-    def describe(got, expected):
-        j = int(np.argmax(np.abs(got - expected)))
-        return f"joint {skel.names[j]}: got {got[j]:.4f} m, expected {expected[j]:.4f} m"
-    cases = [((np.array(skel.parents), P[i]), bone_lengths_of(skel, P[i]), describe) for i in range(len(P))]
-    cases.append(((list(skel.parents), P[0].copy()), bone_lengths_of(skel, P[0]), describe))  # parents as a list
-    cases.append(((np.array(skel.parents), P[1].astype(np.float32)), bone_lengths_of(skel, P[1].astype(np.float32)
-                                                                                     .astype(float)), describe))
-    # a tree of its own, parents listed after their children: no skeleton's joint order may be assumed
-    tree, pos = [3, 0, 0, -1], np.array([[0.0, 1.0, 0.0], [0.2, 1.1, 0.0], [0.0, 1.3, 0.4], [0.0, 0.5, 0.0]])
+    def describe_for(parents, clip, what):
+        slips = {
+            "the largest growth only: a bone that shrinks drifts too (the absolute change)":
+                _drift_with(parents, clip, signed=True),
+            "the change from one frame to the next: the drift is against the first frame, however slow":
+                _drift_with(parents, clip, steps=True),
+        }
 
-    def own(got, expected):
-        j = int(np.argmax(np.abs(got - expected)))
-        return f"joint {j} of parents {tree}: got {got[j]:.4f} m, expected {expected[j]:.4f} m (|p_j - p_parent|, 0 at a root)"
-    cases.append(((list(tree), pos), np.array([0.5, np.hypot(0.2, 0.1), np.hypot(0.3, 0.4), 0.0]), own))
-    return report("check_bone_lengths", my_bone_lengths, cases, forbid=(bone_lengths_of,),
-                  arg_names=("parents", "global_pos"))
+        def describe(got, exp):
+            j = int(np.argmax(np.where(np.isfinite(got), np.abs(got - exp), np.inf)))
+            p = int(parents[j])
+            said = f"joint {j} (parent {p}){what}: got {got[j]:.6g} m, expected {exp[j]:.6g} m"
+            if p < 0:
+                return said + ": a root has no bone (a parent of -1 indexes the last joint in NumPy)"
+            for why, wrong in slips.items():
+                if np.allclose(got, wrong, atol=1e-9) and not np.allclose(wrong, exp, atol=1e-9):
+                    return said + ": " + why
+            if np.allclose(got, exp * 1e3, atol=1e-6):
+                return said + ": metres, not millimetres"
+            return said + ": max over t of | |x_j(t) - x_p(t)| - |x_j(0) - x_p(0)| |"
+        return describe
+    cases = [((parents, clip), bone_drift_reference(parents, clip), describe_for(parents, clip, what))
+             for parents, clip, what in bone_drift_cases()]
+    return report("check_bone_drift", my_bone_drift, cases, atol=1e-9,
+                  forbid=(bone_lengths_of, bone_length_error, bone_drift_reference), arg_names=("parents", "clip"))
 
 
-__all__ = ["check_local_from_global", "check_matrix_to_quat", "check_bone_lengths"]
+__all__ = ["check_local_from_global", "check_matrix_to_quat", "check_bone_drift"]

@@ -15,6 +15,21 @@ from ._check import flat, report
 from ._judge import judged
 
 
+def _pose_vector_with(skeleton, pos, turn=-1.0, keep_height=True, helper=False):
+    """The pose vector of one pose with one rule changed (the describe's slips): turned by ``turn`` times the facing
+    angle, the pelvis's height subtracted too, the helper root kept."""
+    from ..data.metrics import body_joints
+    from ..transforms import facing_angle
+
+    P = np.asarray(pos, dtype=float)
+    origin = P[skeleton.pelvis()] * (np.array([1.0, 0.0, 1.0]) if keep_height else 1.0)
+    a = turn * float(facing_angle(skeleton, P))
+    c, s = np.cos(a), np.sin(a)
+    local = (P - origin) @ np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]).T
+    joints = np.arange(skeleton.n_joints) if helper else body_joints(skeleton)
+    return local[joints].ravel()
+
+
 @judged
 def check_pose_vector(my_pose_vector) -> bool:
     """Check ``my_pose_vector(skeleton, global_pos (J, 3)) -> (3B,)``: the body joints (no helper root)
@@ -22,24 +37,41 @@ def check_pose_vector(my_pose_vector) -> bool:
     (:func:`posekit.data.pose_vectors.pose_vectors`)."""
     from ..data import load_sample
     from ..data.bandai_mini import load_bandai_mini
-    from ..data.pose_vectors import pose_vectors
+    from ..data.pose_vectors import pose_vectors, targets_in_root_frame
+    from ..transforms import root_frame, rotate_y_positions, to_root_space
 
     m = load_bandai_mini()
     other = load_sample()  # another skeleton (DeepMimic's humanoid, no helper root): no index may be hard-coded
     cases = []
 
-    def describe(got, expected):
-        d = np.abs(got - expected).reshape(-1, 3).max(-1)
-        return (f"largest difference {d.max() * 1e3:.1f} mm at body joint {int(np.argmax(d))}; left out joint_Root? "
-                "turned by minus the facing angle? pelvis on the floor (y kept)?")
+    def describe_for(skeleton, pos):
+        slips = {
+            "turned the wrong way: turn by minus the facing angle, so that the facing direction becomes +Z":
+                _pose_vector_with(skeleton, pos, turn=1.0),
+            "not turned: the root frame faces +Z": _pose_vector_with(skeleton, pos, turn=0.0),
+            "the pelvis's height taken off too: the origin is the pelvis on the floor (y = 0), so heights are kept":
+                _pose_vector_with(skeleton, pos, keep_height=False),
+        }
+
+        def describe(got, expected):
+            d = np.abs(got - expected).reshape(-1, 3).max(-1)
+            said = f"largest difference {d.max() * 1e3:.1f} mm at body joint {int(np.argmax(d))}"
+            for why, wrong in slips.items():
+                if got.shape == wrong.shape and np.allclose(got, wrong, atol=1e-6):
+                    return said + ": " + why
+            return said + ": the root frame is the pelvis on the floor, facing +Z"
+        return describe
     for motion, f in ((m, 0), (other, 100), (m, 4321), (m, 20_000), (other, 1500), (m, 40_000)):
         pos = motion.global_pos[f]
-        cases.append(((motion.skeleton, pos.copy()), pose_vectors(motion.skeleton, pos[None])[0][0], describe))
-    return report("check_pose_vector", my_pose_vector, cases, atol=1e-6, forbid=(pose_vectors,),
+        cases.append(((motion.skeleton, pos.copy()), pose_vectors(motion.skeleton, pos[None])[0][0],
+                      describe_for(motion.skeleton, pos)))
+    pos = m.global_pos[777].astype(np.float32)
+    cases.append(((m.skeleton, pos.copy()), pose_vectors(m.skeleton, pos[None].astype(float))[0][0],
+                  describe_for(m.skeleton, pos)))
+    return report("check_pose_vector", my_pose_vector, cases, atol=1e-6,
+                  forbid=(pose_vectors, to_root_space, root_frame, rotate_y_positions, targets_in_root_frame),
                   arg_names=("skeleton", "global_pos"))
 
-
-# -- exercise 2: a vector back to a pose in the world -----------------------------------------------------------
 
 @judged
 def check_pose_from_vector(my_pose_from_vector) -> bool:
