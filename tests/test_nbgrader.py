@@ -2,7 +2,8 @@
 
 The fast tests read the source notebooks and the screening of bad folders; the slow ones run nbgrader
 itself on one course of every lesson: ``generate_assignment``; ``autograde`` of a class for each lesson (the
-source version, the released one, one answer wrong), graded with one ``autograde`` per lesson; for lesson 00
+source version, the released one, one answer wrong), graded with one ``autograde`` per lesson, two lessons at a
+time in copies of the course; for lesson 00
 also a deleted cell, an answer that raises at import, an endless loop and three folders nbgrader cannot grade;
 ``export`` of the grade book.
 """
@@ -373,30 +374,67 @@ LOOP_TIMEOUT_S = 10
 """Lesson 00's cells take about a second each: a 10 s limit (not the course's 300 s) bounds what its endless loop costs."""
 
 
-@pytest.fixture(scope="module")
-def graded(graded_course):
-    """``grade(stem)``: hands in the class of ``stem`` (:func:`_class`) and autogrades all of it with one
-    ``posekit course autograde`` (nbgrader's ``autograde`` behind the screening), once per lesson.
+GRADED_AT_ONCE = 2
+"""Lessons graded side by side, each class in its own copy of the graded course (its own grade book, so that two
+nbgrader processes never write one SQLite file): a kernel waits on its start and on the judge much of the time, and
+two cores can grade two classes in little more than the time of one."""
+
+
+def _grade_class(graded_course, stem, root):
+    """Hands in the class of ``stem`` (:func:`_class`) in a copy of the graded course at ``root``, autogrades all of
+    it with one ``posekit course autograde`` (nbgrader's ``autograde`` behind the screening) and exports the grade
+    book (``nbgrader export``).
     Returns ``(the course folder, what the class did, the finished command)``."""
     from nbgrader.api import Gradebook
 
-    course = graded_course
-    done = {}
+    course = root / "course"
+    shutil.copytree(graded_course, course)
+    did = _class(course, stem)
+    with Gradebook(f"sqlite:///{course / 'gradebook.db'}") as gb:  # the class list
+        for student in CLASS_00 + CHEATS:
+            gb.update_or_create_student(student)
+    extra = ["--cell-timeout", str(LOOP_TIMEOUT_S)] if stem == STEMS[0] else []
+    proc = _run([sys.executable, "-m", "posekit", "course", "autograde", stem, "--course", str(course), *extra],
+                ROOT, ok=False)
+    _nbgrader("export", cwd=course)  # grades.csv, read by _grades
+    return course, did, proc
+
+
+def _stems_to_grade(items) -> list[str]:
+    """The lessons whose classes the selected tests read (a test's ``stem`` parameter, or its ``grades`` mark), in
+    the order the tests run."""
+    out = []
+    for item in items:
+        if "graded" not in getattr(item, "fixturenames", ()):
+            continue
+        params = getattr(getattr(item, "callspec", None), "params", {})
+        stems = [params["stem"]] if "stem" in params else [m.args[0] for m in item.iter_markers("grades")]
+        out += [s for s in stems if s not in out]
+    return out
+
+
+@pytest.fixture(scope="module")
+def graded(graded_course, request, tmp_path_factory):
+    """``grade(stem)``: the class of ``stem`` graded (:func:`_grade_class`), once per lesson. On the first call every
+    lesson the selected tests read is queued, :data:`GRADED_AT_ONCE` at a time, so the next lesson's class is being
+    graded while a test reads this one's. ``grade.done()``: the lessons graded so far, ``{stem: result}``."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    pool = ThreadPoolExecutor(max_workers=GRADED_AT_ONCE)
+    futures = {}
+
+    def queue(stem):
+        if stem not in futures:
+            futures[stem] = pool.submit(_grade_class, graded_course, stem, tmp_path_factory.mktemp(f"class-{stem}"))
 
     def grade(stem):
-        if stem not in done:
-            did = _class(course, stem)
-            with Gradebook(f"sqlite:///{course / 'gradebook.db'}") as gb:  # the class list
-                for student in CLASS_00 + CHEATS:
-                    gb.update_or_create_student(student)
-            extra = ["--cell-timeout", str(LOOP_TIMEOUT_S)] if stem == STEMS[0] else []
-            proc = _run([sys.executable, "-m", "posekit", "course", "autograde", stem, "--course", str(course),
-                         *extra], ROOT, ok=False)
-            done[stem] = course, did, proc
-        return done[stem]
+        for s in _stems_to_grade(request.session.items) + [stem]:
+            queue(s)
+        return futures[stem].result()
 
-    grade.done = done
-    return grade
+    grade.done = lambda: {s: f.result() for s, f in futures.items() if f.done()}
+    yield grade
+    pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _points(course, stem) -> dict[str, float]:
@@ -407,7 +445,8 @@ def _points(course, stem) -> dict[str, float]:
 
 
 def _grades(course) -> dict[tuple[str, str], dict]:
-    _nbgrader("export", cwd=course)
+    """The grade book as ``nbgrader export`` wrote it to ``grades.csv`` (:func:`_grade_class` runs it after grading),
+    by ``(assignment, student)``."""
     with open(course / "grades.csv", newline="") as fh:
         return {(r["assignment"], r["student_id"]): r for r in csv.DictReader(fh)}
 
@@ -468,6 +507,7 @@ def test_autograde_gives_the_source_full_marks_the_released_none_and_one_wrong_a
 
 
 @pytest.mark.slow
+@pytest.mark.grades(STEMS[0])
 def test_autograde_reports_a_students_mistakes_and_bad_folders_and_export_writes_every_grade(graded):
     a = STEMS[0]
     course, did, proc = graded(a)
@@ -499,9 +539,10 @@ def test_autograde_reports_a_students_mistakes_and_bad_folders_and_export_writes
         assert grades[(a, student)]["timestamp"] == ""
         assert not (course / "autograded" / student / a).exists()
     assert all(grades[(a, s)]["timestamp"].startswith(HANDED_IN[:10]) for s in CLASS_00[:6])
-    for stem in graded.done:  # and every other lesson graded in this course (all of them in a full run)
+    for stem, (other, _, _) in graded.done().items():  # and every other lesson graded (all of them in a full run)
+        exported = _grades(other)
         for student in ("right", "untouched", "wrong"):
-            assert float(grades[(stem, student)]["raw_score"]) == _code_score(course, stem, student)[0]
+            assert float(exported[(stem, student)]["raw_score"]) == _code_score(other, stem, student)[0]
 
 
 def _flagged(course, stem, student) -> bool:
@@ -512,6 +553,7 @@ def _flagged(course, stem, student) -> bool:
 
 
 @pytest.mark.slow
+@pytest.mark.grades(CHEATED)
 def test_the_three_cheats_score_nothing_and_are_flagged_and_an_honest_class_is_not(graded):
     course, did, proc = graded(CHEATED)
     points = _points(course, CHEATED)
