@@ -2,10 +2,9 @@
 
 The fast tests read the source notebooks and the screening of bad folders; the slow ones run nbgrader
 itself on one course of every lesson: ``generate_assignment``; ``autograde`` of a class for each lesson (the
-source version, the released one, one answer wrong), graded with one ``autograde`` per lesson, two lessons at a
-time in copies of the course; for lesson 00
-also a deleted cell, an answer that raises at import, an endless loop and three folders nbgrader cannot grade;
-``export`` of the grade book.
+source version, the released one, one answer wrong), graded with one ``autograde`` per lesson, two lessons at
+a time in copies of the course; for lesson 00 also a deleted cell, an answer that raises at import, an endless
+loop and three folders nbgrader cannot grade; ``export`` of the grade book.
 """
 
 from __future__ import annotations
