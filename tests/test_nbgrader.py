@@ -2,8 +2,8 @@
 
 The fast tests read the source notebooks and the screening of bad folders; the slow ones run nbgrader
 itself on one course of every lesson: ``generate_assignment``; ``autograde`` of a class for each lesson (the
-source version, the released one, one answer wrong), graded with one ``autograde`` per lesson, two lessons at
-a time in copies of the course; for lesson 00 also a deleted cell, an answer that raises at import, an endless
+source version, the released one, one answer wrong), graded with one ``autograde`` per lesson, one lesson a
+core in copies of the course; for lesson 00 also a deleted cell, an answer that raises at import, an endless
 loop and three folders nbgrader cannot grade; ``export`` of the grade book.
 """
 
@@ -373,10 +373,11 @@ LOOP_TIMEOUT_S = 10
 """Lesson 00's cells take about a second each: a 10 s limit (not the course's 300 s) bounds what its endless loop costs."""
 
 
-GRADED_AT_ONCE = 2
+GRADED_AT_ONCE = max(1, len(os.sched_getaffinity(0)) // int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1")))
 """Lessons graded side by side, each class in its own copy of the graded course (its own grade book, so that two
-nbgrader processes never write one SQLite file): a kernel waits on its start and on the judge much of the time, and
-two cores can grade two classes in little more than the time of one."""
+nbgrader processes never write one SQLite file): the cores this test file has to itself, one per core (two when it
+runs alone on two cores; one under ``make test``, whose two workers already hold a core each, where a second
+grading would only slow the other worker's tests)."""
 
 
 def _grade_class(graded_course, stem, root):
