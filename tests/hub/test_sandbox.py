@@ -228,16 +228,17 @@ def test_the_relay_joins_the_server_and_the_hub_and_nothing_else(tmp_path):
                                  "private", sys.executable, str(SANDBOX), str(job), "--", sys.executable, "-I", "-c",
                                  server], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         reply = b""
-        for _ in range(100):  # the sandbox's side listens once the sandbox is made
-            try:
-                conn = socket.create_connection(("127.0.0.1", server_port), timeout=20)
+        for _ in range(200):  # the relay listens once the sandbox is made; until the server inside listens too, it
+            try:              # closes what it accepts unanswered (a hub polls a starting server the same way)
+                with socket.create_connection(("127.0.0.1", server_port), timeout=20) as s:
+                    s.settimeout(20)
+                    while chunk := s.recv(64):
+                        reply += chunk
+            except ConnectionError:
+                pass
+            if reply:
                 break
-            except ConnectionRefusedError:
-                time.sleep(0.1)
-        with conn as s:
-            s.settimeout(20)
-            while chunk := s.recv(64):
-                reply += chunk
+            time.sleep(0.1)
         out, err = proc.communicate(timeout=30)
         assert "FROM HUB hub here" in out, err[-2000:]
         assert reply == b"server here"
