@@ -180,6 +180,23 @@ def target_mm(scope, joint):
     return tuple(int(round(1000 * c)) for c in rows["target"])
 
 
+def press_five(page, scope, joint, expected) -> float:
+    """Press ArrowRight five times on the focused X handle, wait for ``joint``'s target to settle (+5 mm when every
+    press landed) and return how far its x moved, mm; ``expected[joint]`` becomes the new target."""
+    for _ in range(5):
+        page.keyboard.press("ArrowRight")
+        time.sleep(0.03)
+    goal = (expected[joint][0] + 5, *expected[joint][1:])
+    try:
+        wait_for(lambda: target_mm(scope, joint) == goal, 15, f"{joint}'s target +5 mm", every=0.2)
+    except pytest.fail.Exception:
+        pass
+    now = wait_for(lambda: target_mm(scope, joint), 30, f"{joint}'s target")
+    moved = now[0] - expected[joint][0]
+    expected[joint] = now
+    return moved
+
+
 def presses_right_after_selections(page, scope, joints, presses: int = 20):
     """Issue 44's race, in the view whose *selected* list and Y slider are in ``scope`` (a locator): ``presses``
     times, choose the next of ``joints`` (each with a target) and press ArrowRight on the Y slider in the same turn

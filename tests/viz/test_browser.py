@@ -523,7 +523,7 @@ def test_a_drag_ends_outside_the_view_and_keys_reach_the_new_slider_in_lab(lab, 
     moves nothing; with the X slider's handle focused, choosing another joint and pressing ArrowRight 5 times at once
     moves the new joint's target +5 mm, 5 times over (the page's watcher, posekit.viz.page_watch)."""
     from posekit.viz.drag import DRAG_HELD_CLASS
-    from tests.viz.browser_helpers import drag_in_3d, press_in_3d, selected_joint, target_mm
+    from tests.viz.browser_helpers import drag_in_3d, press_five, press_in_3d, selected_joint, target_mm
 
     page = _lab_page(chromium, {"width": 1280, "height": 1000})
     try:
@@ -571,17 +571,7 @@ def test_a_drag_ends_outside_the_view_and_keys_reach_the_new_slider_in_lab(lab, 
               list.value = joint;
               list.dispatchEvent(new Event('change', {bubbles: true}));
             }""", [cell.element_handle(), new])
-            for _ in range(5):
-                page.keyboard.press("ArrowRight")
-                time.sleep(0.03)
-            goal = (expected[new][0] + 5, *expected[new][1:])
-            try:
-                _wait_for(lambda: target_mm(cell, new) == goal, 15, f"{new}'s target +5 mm", every=0.2)
-            except pytest.fail.Exception:
-                pass
-            now = _wait_for(lambda: target_mm(cell, new), 30, f"{new}'s target")
-            moved.append(now[0] - expected[new][0])
-            expected[new] = now
+            moved.append(press_five(page, cell, new, expected))
             kernel_round_trip(page, cell)  # the new joint's sliders shown before the next trial focuses one
         assert moved == [5] * 5, moved
         page.screenshot(path=str(lab[2] / "lab_drag_and_keys.png"))

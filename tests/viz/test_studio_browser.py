@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from tests.viz.browser_helpers import (BACKGROUND, SENT_LOG, drag_in_3d, kernel_round_trip, pixels as _pixels,
-                                      press_in_3d, presses_right_after_selections, selected_joint, wait_for,
+                                      press_five, press_in_3d, presses_right_after_selections, selected_joint, wait_for,
                                       wait_still)
 from posekit.bench.browser import blank_tab, chromium_missing, serve_voila
 from posekit.bench.studio import choose_solvers, open_studio, rapid_updates, update_number
@@ -347,25 +347,6 @@ def _select_quietly(page, joint):
     }""", [page.locator(VIEWS).element_handle(), joint])
 
 
-def _press_five(page, scope, joint, expected) -> float:
-    """Press ArrowRight five times on the focused X handle, wait for ``joint``'s target to settle (+5 mm when every
-    press landed) and return how far its x moved, mm; ``expected[joint]`` becomes the new target."""
-    from tests.viz.browser_helpers import target_mm
-
-    for _ in range(5):
-        page.keyboard.press("ArrowRight")
-        time.sleep(0.03)
-    goal = (expected[joint][0] + 5, *expected[joint][1:])
-    try:
-        wait_for(lambda: target_mm(scope, joint) == goal, 15, f"{joint}'s target +5 mm", every=0.2)
-    except pytest.fail.Exception:
-        pass
-    now = wait_for(lambda: target_mm(scope, joint), 30, f"{joint}'s target")
-    moved = now[0] - expected[joint][0]
-    expected[joint] = now
-    return moved
-
-
 def test_key_presses_right_after_a_selection_all_reach_the_new_joint(page):
     """Issue 57, item 2: focus the X slider's handle of the selected joint, choose another joint and at once press
     ArrowRight 5 times, 30 ms apart, 20 times over four joints, a second process keeping a core busy. The kernel
@@ -374,7 +355,6 @@ def test_key_presses_right_after_a_selection_all_reach_the_new_joint(page):
     after the swap went nowhere: a user measured 5 of 10 trials moving 0-1 mm)."""
     import subprocess
     import sys
-    import time
 
     from tests.viz.browser_helpers import target_mm
 
@@ -398,7 +378,7 @@ def test_key_presses_right_after_a_selection_all_reach_the_new_joint(page):
             handle.focus()
             assert page.evaluate("() => document.activeElement.classList.contains('noUi-handle')")
             _select_quietly(page, new)
-            moved.append(_press_five(page, scope, new, expected))
+            moved.append(press_five(page, scope, new, expected))
     finally:
         busy.kill()
         busy.wait()
@@ -458,7 +438,7 @@ def test_presses_right_after_choosing_in_the_list_all_land_on_the_new_joint(page
             wait_for(lambda: target_mm(scope, old) == expected[old], 30, f"{old}'s sliders and target")
             kernel_round_trip(page, VIEWS)  # the old joint's sliders are the ones on the page
             assert page.evaluate(_SELECT_THEN_FOCUS, [root, chosen]), "the X slider's handle did not take the focus"
-            moved.append(_press_five(page, scope, new, expected))
+            moved.append(press_five(page, scope, new, expected))
             on_old += page.evaluate("() => !window.__focused.isConnected")  # the handle focused was replaced
     finally:
         busy.kill()
