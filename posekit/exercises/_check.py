@@ -32,6 +32,7 @@ class _Current:
     the ``Remote``) which input the answer changed in place, by the executor's account."""
 
     forbid: tuple = ()
+    own: tuple = ()  # "module:name" of every helper of the checker's own module (set by the judge): forbidden too
     changed: int | None = None
     in_judge: bool = False  # in a judge the answer runs elsewhere: its executor watches, not this process
 
