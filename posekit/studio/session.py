@@ -10,8 +10,9 @@ honours, :func:`~posekit.studio.solve.solve_honoured`) and tells the listeners, 
   kind per joint, and no rotation beside a look-at (a rotation fixes where a joint faces).
 * **Selecting** a joint (:meth:`PosingSession.select`) never creates an effector: only an edit does
   (:meth:`~PosingSession.move` on a joint without a target adds a position effector there).
-* **Undo and redo** — every change is a step; moves of one effector less than ``coalesce_s`` apart (a drag, a
-  slider held down) are one step. Each step may carry a note (the views' cameras): :attr:`PosingSession.notes`.
+* **Undo and redo** — every change is a step; a drag in 3D, from the press to the release
+  (:meth:`PosingSession.begin_drag` / :meth:`~PosingSession.end_drag`), is one step however slowly the solves come,
+  and moves of one effector less than ``coalesce_s`` apart (a slider held down) are one step. Each step may carry a note (the views' cameras): :attr:`PosingSession.notes`.
 * **Setups** — :meth:`~PosingSession.to_dict` / :meth:`~PosingSession.from_dict` (the JSON of
   :mod:`posekit.viz.setup_file`); a bad setup is refused with a sentence before anything changes.
 * **Timeline keys** — :meth:`~PosingSession.add_key`: the effectors as they are, each key with the same joints and
@@ -180,6 +181,7 @@ class PosingSession:
         self.updates, self.selected, self.keys = 0, None, []
         self._listeners, self._before = [], []
         self._last_move = (None, -np.inf)
+        self._drag_step = None  # during a drag: the step it made (-1 before its first change), else None
         rows = [e if isinstance(e, dict) else self._row_of(e) for e in effectors]
         self._set_rows(self._checked(rows))
         self.solve()
@@ -386,11 +388,23 @@ class PosingSession:
         for cb in list(self._before):
             cb(what, index)
 
+    def begin_drag(self):
+        """A drag in 3D starts (the mouse pressed): every change until :meth:`end_drag` is one undo step, however
+        long the solves between its moves take (timing alone split a drag on a slow machine, and undo then went back
+        to the middle of it). A drag that creates its target (an add, then moves) is one step too."""
+        self._drag_step = -1
+
+    def end_drag(self):
+        """The drag ends (the mouse released, or Escape): the next change is a step of its own."""
+        self._drag_step = None
+        self._last_move = (None, -np.inf)
+
     def _changed(self, what, index):
         self.solve()
         now = self.clock()
-        same = (what == "move" and self._last_move[0] == index and now - self._last_move[1] < self.coalesce_s
-                and self.position == len(self.history) - 1 and self.position > 0)
+        last = self.position == len(self.history) - 1 and self.position > 0
+        same = last and (self._drag_step == self.position if self._drag_step is not None else
+                         what == "move" and self._last_move[0] == index and now - self._last_move[1] < self.coalesce_s)
         if same:
             self.history[self.position] = self.setup()
         else:
@@ -400,6 +414,8 @@ class PosingSession:
             self.notes.append(dict(self.notes[self.position]))
             self.position += 1
         self._last_move = (index, now) if what == "move" else (None, -np.inf)
+        if self._drag_step is not None:
+            self._drag_step = self.position
         self._tell(what, index)
 
     @property

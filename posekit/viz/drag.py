@@ -135,6 +135,8 @@ class DragTargets:
         held, self.dragging = self.dragging, None
         if held is not None:
             self._show_held(False)
+            if hasattr(self.source, "end_drag"):
+                self.source.end_drag()  # a session's next change is a step of its own
         if self._sliders_due:
             self._sync_sliders()
         if held is not None:
@@ -155,6 +157,8 @@ class DragTargets:
             return
         self.dragging = name
         self._show_held(True)
+        if hasattr(self.source, "begin_drag"):
+            self.source.begin_drag()  # a session makes the whole drag one undo step, however slow its solves
         if self.selected != name:
             self.select(name)
         had = self.look_targets.get(name) if self.dragging_look else self.targets.get(name)

@@ -90,6 +90,49 @@ def test_undo_redo_steps_and_coalesced_moves(session):
     assert not session.can_redo and [e.joint for e in session.effectors] == [session.history[-1][0]["joint"]]
 
 
+def test_a_drag_is_one_step_however_slow_its_moves(session):
+    """A drag (press to release) is one undo step even when its moves come more than ``coalesce_s`` apart (a slow
+    machine solving every view between them, or a hand held still); the change after it is a step of its own."""
+    clock, hand = session.test_clock, session.effectors[0].joint
+    p0 = session.effectors[0].target.copy()
+    session.begin_drag()
+    for k in range(4):
+        clock.now += 3.0  # far beyond the coalescing window
+        session.move(hand, p0 + [0.0, 0.02 * (k + 1), 0.0])
+    session.end_drag()
+    assert session.position == 1 and len(session.history) == 2
+    clock.now += 0.1  # a slider press right after the release: not part of the drag
+    session.move(hand, p0 + [0.0, 0.081, 0.0])
+    assert session.position == 2
+    session.undo()
+    np.testing.assert_allclose(session.effectors[0].target, p0 + [0.0, 0.08, 0.0])
+    session.undo()
+    np.testing.assert_allclose(session.effectors[0].target, p0)
+    # a drag that creates its target (an add, then moves) is one step too
+    n = len(session.effectors)
+    session.begin_drag()
+    for k in range(3):
+        clock.now += 2.0
+        session.move("Head", [0.0, 1.6 + 0.01 * k, 0.1])
+    session.end_drag()
+    assert session.position == 1 and len(session.effectors) == n + 1
+    session.undo()
+    assert len(session.effectors) == n and not session.can_undo
+
+
+def test_an_undo_during_a_drag_leaves_the_rest_of_it_a_new_step(session):
+    clock, hand = session.test_clock, session.effectors[0].joint
+    p0 = session.effectors[0].target.copy()
+    session.begin_drag()
+    session.move(hand, p0 + [0.0, 0.01, 0.0])
+    session.undo()  # Ctrl+Z with the mouse still down
+    clock.now += 0.1
+    session.move(hand, p0 + [0.0, 0.02, 0.0])
+    session.end_drag()
+    assert session.position == 1 and len(session.history) == 2
+    np.testing.assert_allclose(session.history[0][0]["target"], p0)
+
+
 def test_notes_follow_the_steps(session):
     session.on_before_change(lambda what, i: session.notes[session.position].update(seen=session.position))
     session.add("Head", "rotation")

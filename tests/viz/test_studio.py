@@ -120,6 +120,32 @@ def test_studio_undo_redo_coalesces_drags(studio):
     assert studio.position == len(studio.history) - 1
 
 
+def test_a_slow_drag_in_a_view_is_one_undo_step(studio):
+    """A drag in 3D whose moves reach the kernel seconds apart (a loaded machine solving every view between them) is
+    still one step: undo brings back the target and the view's camera as before the press. Timing alone split it
+    (moves more than a second apart were steps of their own), and undo went back to the middle of the drag."""
+    session, viewer = studio.session, next(iter(studio.editor.viewers.values()))
+    ticks = iter(np.arange(1000) * 3.0)  # every reading of the clock three seconds after the last
+    clock, session.clock = session.clock, lambda: float(next(ticks))
+    try:
+        steps0, row0 = len(studio.history), studio.editor.rows[0]
+        joint, t0, camera0 = row0["joint"], row0["target"].copy(), studio._cameras()
+        viewer.drag_mode.value = True
+        viewer.grab(t0)
+        assert viewer.dragging == joint
+        eye = np.asarray(viewer.camera.position, float) + viewer._offset
+        for k in range(4):
+            viewer.drag_to(eye + 0.5 * (t0 + [0.0, 0.05 * (k + 1), 0.0] - eye))
+        viewer.page_watch._on_page_message(viewer.page_watch, {"event": "release", "why": "pointerup"}, [])
+        viewer.drag_mode.value = False
+        assert len(studio.history) == steps0 + 1 and studio.editor.rows[0]["target"][1] > t0[1] + 0.05
+        studio.undo()
+        np.testing.assert_allclose(studio.editor.rows[0]["target"], t0)
+        assert studio._cameras() == camera0
+    finally:
+        session.clock = clock
+
+
 def test_studio_setup_round_trip_and_bad_files(studio, tmp_path):
     ed = studio.editor
     ed.add("Head", "look_at", lam=0.3)
