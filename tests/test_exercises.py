@@ -7,6 +7,7 @@ moved) and for lesson 03's pose vector (indices of one skeleton hard-coded); the
 from __future__ import annotations
 
 import inspect
+import os
 import sys
 import time
 
@@ -245,6 +246,22 @@ def test_rebinding_the_checkers_machinery_in_the_kernel_changes_no_verdict(capsy
     monkeypatch.setattr(single_chain, "fabrik_chain", lambda p, *a, **k: (p, 0))
     assert check_fabrik_planted(wrong) is False
     assert "differs" in capsys.readouterr().out
+
+
+def test_a_kernels_judge_is_outside_its_process_group_and_ends_with_its_input():
+    """The judge a check starts is not among the children a shutting-down kernel signals and waits for (ipykernel
+    waits until no process of its group is left, and the judge, killed but not reaped, kept every shutdown after a
+    check waiting 2.5 s); it still ends when the process that asked it goes (its input closes)."""
+    import posekit.exercises._judge as judge
+
+    assert check_fabrik_planted(PLANTED) is True
+    proc = judge._WARM["proc"]
+    assert proc is not None and proc.poll() is None
+    assert os.getpgid(proc.pid) != os.getpgrp()
+    proc.stdin.close()  # as when the kernel is gone
+    assert proc.wait(timeout=30) == 0
+    judge._drop_judge()
+    assert check_fabrik_planted(PLANTED) is True  # the next check starts another
 
 
 def test_the_fresh_check_passes_the_reference_solution():

@@ -156,8 +156,12 @@ def _warm_judge():
         env = dict(os.environ)
         env.setdefault("MPLBACKEND", "Agg")
         err = tempfile.TemporaryFile("w+")  # a file, not a pipe: what the judge says is never waited on
+        # a session of its own: a kernel shutting down signals the children in its process group and waits until
+        # none is left, and this one, never reaped meanwhile, kept every kernel's shutdown waiting 2.5 s; the judge
+        # still ends with the kernel (its input closes)
         proc = subprocess.Popen([sys.executable, "-m", "posekit.exercises._judge", "--serve"],
-                                stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=err, text=True, env=env)
+                                stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=err, text=True, env=env,
+                                start_new_session=True)
         _WARM.update(proc=proc, err=err)
     return proc
 
