@@ -8,6 +8,7 @@ Needs root and ``unshare`` (the hub's own conditions for keeping students apart)
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import shutil
@@ -31,6 +32,19 @@ sys.path.insert(0, str(SANDBOX.parent))
 import limits  # noqa: E402 - deploy/jupyterhub/limits.py
 UID = GID = 64_123
 """The student's uid and gid (no user needs to exist for them)."""
+USER = f"posekit-sandboxtest-{os.getpid()}"
+"""The student's name, which names their control group: this run's own. A hub's student ``alice`` is the system
+user ``posekit-alice``, whose group the hub tests' servers share: a job here under that name once set that group's
+memory to this test's 512 MB while another worker's hub served alice, and her server was killed for memory."""
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _own_control_group():
+    """This module's control group goes with it (empty by then: each sandbox has ended)."""
+    yield
+    for d in (limits.cgroup_dirs(USER) or {}).values():
+        with contextlib.suppress(OSError):
+            d.rmdir()
 
 PROBE = r"""
 import json, os, socket, sys
@@ -89,7 +103,7 @@ def _layout(parent: Path):
 
 
 def _job(tmp_path, repo, state, hide_extra=(), relay=None):
-    job = {"user": "posekit-alice", "uid": UID, "gid": GID, "home": str(state / "users" / "alice"),
+    job = {"user": USER, "uid": UID, "gid": GID, "home": str(state / "users" / "alice"),
            "expose": [str(state / "users" / "alice")],
            "expose_ro": list(dict.fromkeys([sys.base_prefix, sys.prefix, str(repo)])),
            "overlay": "", "hide": [str(state), str(repo / "instructor"), *map(str, hide_extra)],
@@ -179,9 +193,9 @@ def test_a_students_sandbox_hides_the_hub_the_others_and_the_machine(where, tmp_
         assert seen["NoNewPrivs"] == "1" and int(seen["CapBnd"], 16) == 0 and int(seen["CapEff"], 16) == 0
         assert seen["nproc"] == 256
         assert (state / "users" / "alice" / "mine.txt").exists()
-        groups = limits.cgroup_dirs("posekit-alice")
+        groups = limits.cgroup_dirs(USER)
         if groups is not None:  # the machine has control groups the hub may use: the student's held the probe
-            assert "/posekit/posekit-alice" in seen["cgroup"], seen["cgroup"]
+            assert f"/posekit/{USER}" in seen["cgroup"], seen["cgroup"]
             if "memory" in groups:
                 assert int((groups["memory"] / "memory.limit_in_bytes").read_text()) == 512 * 1024 * 1024
                 assert int((groups["cpu"] / "cpu.cfs_quota_us").read_text()) == 100_000
