@@ -12,7 +12,8 @@ honours, :func:`~posekit.studio.solve.solve_honoured`) and tells the listeners, 
   (:meth:`~PosingSession.move` on a joint without a target adds a position effector there).
 * **Undo and redo** — every change is a step; a drag in 3D, from the press to the release
   (:meth:`PosingSession.begin_drag` / :meth:`~PosingSession.end_drag`), is one step however slowly the solves come,
-  and moves of one effector less than ``coalesce_s`` apart (a slider held down) are one step. Each step may carry a note (the views' cameras): :attr:`PosingSession.notes`.
+  and moves of one effector less than ``coalesce_s`` apart (a slider held down) are one step. Each step may carry
+  a note (the views' cameras): :attr:`PosingSession.notes`.
 * **Setups** — :meth:`~PosingSession.to_dict` / :meth:`~PosingSession.from_dict` (the JSON of
   :mod:`posekit.viz.setup_file`); a bad setup is refused with a sentence before anything changes.
 * **Timeline keys** — :meth:`~PosingSession.add_key`: the effectors as they are, each key with the same joints and
@@ -43,7 +44,8 @@ __all__ = ["PosingSession", "StudioEffector", "KIND_CHOICES", "COALESCE_S", "con
 
 KIND_CHOICES = ("position", "rotation", "look_at")
 COALESCE_S = 1.0
-"""Moves of one effector less than this many seconds apart are one undo step (a drag, a slider)."""
+"""Moves of one effector less than this many seconds apart are one undo step (a slider held down; a drag is one step
+from press to release, :meth:`PosingSession.begin_drag`)."""
 
 
 @dataclass

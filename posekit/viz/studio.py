@@ -8,8 +8,8 @@ dragging in 3D) with what an animator expects around it:
   check boxes: a solver a later lesson or a student registers appears without a change here; a summary
   table gives each one's worst effector error and solve time; while solvers load (or anything slow runs)
   the studio says it is busy;
-* **undo / redo** — every change is a step (a drag, or a slider moved without a second's pause, is one); a step
-  brings back the views' cameras with the pose;
+* **undo / redo** — every change is a step (a drag from press to release, or a slider moved without a second's
+  pause, is one); a step brings back the views' cameras with the pose;
 * **setups** — save and load the effectors as JSON (:mod:`posekit.viz.setup_file`), from a path on the
   server or uploaded from the browser; a malformed file is reported and nothing is lost;
 * **export** — the chosen solver's pose as BVH (read back through :func:`posekit.io.bvh.read_bvh` to check it)
