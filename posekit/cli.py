@@ -245,7 +245,10 @@ def _warm(args) -> int:
     return 0
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(group: str | None = None) -> argparse.ArgumentParser:
+    """The whole command line; with ``group`` (the command's first word), the trainers' subcommands only when it is
+    ``train`` or ``docs`` (whose CLI page lists them): they import torch, a second and a half that every other
+    command (``posekit course autograde``, run once per lesson by an instructor) would wait for."""
     parser = argparse.ArgumentParser(prog="posekit", description="posekit: data tools and benchmarks")
     sub = parser.add_subparsers(dest="group", required=True)
 
@@ -300,17 +303,18 @@ def build_parser() -> argparse.ArgumentParser:
     train.add_argument("--list", action="store_true", help="list every trainable model, what it makes and which "
                        "lesson loads it (also what `posekit train` alone prints)")
     train.set_defaults(fn=_train_list)
-    from .learn.trainers import get_trainer, trainer_names
-    from .plugins import add_arguments
+    if group in (None, "train", "docs"):
+        from .learn.trainers import get_trainer, trainer_names
+        from .plugins import add_arguments
 
-    tsub = train.add_subparsers(dest="cmd", metavar="NAME", help=", ".join(trainer_names()))
-    for name in trainer_names():  # every registered trainer is a subcommand
-        t = get_trainer(name)
-        p = tsub.add_parser(name, help=t.help)
-        add_arguments(p, t.args, default_in_help=False)
-        p.add_argument("--device", default="cpu", help="where to train: cpu (default), cuda or cuda:N; under torchrun "
-                       "every process trains its share of each batch (data-parallel, docs/training.md)")
-        p.set_defaults(fn=_train, trainer=name)
+        tsub = train.add_subparsers(dest="cmd", metavar="NAME", help=", ".join(trainer_names()))
+        for name in trainer_names():  # every registered trainer is a subcommand
+            t = get_trainer(name)
+            p = tsub.add_parser(name, help=t.help)
+            add_arguments(p, t.args, default_in_help=False)
+            p.add_argument("--device", default="cpu", help="where to train: cpu (default), cuda or cuda:N; under "
+                           "torchrun every process trains its share of each batch (data-parallel, docs/training.md)")
+            p.set_defaults(fn=_train, trainer=name)
     p = sub.add_parser("warm", help="compile every solver's kernels into the cache (make lab, studio and test run it "
                        "first; quick once the cache holds them)")
     p.add_argument("--workers", type=int, default=2, help="processes compiling side by side (default: 2)")
@@ -341,7 +345,9 @@ def _status(fn, args) -> int:
 
 
 def main(argv=None) -> int:
-    args = build_parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else list(argv)
+    group = next((a for a in argv if not a.startswith("-")), None)  # the top level has no option taking a value
+    args = build_parser(group).parse_args(argv)
     shown, warnings.formatwarning = warnings.formatwarning, _one_line  # how a warning is printed, not whether
     try:
         return _status(args.fn, args)

@@ -190,3 +190,18 @@ def test_a_name_is_registered_once_unless_replace_is_asked_for():
         r.add("a", 3, owner="lesson_b")
     r.add("a", 4, owner="lesson_b", replace=True)
     assert r.get("a") == 4
+
+
+def test_only_the_train_commands_build_the_trainers_and_import_torch():
+    """``posekit course ...`` (an instructor's autograde, once per lesson) starts without importing torch; ``posekit
+    train`` still lists and parses every trainer."""
+    code = ("import sys; from posekit.cli import build_parser; p = build_parser(sys.argv[1]); "
+            "print('torch' in sys.modules, sorted(p._subparsers._group_actions[0].choices['train']._subparsers"
+            "._group_actions[0].choices) if p._subparsers._group_actions[0].choices['train']._subparsers else [])")
+    course = subprocess.run([sys.executable, "-c", code, "course"], capture_output=True, text=True, check=True)
+    assert course.stdout.split(None, 1) == ["False", "[]\n"], course.stdout + course.stderr
+    train = subprocess.run([sys.executable, "-c", code, "train"], capture_output=True, text=True, check=True)
+    assert train.stdout.startswith("True [") and "'protores'" in train.stdout, train.stdout + train.stderr
+    with pytest.raises(SystemExit) as done:
+        main(["train", "no-such-model"])
+    assert done.value.code == 2
