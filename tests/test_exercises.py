@@ -1261,9 +1261,9 @@ assert "LEFT_BEHIND" not in globals(), "another answer's name is here"
 
 
 OWN_HELPERS = {  # checker: a helper of the checker's own module that gives the right answer with its defaults
-    "check_bone_drift": lambda: __import__("posekit.exercises.nb00", fromlist=["_"])._drift_with,
-    "check_pose_vector": lambda: __import__("posekit.exercises.nb03", fromlist=["_"])._pose_vector_with,
-    "check_effector_inputs": lambda: __import__("posekit.exercises.nb05", fromlist=["_"])._inputs_with,
+    "check_bone_drift": ("posekit.exercises.nb00", "_drift_with"),
+    "check_pose_vector": ("posekit.exercises.nb03", "_pose_vector_with"),
+    "check_effector_inputs": ("posekit.exercises.nb05", "_inputs_with"),
 }
 
 
@@ -1271,6 +1271,9 @@ OWN_HELPERS = {  # checker: a helper of the checker's own module that gives the 
 def test_an_answer_that_calls_its_checkers_own_helpers_is_refused(checker, capsys):
     """Each checker's module holds the variants its messages compare with; with their defaults some give the right
     answer. The judge forbids every function of that module, not only the posekit function compared against."""
-    helper = OWN_HELPERS[checker]()
+    import importlib
+
+    module, name = OWN_HELPERS[checker]
+    helper = getattr(importlib.import_module(module), name)
     assert _checker(checker)(lambda *a: helper(*a)) is False
     assert f"calls {helper.__module__}.{helper.__name__}" in capsys.readouterr().out
