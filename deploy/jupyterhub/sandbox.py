@@ -113,6 +113,11 @@ def plan(job) -> list[tuple[str, Path]]:
 def build(job) -> None:
     """Steps 2 and 3 of the module docstring; raises :class:`SandboxError` when a hidden path stays visible."""
     ro = {Path(p) for p in job["expose_ro"]}
+    for p in sorted(ro):  # a folder on the way is covered (plan), but a shared folder's own mode is its owner's word
+        if p.is_dir() and not p.stat().st_mode & stat.S_IXOTH:
+            raise SandboxError(f"{p} is shared read-only with the students (Python, the virtual environment or the "
+                               f"repository) but other users cannot walk through it (mode "
+                               f"{stat.S_IMODE(p.stat().st_mode):04o}); the server is not started: chmod o+x {p}")
     cache = Path(job["overlay"]) if job.get("overlay") else None
     private = {Path(p): size for p, size in job.get("private", {}).items()}
     steps = plan(job)

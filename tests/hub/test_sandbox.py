@@ -167,6 +167,23 @@ def _parent(where, tmp_path):
     return parent
 
 
+def test_a_shared_folder_others_cannot_walk_through_is_named_and_nothing_starts(tmp_path):
+    """A repository the students' servers run from, but of mode 0700 (a checkout in ``mktemp -d``): the sandbox says
+    which folder and what to do, and starts nothing (it used to start the server, which failed with a bare
+    "Permission denied")."""
+    parent = _parent("tmp", tmp_path)
+    try:
+        repo, state = _layout(parent)
+        parent.chmod(0o755)
+        repo.chmod(0o700)
+        done = _sandbox(_job(tmp_path, repo, state), sys.executable, "-c", "print('STARTED')")
+        assert done.returncode == 3 and "STARTED" not in done.stdout, done.stdout + done.stderr
+        assert f"{repo} is shared read-only with the students" in done.stderr and f"chmod o+x {repo}" in done.stderr, \
+            done.stderr
+    finally:
+        shutil.rmtree(parent, ignore_errors=True)
+
+
 @pytest.mark.parametrize("where", ["tmp", "root", "home0750"])
 def test_a_students_sandbox_hides_the_hub_the_others_and_the_machine(where, tmp_path, machine):
     parent = _parent(where, tmp_path)
