@@ -37,6 +37,7 @@
 import json
 import os
 import pwd
+import signal
 import stat
 import sys
 from pathlib import Path
@@ -71,6 +72,12 @@ from measure_class import z2jh_resources  # noqa: E402 - deploy/jupyterhub/measu
 from posekit_spawner import ClassSpawner  # noqa: E402 - deploy/jupyterhub/posekit_spawner.py
 
 c = get_config()  # noqa: F821 - JupyterHub defines it when it loads this file
+
+# A hub started where Ctrl-C is ignored (a script's background job, `make hub &`, some CI runners) would pass that on
+# to every process it starts: the idle culler would outlive the hub's SIGINT, and each stop of the hub wait 30 s for
+# it; each student's server, 10 s. The hub handles SIGINT itself once running; what it starts gets the default.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 # -- the hub and its proxy ------------------------------------------------------------------------------------------
 c.JupyterHub.bind_url = (f"http://{os.environ.get('POSEKIT_HUB_IP', '127.0.0.1')}:"

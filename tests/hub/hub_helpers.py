@@ -8,6 +8,7 @@ import contextlib
 import json
 import os
 import shutil
+import signal
 import subprocess
 import sys
 import time
@@ -66,9 +67,10 @@ class Hub:
 
 @contextlib.contextmanager
 def running_hub(folder: Path, cull_timeout: int = 3600, cull_every: int = 300, activity_every: int = 300,
-                extra_env=None, startup_s: float = 90.0):
+                extra_env=None, startup_s: float = 90.0, sigint_ignored: bool = False):
     """Serve a hub from ``folder`` (its state and log there) until the block ends; then stop it and everything
-    it started, even when the block failed."""
+    it started, even when the block failed. ``sigint_ignored``: the hub starts with Ctrl-C ignored, as a script's
+    background job starts it."""
     import psutil
 
     hub_cmd = Path(sys.executable).parent / "jupyterhub"
@@ -88,8 +90,9 @@ def running_hub(folder: Path, cull_timeout: int = 3600, cull_every: int = 300, a
                POSEKIT_HUB_ACTIVITY_EVERY=str(activity_every), POSEKIT_HUB_PASSWORD=PASSWORD,
                PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}", **(extra_env or {}))
     out = open(log, "w")
-    proc = subprocess.Popen([str(hub_cmd), "-f", str(overlay)], cwd=folder,
-                            env=env, stdout=out, stderr=subprocess.STDOUT)
+    proc = subprocess.Popen([str(hub_cmd), "-f", str(overlay)], cwd=folder, env=env, stdout=out,
+                            stderr=subprocess.STDOUT,
+                            preexec_fn=(lambda: signal.signal(signal.SIGINT, signal.SIG_IGN)) if sigint_ignored else None)
     hub = Hub(f"http://127.0.0.1:{port}", state, log, proc)
     try:
         t0 = time.time()
