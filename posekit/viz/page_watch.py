@@ -158,7 +158,9 @@ function initialize({ model }) {
       return true;
     }
     const z = e.key === "z" || e.key === "Z", y = e.key === "y" || e.key === "Y";
-    if ((e.ctrlKey || e.metaKey) && !e.altKey && (z || y) && inKeysScope(e.target) && !typing(e.target)) {
+    // a slider that had the focus and is being drawn again (an undo's new sliders not there yet) left it on the
+    // page: the key is still the studio's (it was dropped, and a redo right after an undo did nothing)
+    if ((e.ctrlKey || e.metaKey) && !e.altKey && (z || y) && (inKeysScope(e.target) || lost()) && !typing(e.target)) {
       e.preventDefault();
       e.stopPropagation();
       model.send({ event: (e.shiftKey || y) ? "redo" : "undo" });
