@@ -259,8 +259,11 @@ def test_the_relay_joins_the_server_and_the_hub_and_nothing_else(tmp_path):
                                  "private", sys.executable, str(SANDBOX), str(job), "--", sys.executable, "-I", "-c",
                                  server], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         reply = b""
-        for _ in range(200):  # the relay listens once the sandbox is made; until the server inside listens too, it
-            try:              # closes what it accepts unanswered (a hub polls a starting server the same way)
+        deadline = time.monotonic() + 90  # by the clock, not by tries: 200 tries refused at once last 20 s, and a
+        while time.monotonic() < deadline:  # loaded machine can take longer to make the sandbox
+            # the relay listens once the sandbox is made; until the server inside listens too, it closes what it
+            # accepts unanswered (a hub polls a starting server the same way)
+            try:
                 with socket.create_connection(("127.0.0.1", server_port), timeout=20) as s:
                     s.settimeout(20)
                     while chunk := s.recv(64):
