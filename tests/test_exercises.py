@@ -1202,8 +1202,9 @@ print("x" * 300_000)                           # more than a pipe holds: nothing
 
 LOOPS = '''
 def exercise_fabrik_planted(positions, target, tolerance, max_iter):
-    while True:
-        pass
+    import time
+    while True:                                  # asleep: the timeout ends it, without a busy core meanwhile
+        time.sleep(1)
 '''
 
 LEAVES_A_DAEMON = '''
