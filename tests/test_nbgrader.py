@@ -459,8 +459,8 @@ def _points(course, stem) -> dict[str, float]:
 
 
 def _grades(course) -> dict[tuple[str, str], dict]:
-    """The grade book as ``nbgrader export`` wrote it to ``grades.csv`` (:func:`_grade_class` runs it after grading),
-    by ``(assignment, student)``."""
+    """The grade book as ``nbgrader export`` (or :func:`_export`, its CSV plugin) wrote it to ``grades.csv``
+    (:func:`_grade_class` runs it after grading), by ``(assignment, student)``."""
     with open(course / "grades.csv", newline="") as fh:
         return {(r["assignment"], r["student_id"]): r for r in csv.DictReader(fh)}
 
