@@ -51,22 +51,30 @@ def test_fk_chunking_is_invisible(skel, rng):
     np.testing.assert_allclose(full[-5:], fk(skel, q[-5:])[0], atol=1e-12)
 
 
-def test_fk_of_a_few_poses_is_bit_identical_to_the_batched_paths(skel, rng):
-    """One pose (what a solver asks for) goes through a compiled kernel, a few hundred through numpy
-    broadcasts, thousands through the chunked layout: the same sums in the same order, the same bits."""
+def test_every_fk_path_gives_the_same_bits(skel, rng, monkeypatch):
+    """The compiled kernel (every batch with numba; up to a few poses without), the numpy broadcasts (a few hundred
+    poses without numba) and the chunked layout (thousands): the same sums in the same order, the same bits, for
+    one pose, a few, and batches spanning several chunks of each path."""
     from posekit import kinematics
 
-    q = random_rotations((kinematics._SMALL + 3, skel.n_joints), rng)
-    root = rng.normal(size=(len(q), 3))
-    lp = np.asarray(skel.offsets) * (1 + 0.1 * rng.random((len(q), skel.n_joints, 1)))
+    n = max(kinematics._CHUNK, kinematics._COMPILED_CHUNK) + 17
+    q = random_rotations((n, skel.n_joints), rng)
+    root = rng.normal(size=(n, 3))
+    lp = np.asarray(skel.offsets) * (1 + 0.1 * rng.random((n, skel.n_joints, 1)))
     for kw in ({}, {"root_pos": root}, {"local_pos": lp}, {"root_pos": root, "local_pos": lp}):
-        big = fk(skel, q, **kw)  # the chunked path
-        mid = fk(skel, q[:40], **{k: v[:40] for k, v in kw.items()})  # broadcasts
-        assert len(q) >= kinematics._SMALL and 40 > kinematics._ONE
+        got = fk(skel, q, **kw)
+        monkeypatch.setattr(kinematics, "HAVE_NUMBA", False)
+        chunked = fk(skel, q, **kw)
+        mid = fk(skel, q[:40], **{k: v[:40] for k, v in kw.items()})  # numpy broadcasts
+        assert n >= kinematics._SMALL and kinematics._ONE < 40 < kinematics._SMALL
         for i in (0, 7, 39):
-            one = fk(skel, q[i], **{k: v[i] for k, v in kw.items()})  # compiled
-            for a, b, c in zip(one, (mid[0][i], mid[1][i]), (big[0][i], big[1][i])):
-                assert np.array_equal(a, b) and np.array_equal(a, c)
+            one = fk(skel, q[i], **{k: v[i] for k, v in kw.items()})  # the kernel, one pose
+            for a, b in zip(one, (mid[0][i], mid[1][i])):
+                assert np.array_equal(a, b)
+        monkeypatch.undo()
+        for a, b in zip(got, chunked):
+            assert np.array_equal(a, b)
+        assert np.array_equal(got[0][:40], mid[0]) and np.array_equal(got[1][:40], mid[1])
 
 
 def test_fk_reproduces_shipped_positions(sample):

@@ -76,7 +76,9 @@ def _axis(R, k):
 def _rotate_about(v, axis, angle):
     """Rotate vectors v (N, 3) about unit axes (N, 3) by angles (N,) (Rodrigues)."""
     c, s = np.cos(angle)[:, None], np.sin(angle)[:, None]
-    return v * c + np.cross(axis, v) * s + axis * np.sum(axis * v, axis=1, keepdims=True) * (1 - c)
+    a0, a1, a2, v0, v1, v2 = axis[:, 0], axis[:, 1], axis[:, 2], v[:, 0], v[:, 1], v[:, 2]
+    cross = np.stack([a1 * v2 - a2 * v1, a2 * v0 - a0 * v2, a0 * v1 - a1 * v0], 1)  # np.cross's sums, without its cost
+    return v * c + cross * s + axis * np.sum(axis * v, axis=1, keepdims=True) * (1 - c)
 
 
 @dataclass
@@ -143,7 +145,8 @@ class HumanoidRig:
         y = np.asarray(y, dtype=float)
         c = np.clip(y, self.low, self.high)
         over = np.abs(c - y)
-        worst = {self.names[k]: float(over[..., k].max()) for k in range(self.n_controls) if np.any(over[..., k] > 0)}
+        most = over.reshape(-1, self.n_controls).max(0) if over.size else np.zeros(self.n_controls)
+        worst = {self.names[k]: float(most[k]) for k in np.flatnonzero(most > 0)}
         return c, ClampReport(int(np.count_nonzero(over)), worst)
 
     def _check(self, y):
@@ -183,44 +186,57 @@ class HumanoidRig:
         root = np.stack([g("root_tx"), g("root_ty") + self.rest_pelvis_height, g("root_tz")], 1)
         pos, grot = fk(s, R, root)
         yaw = _euler("Y", g("root_yaw")[:, None])
+        chest = grot[:, self._j["chest"]]
+        # the four limbs' two-bone problems (arm: from the shoulder, elbow bending behind and down in the chest
+        # frame; leg: from the hip, knee forward in the facing frame; each swivelled), solved in one call: the
+        # law of cosines is elementwise, so each limb's answer is the same as alone
+        limbs, roots, mids, ends, targets, poles = [], [], [], [], [], []
         for side, full in (("l", "left"), ("r", "right")):
-            # arm: two-bone IK from the shoulder, elbow bending behind and down (chest frame), swivelled
-            S, E, W = (pos[:, self._j[f"{full}_{p}"]] for p in ("shoulder", "elbow", "hand"))
-            hand = np.stack([g(f"{side}_hand_{a}") for a in "xyz"], 1)
-            chest = grot[:, self._j["chest"]]
-            u = hand - S
-            u = u / np.maximum(np.linalg.norm(u, axis=1, keepdims=True), 1e-9)
-            pole_dir = _rotate_about(-_axis(chest, 2) - _axis(chest, 1), u, g(f"{side}_elbow_swivel"))
-            E2, W2, _ = two_bone_ik(S, E, W, hand, S + pole_dir)
-            pos[:, self._j[f"{full}_elbow"]], pos[:, self._j[f"{full}_hand"]] = E2, W2
-            # leg: two-bone IK from the hip, knee forward (facing frame), swivelled; toe by foot pitch
-            H, K, A = (pos[:, self._j[f"{full}_{p}"]] for p in ("hip", "knee", "foot"))
-            foot = np.stack([g(f"{side}_foot_{a}") for a in "xyz"], 1)
-            u = foot - H
-            u = u / np.maximum(np.linalg.norm(u, axis=1, keepdims=True), 1e-9)
-            pole_dir = _rotate_about(_axis(yaw, 2), u, g(f"{side}_knee_swivel"))
-            K2, A2, _ = two_bone_ik(H, K, A, foot, H + pole_dir)
-            pos[:, self._j[f"{full}_knee"]], pos[:, self._j[f"{full}_foot"]] = K2, A2
+            for (a, b, c), goal, pole_of in (
+                    (("shoulder", "elbow", "hand"), "hand", lambda u: _rotate_about(
+                        -_axis(chest, 2) - _axis(chest, 1), u, g(f"{side}_elbow_swivel"))),
+                    (("hip", "knee", "foot"), "foot", lambda u: _rotate_about(
+                        _axis(yaw, 2), u, g(f"{side}_knee_swivel")))):
+                R0, M0, E0 = (pos[:, self._j[f"{full}_{p}"]] for p in (a, b, c))
+                target = np.stack([g(f"{side}_{goal}_{ax}") for ax in "xyz"], 1)
+                u = target - R0
+                u = u / np.maximum(np.linalg.norm(u, axis=1, keepdims=True), 1e-9)
+                limbs.append((full, b, c))
+                roots.append(R0), mids.append(M0), ends.append(E0), targets.append(target)
+                poles.append(R0 + pole_of(u))
+        M2, E2, _ = two_bone_ik(*(np.concatenate(x) for x in (roots, mids, ends, targets, poles)))
+        for k, (full, b, c) in enumerate(limbs):
+            pos[:, self._j[f"{full}_{b}"]], pos[:, self._j[f"{full}_{c}"]] = M2[k * N:(k + 1) * N], E2[k * N:(k + 1) * N]
+        for side, full in (("l", "left"), ("r", "right")):  # toe by foot pitch
             toe_rot = yaw @ _euler("X", g(f"{side}_foot_pitch")[:, None])
             off = self._toe_offset if side == "l" else self._toe_offset_r
-            pos[:, self._j[f"{full}_toe"]] = A2 + toe_rot @ off
+            pos[:, self._j[f"{full}_toe"]] = pos[:, self._j[f"{full}_foot"]] + toe_rot @ off
         return pos.reshape(batch + (J, 3))
 
-    def jacobian(self, y, eps: float = 1e-4) -> np.ndarray:
+    def jacobian(self, y, eps: float = 1e-4, value: bool = False):
         """Finite-difference Jacobian dx/dy (central differences).
 
         Parameters
         ----------
         y : ndarray, shape (N, C)
+        eps : float
+            The step on each control, in its units.
+        value : bool
+            Also return the rig at ``y`` itself, from the same call.
 
         Returns
         -------
         ndarray, shape (N, J*3, C)
+            The Jacobian; with ``value``, ``(x, J)`` where ``x`` (N, J*3) is :meth:`evaluate` at ``y`` without the
+            clamp (the same numbers: each pose is evaluated on its own, whatever else is in the call).
         """
         y = self._check(y).reshape(-1, self.n_controls)
         N, C = y.shape
         steps = np.eye(C) * eps
-        # both sides in one call: the rig's cost is mostly per call (N is often 1: a frame at a time)
-        both = self.evaluate(np.concatenate([y[:, None, :] + steps, y[:, None, :] - steps], 1).reshape(-1, C),
-                             clamp=False).reshape(N, 2, C, -1)
-        return np.swapaxes((both[:, 0] - both[:, 1]) / (2 * eps), 1, 2)
+        # both sides (and y) in one call: the rig's cost is mostly per call (N is often 1: a frame at a time)
+        poses = [y[:, None, :] + steps, y[:, None, :] - steps] + ([y[:, None, :]] if value else [])
+        out = self.evaluate(np.concatenate(poses, 1).reshape(-1, C), clamp=False).reshape(N, -1)
+        width = self.skeleton.n_joints * 3
+        both = out[:, :2 * C * width].reshape(N, 2, C, width)
+        J = np.swapaxes((both[:, 0] - both[:, 1]) / (2 * eps), 1, 2)
+        return (out[:, 2 * C * width:], J) if value else J

@@ -44,9 +44,13 @@ def refine(rig, x_target, y0, jacobian="computed", iterations: int = 3, damping:
     x_target = np.asarray(x_target, dtype=float).reshape(len(y0), -1)
     y = np.clip(np.array(y0, dtype=float), rig.low, rig.high)  # the rig would clamp the guess anyway
     C = y.shape[1]
+    computed = isinstance(jacobian, str) and jacobian == "computed"
     for _ in range(iterations):
-        dx = x_target - rig.evaluate(y).reshape(len(y), -1)
-        J = rig.jacobian(y) if isinstance(jacobian, str) and jacobian == "computed" else jacobian(y)
+        if computed:  # the rig at y and its Jacobian in one call (y is in range: no clamp to do)
+            x, J = rig.jacobian(y, value=True)
+        else:
+            x, J = rig.evaluate(y).reshape(len(y), -1), jacobian(y)
+        dx = x_target - x
         JT = np.swapaxes(J, 1, 2)
         A = JT @ J + damping**2 * np.eye(C)
         y = np.clip(y + np.linalg.solve(A, (JT @ dx[..., None]))[..., 0], rig.low, rig.high)
