@@ -66,6 +66,17 @@ def test_rig_jacobian_matches_finite_differences(rig, data):
     np.testing.assert_allclose(J[:, :, k], fd, atol=1e-5)
 
 
+def test_a_pose_evaluates_to_the_same_bits_whatever_else_is_in_the_call(rig, data):
+    """refine takes the rig's value at y from its Jacobian's call (``value=True``), and evaluate solves the four
+    limbs in one call: each pose's numbers must not depend on its neighbours."""
+    y = data[0][:7]
+    alone = np.stack([rig.evaluate(y[i]) for i in range(len(y))])
+    assert np.array_equal(rig.evaluate(y), alone)
+    x, J = rig.jacobian(y, value=True)
+    assert np.array_equal(x, alone.reshape(len(y), -1)) and np.array_equal(J, rig.jacobian(y))
+    assert np.array_equal(rig.jacobian(y[3:4]), J[3:4])
+
+
 def test_rig_clamps_and_reports_and_refuses_nan(rig):
     y = rig.default()
     y[rig.index("neck_turn")] = 5.0
