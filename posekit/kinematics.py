@@ -174,7 +174,7 @@ def _fk_compiled(skeleton, Rl, batch, Root, Ol):
     """FK of any number of poses by the compiled :func:`_fk_poses`, :data:`_COMPILED_CHUNK` poses at a time
     (bit-identical to :func:`_fk_small` and :func:`_fk_numpy`)."""
     N, J = Rl.shape[:2]
-    parents = np.asarray(skeleton.parents, dtype=np.int64)
+    parents = np.require(skeleton.parents, np.int64, ("C", "W"))
     offsets = np.asarray(skeleton.offsets, dtype=float)
     rg = np.empty((N, J, 3, 3))
     pg = np.empty((N, J, 3))
@@ -182,8 +182,8 @@ def _fk_compiled(skeleton, Rl, batch, Root, Ol):
         b = min(N, a + _COMPILED_CHUNK)
         off = np.broadcast_to(offsets, (b - a, J, 3)) if Ol is None else Ol[a:b]
         root = off[:, 0] if Root is None else Root[a:b]
-        _fk_poses(parents, np.ascontiguousarray(Rl[a:b], dtype=float), np.ascontiguousarray(root, dtype=float),
-                  np.ascontiguousarray(off, dtype=float), rg[a:b], pg[a:b])
+        # contiguous and writable (a copy only where they are not): one signature, the one `posekit warm` compiled
+        _fk_poses(parents, *(np.require(x, float, ("C", "W")) for x in (Rl[a:b], root, off)), rg[a:b], pg[a:b])
     return pg.reshape(batch + (J, 3)), rg.reshape(batch + (J, 3, 3))
 
 
