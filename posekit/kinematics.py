@@ -167,7 +167,8 @@ def _fk_poses(parents, Rl, root, offsets, rg, pg):
 
 
 _COMPILED_CHUNK = 8192
-"""Poses per call of :func:`_fk_poses`: bounds the contiguous copies of the inputs (about 3 MB a chunk)."""
+"""Poses per call of :func:`_fk_poses`: bounds the contiguous copies of the inputs (about 13 MB of rotations a chunk
+for 22 joints)."""
 
 
 def _fk_compiled(skeleton, Rl, batch, Root, Ol):
