@@ -4,6 +4,7 @@ set by ``tests/conftest.py``; :func:`posekit.paths.exports_dir`)."""
 
 from __future__ import annotations
 
+import re
 import tempfile
 from pathlib import Path
 
@@ -55,3 +56,16 @@ def test_a_kernel_started_in_notebooks_as_nbval_starts_one_writes_outside_them()
     printed = Path("".join(out).strip())
     assert printed == exports_dir().resolve(), printed
     assert not _inside(printed, notebooks_dir()), printed
+
+
+def test_a_printed_export_path_compares_whatever_the_temporary_folders_name():
+    """nbval applies tests/nbval_sanitize.cfg's rules in order: a temporary folder whose random name ends like a rate
+    (``..._h68z3s`` + ``/studio_exports``) must still compare as ``studio_exports/`` (a CI run failed on lesson 06)."""
+    from nbval.plugin import get_sanitize_patterns
+
+    rules = get_sanitize_patterns((Path(__file__).resolve().parents[1] / "nbval_sanitize.cfg").read_text())
+    for name in ("posekit-test-exports-_h68z3s", "posekit-test-exports-abc12it", "posekit-test-exports-q0.5s"):
+        text = f"loaded /tmp/{name}/{EXPORTS}/raise_hand.json: 7 effectors"
+        for regex, replace in rules:
+            text = re.sub(regex, replace, text)
+        assert text == f"loaded {EXPORTS}/raise_hand.json: 7 effectors", (name, text)
