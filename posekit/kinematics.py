@@ -171,20 +171,26 @@ _COMPILED_CHUNK = 8192
 for 22 joints)."""
 
 
+def _writable(x):
+    """``x`` as a contiguous, writable float64 array, copied only when it is not one: read-only views (a broadcast
+    ``root_pos``) would otherwise make numba compile a second signature of :func:`_fk_poses`."""
+    if x.flags.c_contiguous and x.flags.writeable and x.dtype == np.float64:
+        return x
+    return np.array(x, dtype=float, order="C")
+
+
 def _fk_compiled(skeleton, Rl, batch, Root, Ol):
     """FK of any number of poses by the compiled :func:`_fk_poses`, :data:`_COMPILED_CHUNK` poses at a time
     (bit-identical to :func:`_fk_small` and :func:`_fk_numpy`)."""
     N, J = Rl.shape[:2]
-    parents = np.require(skeleton.parents, np.int64, ("C", "W"))
-    offsets = np.asarray(skeleton.offsets, dtype=float)
     rg = np.empty((N, J, 3, 3))
     pg = np.empty((N, J, 3))
     for a in range(0, N, _COMPILED_CHUNK):
         b = min(N, a + _COMPILED_CHUNK)
-        off = np.broadcast_to(offsets, (b - a, J, 3)) if Ol is None else Ol[a:b]
+        off = np.broadcast_to(skeleton.offsets, (b - a, J, 3)) if Ol is None else Ol[a:b]
         root = off[:, 0] if Root is None else Root[a:b]
-        # contiguous and writable (a copy only where they are not): one signature, the one `posekit warm` compiled
-        _fk_poses(parents, *(np.require(x, float, ("C", "W")) for x in (Rl[a:b], root, off)), rg[a:b], pg[a:b])
+        # the skeleton's parents are read-only int64 arrays (Skeleton makes them so): one signature with the rest
+        _fk_poses(skeleton.parents, _writable(Rl[a:b]), _writable(root), _writable(off), rg[a:b], pg[a:b])
     return pg.reshape(batch + (J, 3)), rg.reshape(batch + (J, 3, 3))
 
 

@@ -187,26 +187,24 @@ class HumanoidRig:
         pos, grot = fk(s, R, root)
         yaw = _euler("Y", g("root_yaw")[:, None])
         chest = grot[:, self._j["chest"]]
-        # the four limbs' two-bone problems (arm: from the shoulder, elbow bending behind and down in the chest
-        # frame; leg: from the hip, knee forward in the facing frame; each swivelled), solved in one call: the
-        # law of cosines is elementwise, so each limb's answer is the same as alone
-        limbs, roots, mids, ends, targets, poles = [], [], [], [], [], []
+        # the four limbs' two-bone problems, solved in one call (the law of cosines is elementwise: each limb's
+        # answer is the one it gets alone): an arm from the shoulder, its elbow bending behind and down in the chest
+        # frame; a leg from the hip, its knee forward in the facing frame; each bend swivelled about root -> target
+        bends = {"elbow_swivel": -_axis(chest, 2) - _axis(chest, 1), "knee_swivel": _axis(yaw, 2)}
+        placed, problems = [], []
         for side, full in (("l", "left"), ("r", "right")):
-            for (a, b, c), goal, pole_of in (
-                    (("shoulder", "elbow", "hand"), "hand", lambda u: _rotate_about(
-                        -_axis(chest, 2) - _axis(chest, 1), u, g(f"{side}_elbow_swivel"))),
-                    (("hip", "knee", "foot"), "foot", lambda u: _rotate_about(
-                        _axis(yaw, 2), u, g(f"{side}_knee_swivel")))):
-                R0, M0, E0 = (pos[:, self._j[f"{full}_{p}"]] for p in (a, b, c))
+            for joints, goal, swivel in ((("shoulder", "elbow", "hand"), "hand", "elbow_swivel"),
+                                         (("hip", "knee", "foot"), "foot", "knee_swivel")):
+                start, mid, end = (self._j[f"{full}_{p}"] for p in joints)
                 target = np.stack([g(f"{side}_{goal}_{ax}") for ax in "xyz"], 1)
-                u = target - R0
+                u = target - pos[:, start]
                 u = u / np.maximum(np.linalg.norm(u, axis=1, keepdims=True), 1e-9)
-                limbs.append((full, b, c))
-                roots.append(R0), mids.append(M0), ends.append(E0), targets.append(target)
-                poles.append(R0 + pole_of(u))
-        M2, E2, _ = two_bone_ik(*(np.concatenate(x) for x in (roots, mids, ends, targets, poles)))
-        for k, (full, b, c) in enumerate(limbs):
-            pos[:, self._j[f"{full}_{b}"]], pos[:, self._j[f"{full}_{c}"]] = M2[k * N:(k + 1) * N], E2[k * N:(k + 1) * N]
+                pole = pos[:, start] + _rotate_about(bends[swivel], u, g(f"{side}_{swivel}"))
+                problems.append((pos[:, start], pos[:, mid], pos[:, end], target, pole))
+                placed.append((mid, end))
+        new_mid, new_end, _ = two_bone_ik(*(np.concatenate(x) for x in zip(*problems)))
+        for k, (mid, end) in enumerate(placed):
+            pos[:, mid], pos[:, end] = new_mid[k * N:(k + 1) * N], new_end[k * N:(k + 1) * N]
         for side, full in (("l", "left"), ("r", "right")):  # toe by foot pitch
             toe_rot = yaw @ _euler("X", g(f"{side}_foot_pitch")[:, None])
             off = self._toe_offset if side == "l" else self._toe_offset_r
